@@ -1,0 +1,41 @@
+#pragma once
+/// @file image.hpp
+/// RGBA8 images, rows top to bottom, and their PNG I/O (stb_image / stb_image_write).
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace simreel::render {
+
+/// 8-bit RGBA image, rows stored top to bottom, 4 bytes per pixel, no padding.
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgba;  ///< (height x width x 4)
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), rgba(std::size_t(w) * std::size_t(h) * 4, 0) {}
+  [[nodiscard]] std::uint8_t* pixel(int x, int y) { return &rgba[(std::size_t(y) * width + x) * 4]; }
+  [[nodiscard]] const std::uint8_t* pixel(int x, int y) const {
+    return &rgba[(std::size_t(y) * width + x) * 4];
+  }
+};
+
+/// An output or input file could not be written or read; the message names the file.
+class IoError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Writes a PNG atomically: to a temporary name in the same directory, then renamed.
+/// @param compression zlib level 0–9 (stb's default is 8; low levels are much faster).
+/// @throws IoError naming the path.
+void write_png(const std::filesystem::path& path, const Image& image, int compression = 4);
+
+/// Reads PNG/JPEG/BMP/TGA into RGBA8. @throws IoError naming the path and stb's reason.
+Image read_image(const std::filesystem::path& path);
+
+}  // namespace simreel::render

@@ -1,0 +1,109 @@
+#pragma once
+/// @file renderer.hpp
+/// The offscreen renderer. It keeps its own table `key -> drawable` (a hash map), applies
+/// transforms and particle data the program hands it, and never includes an engine header:
+/// keys are opaque 64-bit values (the program passes sim::Handle::packed()).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include <Eigen/Core>
+
+#include "simreel/render/context.hpp"
+#include "simreel/render/image.hpp"
+
+namespace simreel::render {
+
+using ObjectKey = std::uint64_t;
+using Vec3f = Eigen::Vector3f;
+using Vec4f = Eigen::Vector4f;
+using Mat3f = Eigen::Matrix3f;
+
+/// Pinhole camera. World frame is z up.
+struct Camera {
+  Vec3f position{6.f, -6.f, 3.f};  ///< (m)
+  Vec3f target{0.f, 0.f, 0.5f};    ///< (m) point looked at
+  Vec3f up{0.f, 0.f, 1.f};
+  float fov_deg = 40.f;            ///< vertical field of view (degrees), in (0, 180)
+  float near_m = 0.05f;            ///< near clip distance (m)
+  float far_m = 500.f;             ///< far clip distance (m)
+};
+
+/// Directional sun plus constant ambient.
+struct Light {
+  Vec3f direction{-0.4f, 0.3f, -1.f};  ///< direction the light travels (from the sun), world frame
+  Vec3f color{1.f, 0.97f, 0.92f};      ///< linear RGB intensity
+  Vec3f ambient{0.30f, 0.33f, 0.38f};  ///< linear RGB added everywhere
+};
+
+struct RenderSettings {
+  int width = 1280;        ///< (pixels) >= 1
+  int height = 720;        ///< (pixels) >= 1
+  int msaa_samples = 4;    ///< 0 or 1 disables multisampling
+  Vec3f sky_top{0.32f, 0.50f, 0.78f};     ///< background gradient, top of the frame (linear RGB)
+  Vec3f sky_bottom{0.80f, 0.86f, 0.93f};  ///< background gradient, bottom of the frame
+};
+
+/// A finite, drawn piece of an infinite ground plane, centred on the plane's origin.
+struct PlaneDesc {
+  Vec3f point{0.f, 0.f, 0.f};   ///< (m) the plane's origin, world frame
+  Vec3f normal{0.f, 0.f, 1.f};
+  float half_size = 20.f;       ///< (m) drawn square extends +-half_size around point
+  Vec4f color{0.55f, 0.57f, 0.6f, 1.f};
+  float checker_m = 1.f;        ///< (m) checker cell size; 0 draws a plain color
+};
+
+struct BoxDesc {
+  Vec3f half_extents{0.5f, 0.5f, 0.5f};  ///< (m) along local axes
+  Vec4f color{0.8f, 0.45f, 0.2f, 1.f};
+};
+
+/// How particles are drawn.
+enum class ParticleStyle {
+  soft,      ///< camera-facing round sprites with a soft edge and sphere-like shading, alpha blended
+  additive,  ///< soft glow added to the frame (fire, sparks)
+};
+
+/// A batch of particles, structure-of-arrays; copied during set_particles().
+struct ParticleBatch {
+  std::size_t count = 0;
+  const float* position = nullptr;  ///< (count x 3) world frame (m)
+  const float* color = nullptr;     ///< (count x 4) linear RGBA in [0, 1]
+  const float* radius = nullptr;    ///< (count) (m): the sprite's world-space radius
+  ParticleStyle style = ParticleStyle::soft;
+};
+
+class Renderer {
+ public:
+  /// The context must be current on this thread. @throws ContextError if the framebuffer or a
+  /// shader cannot be created (message names the stage and the GL log).
+  Renderer(Context& context, const RenderSettings& settings);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  void set_camera(const Camera& camera);
+  void set_light(const Light& light);
+
+  /// Adds drawables under a key. @throws std::invalid_argument if the key is already used.
+  void add_plane(ObjectKey key, const PlaneDesc& desc);
+  void add_box(ObjectKey key, const BoxDesc& desc);
+  /// Moves a mesh drawable: x_world = rotation * x_local + translation.
+  /// @throws std::out_of_range if the key is unknown.
+  void set_transform(ObjectKey key, const Vec3f& translation, const Mat3f& rotation);
+  /// Replaces the particles drawn under `key` (creates the drawable on first use).
+  void set_particles(ObjectKey key, const ParticleBatch& batch);
+  void remove(ObjectKey key);
+
+  /// Draws the frame and reads it back: RGBA8, rows top to bottom, alpha 255.
+  [[nodiscard]] Image render();
+
+  [[nodiscard]] const RenderSettings& settings() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace simreel::render

@@ -1,0 +1,37 @@
+#pragma once
+/// @file random.hpp
+/// The project's own random generator and normal distribution, so the same seed gives the same
+/// particles with any standard library (std::normal_distribution differs between them).
+
+#include <cstdint>
+
+namespace simreel::sim {
+
+/// xoshiro256** (Blackman & Vigna 2018), seeded through splitmix64. Not thread-safe: one
+/// generator per emitter, derived from the scene seed and the emitter's index.
+class Rng {
+ public:
+  /// @param seed any 64-bit value; @param stream distinguishes generators sharing a seed
+  ///        (e.g. the emitter index), so emitters do not draw correlated sequences.
+  explicit Rng(std::uint64_t seed = 0, std::uint64_t stream = 0);
+
+  std::uint64_t next_u64();
+  /// Uniform in [0, 1) with 53 random bits.
+  double uniform();
+  /// Uniform in [lo, hi).
+  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+  /// Standard normal N(0, 1) by the Box–Muller transform (both values used: the second is
+  /// cached), computed with std::log/std::sqrt/std::cos/std::sin only.
+  double normal();
+  /// N(mean, deviation²). A deviation of 0 returns mean exactly without drawing.
+  double normal(double mean, double deviation) {
+    return deviation == 0.0 ? mean : mean + deviation * normal();
+  }
+
+ private:
+  std::uint64_t s_[4];
+  double cached_ = 0.0;
+  bool has_cached_ = false;
+};
+
+}  // namespace simreel::sim
