@@ -3,8 +3,9 @@
 /// The project's own OpenGL function table, loaded through a context's getProcAddress (the way
 /// glad does it), so the OSMesa and EGL backends share every line of renderer code.
 
-#include <GL/gl.h>
-#include <GL/glext.h>
+// glcorearb.h declares every core entry point's PFN type (gl.h + glext.h lack those of GL 1.0
+// and 1.1). It must come before any <GL/gl.h>, which would otherwise hide its GL 1.1 block.
+#include <GL/glcorearb.h>
 
 namespace simreel::render {
 
