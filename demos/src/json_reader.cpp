@@ -1,0 +1,326 @@
+#include "json_reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace simreel::app {
+
+namespace {
+
+std::string join_lines(const std::vector<std::string>& lines) {
+  std::string out;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (i) out += '\n';
+    out += lines[i];
+  }
+  return out;
+}
+
+std::string type_name(const json& v) {
+  switch (v.type()) {
+    case json::value_t::null: return "null";
+    case json::value_t::boolean: return "boolean";
+    case json::value_t::string: return "string";
+    case json::value_t::array: return "array";
+    case json::value_t::object: return "object";
+    case json::value_t::number_integer:
+    case json::value_t::number_unsigned:
+    case json::value_t::number_float: return "number";
+    default: return "value";
+  }
+}
+
+std::string format_number(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+SceneError::SceneError(std::vector<std::string> messages)
+    : std::runtime_error(join_lines(messages)), messages_(std::move(messages)) {}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t sub = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, sub});
+    }
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string pointer_token(const std::string& key) {
+  std::string out;
+  for (char c : key) {
+    if (c == '~') out += "~0";
+    else if (c == '/') out += "~1";
+    else out += c;
+  }
+  return out;
+}
+
+std::string describe(const json& v) {
+  if (v.is_object()) return "an object";
+  if (v.is_array()) return "an array of " + std::to_string(v.size());
+  std::string text = v.dump();
+  if (text.size() > 40) text = text.substr(0, 37) + "...";
+  return text + " (" + type_name(v) + ")";
+}
+
+json parse_json_text(const std::string& text, const std::string& file) {
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann reports a byte offset; users need line and column.
+    std::size_t line = 1, col = 1;
+    const std::size_t end = std::min<std::size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
+    for (std::size_t i = 0; i < end; ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
+    }
+    std::string reason = e.what();
+    // Strip nlohmann's "[json.exception.parse_error.101] parse error at line 1, column 2: " prefix.
+    if (auto pos = reason.find(": "); pos != std::string::npos) reason = reason.substr(pos + 2);
+    if (auto pos = reason.find("syntax error while parsing value - "); pos != std::string::npos)
+      reason = reason.substr(pos + 35);
+    throw SceneError(file + ":" + std::to_string(line) + ":" + std::to_string(col) +
+                     ": invalid JSON: " + reason);
+  }
+}
+
+json parse_json_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw SceneError(path.string() + ": cannot read scene: no such file");
+  if (std::filesystem::is_directory(path, ec))
+    throw SceneError(path.string() + ": cannot read scene: is a directory, expected a JSON file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path.string() + ": cannot read scene: permission denied or unreadable");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  return parse_json_text(buf.str(), path.string());
+}
+
+void apply_override(json& doc, const std::string& assignment, const std::string& file) {
+  const auto eq = assignment.find('=');
+  const std::string where = "--set " + assignment;
+  if (eq == std::string::npos || eq == 0)
+    throw SceneError(where + ": expected POINTER=VALUE, e.g. /emitters/0/rate=500");
+  const std::string ptr_text = assignment.substr(0, eq);
+  const std::string value_text = assignment.substr(eq + 1);
+  if (ptr_text.front() != '/')
+    throw SceneError(where + ": expected a JSON pointer starting with '/', found \"" + ptr_text + "\"");
+  json::json_pointer ptr;
+  try {
+    ptr = json::json_pointer(ptr_text);
+  } catch (const json::exception& e) {
+    throw SceneError(where + ": invalid JSON pointer \"" + ptr_text + "\"");
+  }
+  json value;
+  try {
+    value = json::parse(value_text);
+  } catch (const json::parse_error&) {
+    value = value_text;  // a bare word is a string
+  }
+  if (doc.contains(ptr)) {
+    doc[ptr] = value;
+    return;
+  }
+  const json::json_pointer parent = ptr.parent_pointer();
+  if (doc.contains(parent) && doc[parent].is_object()) {
+    doc[ptr] = value;  // a new key; the schema check rejects unknown ones
+    return;
+  }
+  throw SceneError(file + ": " + ptr_text + ": --set names nothing in the scene (no value at " +
+                   ptr_text + " and " + (parent.empty() ? "/" : parent.to_string()) +
+                   " is not an object)");
+}
+
+ObjectReader::ObjectReader(const json& object, std::string pointer, std::string file,
+                           std::vector<std::string>& errors)
+    : object_(object), pointer_(std::move(pointer)), file_(std::move(file)), errors_(errors) {}
+
+bool ObjectReader::has(const std::string& key) const { return object_.contains(key); }
+
+const json* ObjectReader::get(const std::string& key) {
+  known_.insert(key);
+  auto it = object_.find(key);
+  return it == object_.end() ? nullptr : &*it;
+}
+
+void ObjectReader::error(const std::string& key, const std::string& expected, const json& found) {
+  errors_.push_back(file_ + ": " + pointer(key) + ": expected " + expected + ", found " + describe(found));
+}
+
+void ObjectReader::error_at(const std::string& ptr, const std::string& message) {
+  errors_.push_back(file_ + ": " + (ptr.empty() ? "/" : ptr) + ": " + message);
+}
+
+double ObjectReader::number(const std::string& key, double fallback, double min, double max,
+                            bool min_exclusive) {
+  const json* v = get(key);
+  if (!v) return fallback;
+  std::string range = "a number";
+  if (std::isfinite(min) && std::isfinite(max))
+    range += std::string(" in ") + (min_exclusive ? "(" : "[") + format_number(min) + ", " + format_number(max) + "]";
+  else if (std::isfinite(min))
+    range += (min_exclusive ? " > " : " >= ") + format_number(min);
+  else if (std::isfinite(max))
+    range += " <= " + format_number(max);
+  if (!v->is_number()) {
+    error(key, range, *v);
+    return fallback;
+  }
+  const double x = v->get<double>();
+  if (!std::isfinite(x) || x < min || x > max || (min_exclusive && x == min)) {
+    error(key, range, *v);
+    return fallback;
+  }
+  return x;
+}
+
+long long ObjectReader::integer(const std::string& key, long long fallback, long long min, long long max) {
+  const json* v = get(key);
+  if (!v) return fallback;
+  const std::string expected = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  if (!v->is_number_integer() && !(v->is_number_float() && std::floor(v->get<double>()) == v->get<double>())) {
+    error(key, expected, *v);
+    return fallback;
+  }
+  const double d = v->get<double>();
+  if (d < double(min) || d > double(max)) {
+    error(key, expected, *v);
+    return fallback;
+  }
+  return static_cast<long long>(d);
+}
+
+bool ObjectReader::boolean(const std::string& key, bool fallback) {
+  const json* v = get(key);
+  if (!v) return fallback;
+  if (!v->is_boolean()) {
+    error(key, "true or false", *v);
+    return fallback;
+  }
+  return v->get<bool>();
+}
+
+std::string ObjectReader::string(const std::string& key, const std::string& fallback) {
+  const json* v = get(key);
+  if (!v) return fallback;
+  if (!v->is_string()) {
+    error(key, "a string", *v);
+    return fallback;
+  }
+  return v->get<std::string>();
+}
+
+std::string ObjectReader::choice(const std::string& key, const std::string& fallback,
+                                 const std::vector<std::string>& choices) {
+  std::string expected = "one of";
+  for (std::size_t i = 0; i < choices.size(); ++i) expected += (i ? ", \"" : " \"") + choices[i] + "\"";
+  const json* v = get(key);
+  if (!v) return fallback;
+  if (!v->is_string() || std::find(choices.begin(), choices.end(), v->get<std::string>()) == choices.end()) {
+    error(key, expected, *v);
+    return fallback;
+  }
+  return v->get<std::string>();
+}
+
+std::vector<double> ObjectReader::numbers(const std::string& key, std::vector<double> fallback,
+                                          std::size_t count, double min, double max, bool min_exclusive) {
+  const json* v = get(key);
+  if (!v) return fallback;
+  std::string expected = "an array of " + std::to_string(count) + " numbers";
+  if (std::isfinite(min) || std::isfinite(max)) {
+    expected += " each ";
+    if (std::isfinite(min) && std::isfinite(max))
+      expected += std::string("in ") + (min_exclusive ? "(" : "[") + format_number(min) + ", " + format_number(max) + "]";
+    else if (std::isfinite(min))
+      expected += (min_exclusive ? "> " : ">= ") + format_number(min);
+    else
+      expected += "<= " + format_number(max);
+  }
+  if (!v->is_array() || v->size() != count) {
+    error(key, expected, *v);
+    return fallback;
+  }
+  std::vector<double> out(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const json& e = (*v)[i];
+    const bool ok = e.is_number() && std::isfinite(e.get<double>()) && e.get<double>() >= min &&
+                    e.get<double>() <= max && !(min_exclusive && e.get<double>() == min);
+    if (!ok) {
+      errors_.push_back(file_ + ": " + pointer(key) + "/" + std::to_string(i) + ": expected " + expected +
+                        ", found " + describe(e));
+      return fallback;
+    }
+    out[i] = e.get<double>();
+  }
+  return out;
+}
+
+std::array<double, 3> ObjectReader::vec3(const std::string& key, std::array<double, 3> fallback) {
+  auto v = numbers(key, {fallback[0], fallback[1], fallback[2]}, 3, -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity());
+  return {v[0], v[1], v[2]};
+}
+
+std::array<double, 4> ObjectReader::color(const std::string& key, std::array<double, 4> fallback) {
+  const json* v = get(key);
+  if (!v) return fallback;
+  const std::string expected = "a color [r, g, b] or [r, g, b, a] with each in [0, 1]";
+  if (!v->is_array() || (v->size() != 3 && v->size() != 4)) {
+    error(key, expected, *v);
+    return fallback;
+  }
+  std::array<double, 4> out{0, 0, 0, 1};
+  for (std::size_t i = 0; i < v->size(); ++i) {
+    const json& e = (*v)[i];
+    if (!e.is_number() || !(e.get<double>() >= 0.0 && e.get<double>() <= 1.0)) {
+      errors_.push_back(file_ + ": " + pointer(key) + "/" + std::to_string(i) + ": expected " + expected +
+                        ", found " + describe(e));
+      return fallback;
+    }
+    out[i] = e.get<double>();
+  }
+  return out;
+}
+
+void ObjectReader::finish() {
+  for (auto it = object_.begin(); it != object_.end(); ++it) {
+    if (known_.count(it.key())) continue;
+    std::string hint;
+    std::size_t best = std::string::npos;
+    for (const auto& k : known_) {
+      const std::size_t d = edit_distance(it.key(), k);
+      if (d < best) {
+        best = d;
+        hint = k;
+      }
+    }
+    std::string msg = file_ + ": " + pointer(it.key()) + ": unknown key \"" + it.key() + "\"";
+    if (!hint.empty() && best <= std::max<std::size_t>(2, hint.size() / 3)) msg += "; did you mean \"" + hint + "\"?";
+    else if (!known_.empty()) {
+      msg += "; expected one of:";
+      for (const auto& k : known_) msg += " " + k;
+    }
+    errors_.push_back(msg);
+  }
+}
+
+}  // namespace simreel::app

@@ -1,0 +1,101 @@
+#pragma once
+/// @file json_reader.hpp
+/// Checked reading of JSON scene files: every value read is checked for type and range, every
+/// object for unknown keys (with a "did you mean" hint), and every message names the file, the
+/// JSON pointer (RFC 6901), what was found and what was expected. Errors are collected so that
+/// `simreel validate` can print all of them; SceneError carries the list.
+
+#include <array>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace simreel::app {
+
+using nlohmann::json;
+
+/// Bad input (scene file, --set override, asset): exit code 2. `what()` is all messages, one
+/// per line; `messages()` lists them.
+class SceneError : public std::runtime_error {
+ public:
+  explicit SceneError(std::vector<std::string> messages);
+  explicit SceneError(const std::string& message) : SceneError(std::vector<std::string>{message}) {}
+  [[nodiscard]] const std::vector<std::string>& messages() const { return messages_; }
+
+ private:
+  std::vector<std::string> messages_;
+};
+
+/// Levenshtein distance, for "did you mean" hints.
+std::size_t edit_distance(const std::string& a, const std::string& b);
+
+/// Escapes one reference token for a JSON pointer (~ -> ~0, / -> ~1).
+std::string pointer_token(const std::string& key);
+
+/// Short description of a JSON value for messages: `"fast" (string)`, `-3 (number)`, `an object`.
+std::string describe(const json& value);
+
+/// Parses JSON text. @throws SceneError "FILE:LINE:COL: invalid JSON: ..." on a syntax error.
+json parse_json_text(const std::string& text, const std::string& file);
+/// Reads and parses a file. @throws SceneError naming the file if it cannot be read or parsed.
+json parse_json_file(const std::filesystem::path& path);
+
+/// Applies `--set POINTER=VALUE`: VALUE is read as JSON, and as a string if it is not JSON.
+/// The pointer must name an existing value or a new key of an existing object (the schema check
+/// then rejects an unknown key). @throws SceneError naming the override and the file.
+void apply_override(json& doc, const std::string& assignment, const std::string& file);
+
+/// One JSON object being read. Keys read through it are "known"; finish() reports the others.
+class ObjectReader {
+ public:
+  ObjectReader(const json& object, std::string pointer, std::string file,
+               std::vector<std::string>& errors);
+
+  [[nodiscard]] bool has(const std::string& key) const;
+  [[nodiscard]] std::string pointer(const std::string& key) const { return pointer_ + "/" + pointer_token(key); }
+  [[nodiscard]] const std::string& pointer() const { return pointer_; }
+  [[nodiscard]] const std::string& file() const { return file_; }
+  std::vector<std::string>& errors() { return errors_; }
+
+  /// Marks a key known without reading it (a key handled elsewhere).
+  void known(const std::string& key) { known_.insert(key); }
+  /// The raw value of key, or nullptr if absent (marks the key known).
+  const json* get(const std::string& key);
+
+  double number(const std::string& key, double fallback, double min = -std::numeric_limits<double>::infinity(),
+                double max = std::numeric_limits<double>::infinity(), bool min_exclusive = false);
+  long long integer(const std::string& key, long long fallback, long long min, long long max);
+  bool boolean(const std::string& key, bool fallback);
+  std::string string(const std::string& key, const std::string& fallback);
+  /// A string that must be one of `choices`.
+  std::string choice(const std::string& key, const std::string& fallback,
+                     const std::vector<std::string>& choices);
+  std::array<double, 3> vec3(const std::string& key, std::array<double, 3> fallback);
+  /// RGB (3 numbers) or RGBA (4 numbers) in [0, 1]; alpha defaults to 1.
+  std::array<double, 4> color(const std::string& key, std::array<double, 4> fallback);
+  /// Fixed-length array of numbers each in [min, max].
+  std::vector<double> numbers(const std::string& key, std::vector<double> fallback, std::size_t count,
+                              double min, double max, bool min_exclusive = false);
+
+  /// Adds an error at this object's key.
+  void error(const std::string& key, const std::string& expected, const json& found);
+  void error_at(const std::string& pointer, const std::string& message);
+
+  /// Reports keys present but never read, with the closest known key as a hint.
+  void finish();
+
+ private:
+  const json& object_;
+  std::string pointer_;
+  std::string file_;
+  std::vector<std::string>& errors_;
+  std::set<std::string> known_;
+};
+
+}  // namespace simreel::app

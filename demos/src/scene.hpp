@@ -1,0 +1,66 @@
+#pragma once
+/// @file scene.hpp
+/// Scene files: JSON -> checked definitions -> a sim::World and the renderer's drawables.
+/// The format is documented key by key in README.md ("Scene format").
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "simreel/render/context.hpp"
+#include "simreel/render/renderer.hpp"
+#include "simreel/sim/world.hpp"
+
+namespace simreel::app {
+
+struct ColliderScene {
+  std::string name;
+  enum class Type { plane, box } type = Type::plane;
+  sim::PlaneDef plane;
+  sim::BoxDef box;
+  render::Vec4f color{0.6f, 0.6f, 0.62f, 1.f};
+  float checker_m = 0.f;        ///< (m) plane checker cell; 0 = plain
+  float draw_half_size = 20.f;  ///< (m) drawn extent of an infinite plane
+};
+
+struct EmitterScene {
+  sim::ParticleSystemDef system;
+  render::ParticleStyle style = render::ParticleStyle::soft;
+};
+
+/// A loaded, checked scene. Every value is in engine units (SI, radians) except where named.
+struct Scene {
+  std::string file;  ///< path as given, used in messages
+  std::uint64_t seed = 0;
+  double fps = 30.0;  ///< frames per second; the sampling time is 1/fps
+  int frames = 120;
+  sim::WorldDef world;
+  render::Backend backend = render::Backend::osmesa;
+  render::RenderSettings render;
+  render::Camera camera;
+  render::Light light;
+  std::vector<ColliderScene> colliders;
+  std::vector<EmitterScene> emitters;
+};
+
+/// Turns a parsed document into a Scene, checking every key. @throws SceneError listing every
+/// problem (file, JSON pointer, found, expected).
+Scene scene_from_json(const nlohmann::json& doc, const std::string& file);
+
+/// Reads `path`, applies `--set` overrides in order, then checks. @throws SceneError.
+Scene load_scene(const std::filesystem::path& path, const std::vector<std::string>& overrides = {});
+
+/// The simulation built from a scene, with the handle of each collider and emitter in scene order.
+struct SceneWorld {
+  sim::World world;
+  std::vector<sim::ColliderHandle> colliders;
+  std::vector<sim::ParticleSystemHandle> systems;
+};
+
+/// @throws SceneError if the engine rejects a definition (should not happen after checking).
+SceneWorld build_world(const Scene& scene);
+
+}  // namespace simreel::app

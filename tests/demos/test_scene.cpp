@@ -1,0 +1,114 @@
+// Scene loading: every key checked, messages name file + pointer + found + expected.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "json_reader.hpp"
+#include "scene.hpp"
+
+using simreel::app::apply_override;
+using simreel::app::json;
+using simreel::app::parse_json_text;
+using simreel::app::scene_from_json;
+using simreel::app::SceneError;
+
+namespace {
+
+std::string errors_of(const json& doc) {
+  try {
+    (void)scene_from_json(doc, "s.json");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(SceneLoad, EmptyObjectGivesDefaults) {
+  const auto s = scene_from_json(json::object(), "s.json");
+  EXPECT_EQ(s.frames, 120);
+  EXPECT_DOUBLE_EQ(s.fps, 30.0);
+  EXPECT_TRUE(s.emitters.empty());
+  EXPECT_TRUE(s.colliders.empty());
+}
+
+TEST(SceneLoad, EmitterDistributionsAndDirection) {
+  const auto doc = json::parse(R"({"emitters":[{"name":"jet","direction":[1,0,0],"rate":12.5,
+      "start_speed":{"mean":3,"deviation":0.5},"spread_deg":4,"mass":0.002,
+      "particle_radius":{"mean":0.01,"deviation":0.001,"min":0.005,"max":0.02}}]})");
+  const auto s = scene_from_json(doc, "s.json");
+  ASSERT_EQ(s.emitters.size(), 1u);
+  const auto& em = s.emitters[0].system.emitter;
+  EXPECT_EQ(s.emitters[0].system.name, "jet");
+  EXPECT_DOUBLE_EQ(em.rate, 12.5);
+  EXPECT_DOUBLE_EQ(em.start_speed.mean, 3.0);
+  EXPECT_DOUBLE_EQ(em.start_speed.deviation, 0.5);
+  EXPECT_DOUBLE_EQ(em.spread_deg.mean, 4.0);
+  EXPECT_DOUBLE_EQ(em.spread_deg.deviation, 0.0);
+  EXPECT_DOUBLE_EQ(em.radius.min, 0.005);
+  EXPECT_DOUBLE_EQ(em.radius.max, 0.02);
+  // The emitter's +z axis is turned onto the given direction.
+  const auto axis = em.transform.rotation * simreel::sim::Vec3::UnitZ();
+  EXPECT_NEAR(axis.x(), 1.0, 1e-12);
+  EXPECT_NEAR(axis.z(), 0.0, 1e-12);
+}
+
+TEST(SceneLoad, WrongTypeNamesPointerFoundAndExpected) {
+  const std::string e = errors_of(json::parse(R"({"emitters":[{"rate":"fast"}]})"));
+  EXPECT_NE(e.find("s.json: /emitters/0/rate: expected a number"), std::string::npos) << e;
+  EXPECT_NE(e.find("found \"fast\" (string)"), std::string::npos) << e;
+}
+
+TEST(SceneLoad, OutOfRangeIsAnError) {
+  const std::string e = errors_of(json::parse(R"({"colliders":[{"type":"plane","restitution":1.5}]})"));
+  EXPECT_NE(e.find("/colliders/0/restitution: expected a number in [0, 1], found 1.5"), std::string::npos) << e;
+}
+
+TEST(SceneLoad, UnknownKeyGetsDidYouMean) {
+  const std::string e = errors_of(json::parse(R"({"emitters":[{"rat":5}], "fsp": 30})"));
+  EXPECT_NE(e.find("/emitters/0/rat: unknown key \"rat\"; did you mean \"rate\"?"), std::string::npos) << e;
+  EXPECT_NE(e.find("/fsp: unknown key \"fsp\"; did you mean \"fps\"?"), std::string::npos) << e;
+}
+
+TEST(SceneLoad, AllErrorsAreCollected) {
+  try {
+    (void)scene_from_json(json::parse(R"({"fps":-1,"frames":"x","camera":{"fov_deg":500}})"), "s.json");
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.messages().size(), 3u) << e.what();
+  }
+}
+
+TEST(SceneLoad, KeyframeTimesMustIncrease) {
+  const std::string e = errors_of(json::parse(
+      R"({"colliders":[{"type":"box","path":{"keys":[{"time":1},{"time":1}]}}]})"));
+  EXPECT_NE(e.find("/colliders/0/path/keys/1/time: expected times strictly increasing"), std::string::npos) << e;
+}
+
+TEST(SceneLoad, InvalidJsonReportsLineAndColumn) {
+  try {
+    (void)parse_json_text("{\n  \"fps\": 30,\n  \"frames\": ,\n}", "bad.json");
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json:3:13: invalid JSON"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneOverride, ReplacesExistingValueReadAsJson) {
+  json doc = json::parse(R"({"emitters":[{"rate":10}]})");
+  apply_override(doc, "/emitters/0/rate=500", "s.json");
+  EXPECT_EQ(doc["emitters"][0]["rate"], 500);
+  apply_override(doc, "/emitters/0/name=spray", "s.json");  // bare word -> string
+  EXPECT_EQ(doc["emitters"][0]["name"], "spray");
+  apply_override(doc, "/emitters/0/position=[1,2,3]", "s.json");
+  EXPECT_EQ(doc["emitters"][0]["position"], json::parse("[1,2,3]"));
+}
+
+TEST(SceneOverride, PointerThatNamesNothingIsAnError) {
+  json doc = json::parse(R"({"emitters":[{"rate":10}]})");
+  EXPECT_THROW(apply_override(doc, "/emitters/3/rate=1", "s.json"), SceneError);
+  EXPECT_THROW(apply_override(doc, "/camera/fov_deg=1", "s.json"), SceneError);
+  EXPECT_THROW(apply_override(doc, "emitters=1", "s.json"), SceneError);
+  EXPECT_THROW(apply_override(doc, "/emitters/0/rate", "s.json"), SceneError);
+}
