@@ -1,1 +1,376 @@
-// placeholder: being written
+#include "simreel/render/frame_sink.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace simreel::render {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// PNG sequence
+
+class PngSequenceSink final : public FrameSink {
+ public:
+  PngSequenceSink(fs::path dir, int compression) : dir_(std::move(dir)), compression_(compression) {
+    std::error_code ec;
+    fs::create_directories(dir_, ec);
+    if (ec) throw IoError("cannot create directory " + dir_.string() + ": " + ec.message());
+  }
+
+  void write(const Image& frame, int index) override {
+    if (index < 0) throw IoError("cannot write frame " + std::to_string(index) + " to " + describe());
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", index);
+    write_png(dir_ / name, frame, compression_);
+  }
+  // Every frame is complete on its own once written, so there is nothing to close or discard.
+  void finish() override {}
+  void abort() noexcept override {}
+  [[nodiscard]] std::string describe() const override {
+    return (dir_ / "frame_%05d.png").string();
+  }
+
+ private:
+  fs::path dir_;
+  int compression_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Video through an ffmpeg child process
+
+/// Searches PATH the way execvp does (an empty entry means the current directory).
+fs::path find_on_path(const std::string& program) {
+  const char* env = std::getenv("PATH");
+  const std::string path = env != nullptr ? env : "/usr/local/bin:/usr/bin:/bin";
+  std::size_t start = 0;
+  while (start <= path.size()) {
+    std::size_t end = path.find(':', start);
+    if (end == std::string::npos) end = path.size();
+    const std::string dir = path.substr(start, end - start);
+    const fs::path candidate = fs::path(dir.empty() ? "." : dir) / program;
+    struct stat st {};
+    if (::stat(candidate.c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
+        ::access(candidate.c_str(), X_OK) == 0) {
+      return candidate;
+    }
+    start = end + 1;
+  }
+  return {};
+}
+
+/// A write to a pipe whose reader died raises SIGPIPE, which would kill the program. Blocking
+/// it on this thread (instead of changing the process-wide disposition) turns it into EPIPE;
+/// a SIGPIPE raised meanwhile is consumed before unblocking.
+class SigpipeBlock {
+ public:
+  SigpipeBlock() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGPIPE);
+    pthread_sigmask(SIG_BLOCK, &set_, &old_);
+  }
+  ~SigpipeBlock() {
+    const timespec zero{};
+    while (sigtimedwait(&set_, nullptr, &zero) > 0) {
+    }
+    pthread_sigmask(SIG_SETMASK, &old_, nullptr);
+  }
+  SigpipeBlock(const SigpipeBlock&) = delete;
+  SigpipeBlock& operator=(const SigpipeBlock&) = delete;
+
+ private:
+  sigset_t set_{};
+  sigset_t old_{};
+};
+
+std::string format_fps(double fps) {
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, fps);
+  return ec == std::errc() ? std::string(buf, end) : std::to_string(fps);
+}
+
+std::string lower_extension(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+class VideoSink final : public FrameSink {
+ public:
+  VideoSink(const fs::path& path, int width, int height, const VideoOptions& options)
+      : path_(path), width_(width), height_(height) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".mp4" && ext != ".gif") {
+      fail("unsupported extension \"" + path.extension().string() + "\" (expected .mp4 or .gif)");
+    }
+    if (width < 1 || height < 1) fail("frame size must be at least 1x1");
+    if (!(options.fps > 0.0) || !std::isfinite(options.fps)) fail("fps must be positive");
+    if (options.crf < 0 || options.crf > 51) fail("crf must be in 0..51");
+    const fs::path ffmpeg = find_on_path("ffmpeg");
+    if (ffmpeg.empty()) fail("ffmpeg not found on PATH");
+
+    const fs::path dir = path.parent_path();
+    if (!dir.empty()) {
+      std::error_code ec;
+      fs::create_directories(dir, ec);
+      if (ec) fail("cannot create directory " + dir.string() + ": " + ec.message());
+    }
+    std::string tmp_name = ".";  // built piecewise: GCC 12 warns falsely on "." + string&&
+    tmp_name += path.filename().string();
+    tmp_name += ".tmp-";
+    tmp_name += std::to_string(long(::getpid()));
+    tmp_ = dir / tmp_name;
+
+    std::vector<std::string> args = {ffmpeg.string(), "-hide_banner", "-nostdin", "-loglevel",
+                                     "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgba", "-s",
+                                     std::to_string(width) + "x" + std::to_string(height), "-r",
+                                     format_fps(options.fps), "-i", "-"};
+    if (ext == ".mp4") {
+      args.insert(args.end(), {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264",
+                               "-preset", "veryfast", "-crf", std::to_string(options.crf),
+                               "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"});
+    } else {
+      args.insert(args.end(),
+                  {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-f", "gif"});
+    }
+    args.push_back(tmp_.string());
+    spawn(ffmpeg, args);
+  }
+
+  ~VideoSink() override { abort(); }
+  VideoSink(const VideoSink&) = delete;
+  VideoSink& operator=(const VideoSink&) = delete;
+
+  void write(const Image& frame, int index) override {
+    if (pid_ <= 0) fail("frame " + std::to_string(index) + " written after the video was closed");
+    if (frame.width != width_ || frame.height != height_ ||
+        frame.rgba.size() != std::size_t(width_) * std::size_t(height_) * 4) {
+      fail("frame " + std::to_string(index) + " is " + std::to_string(frame.width) + "x" +
+           std::to_string(frame.height) + ", expected " + std::to_string(width_) + "x" +
+           std::to_string(height_));
+    }
+    const std::uint8_t* data = frame.rgba.data();
+    std::size_t left = frame.rgba.size();
+    int err = 0;
+    {
+      const SigpipeBlock block;
+      while (left > 0) {
+        const ssize_t n = ::write(stdin_fd_, data, left);
+        if (n < 0) {
+          if (errno == EINTR) continue;
+          err = errno;
+          break;
+        }
+        data += n;
+        left -= std::size_t(n);
+      }
+    }
+    if (err != 0) {
+      // ffmpeg went away (bad arguments, disk full, ...): its own message says why.
+      const int status = close_and_wait();
+      const std::string log = stderr_tail();
+      cleanup();
+      fail("ffmpeg stopped reading frames at frame " + std::to_string(index) + " (" +
+           describe_status(status) + ")" + (log.empty() ? "" : ": " + log));
+    }
+  }
+
+  void finish() override {
+    if (pid_ <= 0) fail("video already closed");
+    const int status = close_and_wait();
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      const std::string log = stderr_tail();
+      cleanup();
+      fail("ffmpeg failed (" + describe_status(status) + ")" + (log.empty() ? "" : ": " + log));
+    }
+    std::error_code ec;
+    fs::rename(tmp_, path_, ec);
+    if (ec) {
+      cleanup();
+      fail(ec.message());
+    }
+    tmp_.clear();
+    close_stderr();
+  }
+
+  void abort() noexcept override {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      close_and_wait();
+    }
+    cleanup();
+  }
+
+  [[nodiscard]] std::string describe() const override { return path_.string(); }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) const {
+    throw IoError("cannot encode " + path_.string() + ": " + why);
+  }
+
+  void spawn(const fs::path& ffmpeg, const std::vector<std::string>& args) {
+    // ffmpeg's stderr goes to an unlinked temporary file: nothing to drain while frames are
+    // written, nothing left behind, and the parent reads it through its own descriptor.
+    std::error_code ec;
+    fs::path log_dir = fs::temp_directory_path(ec);
+    if (ec) log_dir = "/tmp";
+    std::string log_name = (log_dir / "simreel-ffmpeg-XXXXXX").string();
+    stderr_fd_ = ::mkostemp(log_name.data(), O_CLOEXEC);
+    if (stderr_fd_ < 0) {
+      fail("cannot create a log file for ffmpeg in " + log_dir.string() + ": " +
+           std::strerror(errno));
+    }
+    ::unlink(log_name.c_str());
+
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) {
+      const int e = errno;
+      close_stderr();
+      fail(std::string("cannot create a pipe: ") + std::strerror(e));
+    }
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[0], 0);
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_adddup2(&actions, stderr_fd_, 2);
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    sigset_t defaults;
+    sigemptyset(&defaults);
+    sigaddset(&defaults, SIGPIPE);
+    sigset_t empty;
+    sigemptyset(&empty);
+    posix_spawnattr_setsigdefault(&attr, &defaults);
+    posix_spawnattr_setsigmask(&attr, &empty);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    const int rc = ::posix_spawn(&pid, ffmpeg.c_str(), &actions, &attr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attr);
+    ::close(fds[0]);
+    if (rc != 0) {
+      ::close(fds[1]);
+      close_stderr();
+      fail("cannot start " + ffmpeg.string() + ": " + std::strerror(rc));
+    }
+    pid_ = pid;
+    stdin_fd_ = fds[1];
+  }
+
+  /// Closes ffmpeg's input and reaps it; returns the wait status.
+  int close_and_wait() noexcept {
+    if (stdin_fd_ >= 0) {
+      ::close(stdin_fd_);
+      stdin_fd_ = -1;
+    }
+    int status = 0;
+    if (pid_ > 0) {
+      while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+      }
+      pid_ = -1;
+    }
+    return status;
+  }
+
+  static std::string describe_status(int status) {
+    if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
+    if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+    return "status " + std::to_string(status);
+  }
+
+  /// The last few lines ffmpeg printed, joined into one line.
+  std::string stderr_tail() const {
+    if (stderr_fd_ < 0) return {};
+    std::string text;
+    char buf[4096];
+    off_t offset = 0;
+    for (;;) {
+      const ssize_t n = ::pread(stderr_fd_, buf, sizeof buf, offset);
+      if (n <= 0) break;
+      text.append(buf, std::size_t(n));
+      offset += n;
+    }
+    std::vector<std::string> lines;
+    std::size_t start = 0;
+    while (start < text.size()) {
+      std::size_t end = text.find('\n', start);
+      if (end == std::string::npos) end = text.size();
+      std::string line = text.substr(start, end - start);
+      while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
+      if (!line.empty()) lines.push_back(std::move(line));
+      start = end + 1;
+    }
+    constexpr std::size_t kLines = 3;
+    std::string tail;
+    for (std::size_t i = lines.size() > kLines ? lines.size() - kLines : 0; i < lines.size(); ++i) {
+      if (!tail.empty()) tail += " | ";
+      tail += lines[i];
+    }
+    return tail;
+  }
+
+  void close_stderr() noexcept {
+    if (stderr_fd_ >= 0) {
+      ::close(stderr_fd_);
+      stderr_fd_ = -1;
+    }
+  }
+
+  void cleanup() noexcept {
+    close_stderr();
+    if (!tmp_.empty()) {
+      std::error_code ec;
+      fs::remove(tmp_, ec);
+    }
+  }
+
+  fs::path path_;
+  fs::path tmp_;
+  int width_;
+  int height_;
+  pid_t pid_ = -1;
+  int stdin_fd_ = -1;
+  int stderr_fd_ = -1;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSink> make_png_sequence(const fs::path& dir, int compression) {
+  return std::make_unique<PngSequenceSink>(dir, compression);
+}
+
+std::unique_ptr<FrameSink> make_video(const fs::path& path, int width, int height,
+                                      const VideoOptions& options) {
+  return std::make_unique<VideoSink>(path, width, height, options);
+}
+
+bool ffmpeg_available() { return !find_on_path("ffmpeg").empty(); }
+
+}  // namespace simreel::render

@@ -1,1 +1,886 @@
-// placeholder: being written
+#include "simreel/render/renderer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "shaders.hpp"
+
+namespace simreel::render {
+
+namespace {
+
+using Mat4f = Eigen::Matrix4f;
+
+constexpr int kShadowMapSize = 2048;
+constexpr std::size_t kInstanceFloats = 8;  // centre xyz, radius, colour rgba
+
+// ---------------------------------------------------------------------------------------------
+// Matrices (column-major, OpenGL clip conventions)
+
+Vec3f any_perpendicular(const Vec3f& n) {
+  const Vec3f ref = std::abs(n.x()) < 0.9f ? Vec3f::UnitX() : Vec3f::UnitY();
+  return (ref - n * n.dot(ref)).normalized();
+}
+
+Mat4f look_at(const Vec3f& eye, const Vec3f& target, const Vec3f& up) {
+  const Vec3f f = (target - eye).normalized();
+  Vec3f s = f.cross(up);
+  if (s.squaredNorm() < 1e-12f) s = f.cross(any_perpendicular(f));  // looking along `up`
+  s.normalize();
+  const Vec3f u = s.cross(f);
+  Mat4f m = Mat4f::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  m(0, 3) = -s.dot(eye);
+  m(1, 3) = -u.dot(eye);
+  m(2, 3) = f.dot(eye);
+  return m;
+}
+
+Mat4f perspective(float fovy_rad, float aspect, float near_m, float far_m) {
+  const float t = 1.f / std::tan(0.5f * fovy_rad);
+  Mat4f m = Mat4f::Zero();
+  m(0, 0) = t / aspect;
+  m(1, 1) = t;
+  m(2, 2) = (far_m + near_m) / (near_m - far_m);
+  m(2, 3) = 2.f * far_m * near_m / (near_m - far_m);
+  m(3, 2) = -1.f;
+  return m;
+}
+
+Mat4f ortho(float half_w, float half_h, float near_m, float far_m) {
+  Mat4f m = Mat4f::Identity();
+  m(0, 0) = 1.f / half_w;
+  m(1, 1) = 1.f / half_h;
+  m(2, 2) = -2.f / (far_m - near_m);
+  m(2, 3) = -(far_m + near_m) / (far_m - near_m);
+  return m;
+}
+
+Mat4f affine(const Mat3f& linear, const Vec3f& translation) {
+  Mat4f m = Mat4f::Identity();
+  m.block<3, 3>(0, 0) = linear;
+  m.block<3, 1>(0, 3) = translation;
+  return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shader programs
+
+class Program {
+ public:
+  Program() = default;
+  Program(const GlTable& gl, const char* name, const std::string& vs, const std::string& fs)
+      : gl_(&gl) {
+    const GLuint v = compile(GL_VERTEX_SHADER, name, "vertex", vs);
+    GLuint f = 0;
+    try {
+      f = compile(GL_FRAGMENT_SHADER, name, "fragment", fs);
+    } catch (...) {
+      gl.DeleteShader(v);
+      throw;
+    }
+    id_ = gl.CreateProgram();
+    gl.AttachShader(id_, v);
+    gl.AttachShader(id_, f);
+    gl.LinkProgram(id_);
+    gl.DeleteShader(v);
+    gl.DeleteShader(f);
+    GLint ok = GL_FALSE;
+    gl.GetProgramiv(id_, GL_LINK_STATUS, &ok);
+    if (ok != GL_TRUE) {
+      GLint length = 0;
+      gl.GetProgramiv(id_, GL_INFO_LOG_LENGTH, &length);
+      std::string log(std::size_t(std::max(length, 1)), '\0');
+      gl.GetProgramInfoLog(id_, GLsizei(log.size()), nullptr, log.data());
+      gl.DeleteProgram(id_);
+      id_ = 0;
+      throw ContextError(std::string("renderer: cannot link the ") + name + " shader: " +
+                         log.c_str());
+    }
+  }
+  ~Program() {
+    if (id_ != 0) gl_->DeleteProgram(id_);
+  }
+  Program(const Program&) = delete;
+  Program& operator=(const Program&) = delete;
+  Program(Program&& o) noexcept { *this = std::move(o); }
+  Program& operator=(Program&& o) noexcept {
+    std::swap(gl_, o.gl_);
+    std::swap(id_, o.id_);
+    std::swap(locations_, o.locations_);
+    return *this;
+  }
+
+  void use() const { gl_->UseProgram(id_); }
+  void set(const char* name, int v) const { gl_->Uniform1i(loc(name), v); }
+  void set(const char* name, float v) const { gl_->Uniform1f(loc(name), v); }
+  void set(const char* name, float x, float y) const { gl_->Uniform2f(loc(name), x, y); }
+  void set(const char* name, const Vec3f& v) const { gl_->Uniform3f(loc(name), v.x(), v.y(), v.z()); }
+  void set(const char* name, const Vec4f& v) const {
+    gl_->Uniform4f(loc(name), v.x(), v.y(), v.z(), v.w());
+  }
+  void set(const char* name, const Mat3f& m) const {
+    gl_->UniformMatrix3fv(loc(name), 1, GL_FALSE, m.data());
+  }
+  void set(const char* name, const Mat4f& m) const {
+    gl_->UniformMatrix4fv(loc(name), 1, GL_FALSE, m.data());
+  }
+
+ private:
+  GLuint compile(GLenum type, const char* name, const char* stage, const std::string& source) {
+    const GLuint shader = gl_->CreateShader(type);
+    const char* text = source.c_str();
+    gl_->ShaderSource(shader, 1, &text, nullptr);
+    gl_->CompileShader(shader);
+    GLint ok = GL_FALSE;
+    gl_->GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (ok != GL_TRUE) {
+      GLint length = 0;
+      gl_->GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+      std::string log(std::size_t(std::max(length, 1)), '\0');
+      gl_->GetShaderInfoLog(shader, GLsizei(log.size()), nullptr, log.data());
+      gl_->DeleteShader(shader);
+      throw ContextError(std::string("renderer: cannot compile the ") + name + " " + stage +
+                         " shader: " + log.c_str());
+    }
+    return shader;
+  }
+
+  // Uniforms a shader does not use report -1, which GL ignores on upload.
+  GLint loc(const char* name) const {
+    auto it = locations_.find(name);
+    if (it == locations_.end()) {
+      it = locations_.emplace(name, gl_->GetUniformLocation(id_, name)).first;
+    }
+    return it->second;
+  }
+
+  const GlTable* gl_ = nullptr;
+  GLuint id_ = 0;
+  mutable std::unordered_map<std::string, GLint> locations_;
+};
+
+std::string source(std::initializer_list<const char*> parts) {
+  std::string s = detail::kGlslVersion;
+  for (const char* p : parts) s += p;
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry
+
+/// Interleaved vertex: position (3), normal (3), plane coordinates in metres (2).
+struct Vertex {
+  float p[3];
+  float n[3];
+  float uv[2];
+};
+
+/// Unit cube [-1, 1]^3 with one normal per face (24 vertices), scaled per box by the model
+/// matrix; axis-aligned scaling leaves face normals unchanged.
+void unit_cube(std::vector<Vertex>& vertices, std::vector<GLuint>& indices) {
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const float sign : {-1.f, 1.f}) {
+      const int a = (axis + 1) % 3;
+      const int b = (axis + 2) % 3;
+      const GLuint base = GLuint(vertices.size());
+      // Corners ordered so the face is counter-clockwise seen from outside.
+      const float corners[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+      for (const auto& c : corners) {
+        Vertex v{};
+        v.p[axis] = sign;
+        v.p[a] = c[0];
+        v.p[b] = sign > 0 ? c[1] : -c[1];
+        v.n[axis] = sign;
+        vertices.push_back(v);
+      }
+      for (const GLuint i : {0u, 1u, 2u, 0u, 2u, 3u}) indices.push_back(base + i);
+    }
+  }
+}
+
+struct Mesh {
+  GLuint vao = 0;
+  GLuint vbo = 0;
+  GLuint ebo = 0;
+  GLsizei index_count = 0;
+};
+
+Mesh upload_mesh(const GlTable& gl, const std::vector<Vertex>& vertices,
+                 const std::vector<GLuint>& indices) {
+  Mesh m;
+  gl.GenVertexArrays(1, &m.vao);
+  gl.BindVertexArray(m.vao);
+  gl.GenBuffers(1, &m.vbo);
+  gl.BindBuffer(GL_ARRAY_BUFFER, m.vbo);
+  gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(Vertex)), vertices.data(),
+                GL_STATIC_DRAW);
+  gl.GenBuffers(1, &m.ebo);
+  gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+  gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)),
+                indices.data(), GL_STATIC_DRAW);
+  gl.EnableVertexAttribArray(0);
+  gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                         reinterpret_cast<const void*>(offsetof(Vertex, p)));
+  gl.EnableVertexAttribArray(1);
+  gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                         reinterpret_cast<const void*>(offsetof(Vertex, n)));
+  gl.EnableVertexAttribArray(2);
+  gl.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                         reinterpret_cast<const void*>(offsetof(Vertex, uv)));
+  gl.BindVertexArray(0);
+  m.index_count = GLsizei(indices.size());
+  return m;
+}
+
+void destroy_mesh(const GlTable& gl, Mesh& m) {
+  if (m.vao != 0) gl.DeleteVertexArrays(1, &m.vao);
+  if (m.vbo != 0) gl.DeleteBuffers(1, &m.vbo);
+  if (m.ebo != 0) gl.DeleteBuffers(1, &m.ebo);
+  m = Mesh{};
+}
+
+/// One instanced particle stream: a shared corner quad plus a growing per-instance buffer.
+struct ParticleStream {
+  GLuint vao = 0;
+  GLuint instances = 0;
+  std::size_t capacity = 0;  // particles the GL buffer holds
+  std::vector<float> staging;
+  std::size_t count = 0;
+};
+
+const char* framebuffer_status_name(GLenum status) {
+  switch (status) {
+    case GL_FRAMEBUFFER_UNDEFINED: return "GL_FRAMEBUFFER_UNDEFINED";
+    case GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT: return "GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT";
+    case GL_FRAMEBUFFER_INCOMPLETE_MISSING_ATTACHMENT:
+      return "GL_FRAMEBUFFER_INCOMPLETE_MISSING_ATTACHMENT";
+    case GL_FRAMEBUFFER_INCOMPLETE_DRAW_BUFFER: return "GL_FRAMEBUFFER_INCOMPLETE_DRAW_BUFFER";
+    case GL_FRAMEBUFFER_INCOMPLETE_READ_BUFFER: return "GL_FRAMEBUFFER_INCOMPLETE_READ_BUFFER";
+    case GL_FRAMEBUFFER_UNSUPPORTED: return "GL_FRAMEBUFFER_UNSUPPORTED";
+    case GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE: return "GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE";
+    default: return "unknown status";
+  }
+}
+
+std::string hex(unsigned v) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%04x", v);
+  return buf;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+struct Renderer::Impl {
+  enum class Kind { plane, box, particles };
+
+  struct Drawable {
+    Kind kind = Kind::box;
+    Vec3f translation = Vec3f::Zero();
+    Mat3f rotation = Mat3f::Identity();
+    Vec4f color = Vec4f::Ones();
+    Vec3f half_extents = Vec3f::Ones();  // box
+    PlaneDesc plane;                     // plane
+    Mesh mesh;                           // plane (boxes share the unit cube)
+    std::vector<float> instances;        // particles, kInstanceFloats each
+    ParticleStyle style = ParticleStyle::soft;
+  };
+
+  Impl(Context& context, const RenderSettings& s) : gl(context.gl()), settings(s) {
+    if (s.width < 1 || s.height < 1) {
+      throw std::invalid_argument("render size must be at least 1x1, got " +
+                                  std::to_string(s.width) + "x" + std::to_string(s.height));
+    }
+    try {
+      create();
+    } catch (...) {
+      destroy();
+      throw;
+    }
+  }
+  ~Impl() { destroy(); }
+
+  void create();
+  void destroy() noexcept;
+  void check_framebuffer(const char* what) const;
+  void check_error(const char* stage) const;
+  Drawable& add(ObjectKey key, Kind kind);
+
+  void draw_shadow_map();
+  void draw_meshes();
+  void draw_particles();
+  void upload_stream(ParticleStream& stream);
+  Image read_back();
+
+  const GlTable& gl;
+  RenderSettings settings;
+  Camera camera;
+  Light light;
+  int samples = 0;  // 0: no multisampling
+
+  // Scene target: multisampled half-float colour + depth, resolved into `resolve_tex`.
+  GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0;
+  GLuint resolve_fbo = 0, resolve_tex = 0, resolve_depth = 0;
+  // Tone-mapped 8-bit output that is read back.
+  GLuint out_fbo = 0, out_color = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0;
+  GLuint empty_vao = 0, quad_vbo = 0;
+  Mesh cube;
+  ParticleStream soft, additive;
+
+  Program sky_program, lit_program, depth_program, soft_program, add_program, post_program;
+
+  std::unordered_map<ObjectKey, Drawable> drawables;
+  // Keys in increasing order, so drawing (and merging particle batches) is deterministic.
+  std::vector<ObjectKey> order;
+
+  // Per-frame values.
+  Mat4f view = Mat4f::Identity();
+  Mat4f proj = Mat4f::Identity();
+  Mat4f light_view_proj = Mat4f::Identity();
+  bool shadow_enabled = false;
+  float shadow_bias = 0.f, shadow_offset = 0.f, shadow_radius = 0.f;
+  std::vector<float> gather;  // soft particles of all batches before sorting
+  std::vector<float> sort_depth;
+  std::vector<std::uint32_t> sort_index;
+  std::vector<std::uint8_t> pixels;
+};
+
+void Renderer::Impl::check_framebuffer(const char* what) const {
+  const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    throw ContextError(std::string("renderer: the ") + what + " framebuffer (" +
+                       std::to_string(settings.width) + "x" + std::to_string(settings.height) +
+                       ") is incomplete: " + framebuffer_status_name(status));
+  }
+}
+
+void Renderer::Impl::check_error(const char* stage) const {
+  const GLenum error = gl.GetError();
+  if (error != GL_NO_ERROR) {
+    throw ContextError(std::string("renderer: OpenGL error ") + hex(error) + " while " + stage);
+  }
+}
+
+void Renderer::Impl::create() {
+  const int w = settings.width;
+  const int h = settings.height;
+  while (gl.GetError() != GL_NO_ERROR) {
+  }
+
+  using namespace detail;
+  sky_program = Program(gl, "sky", source({kFullscreenVs}), source({kSkyGlsl, kSkyFs}));
+  lit_program = Program(gl, "lit mesh", source({kLitVs}), source({kSkyGlsl, kShadowGlsl, kLitFs}));
+  depth_program = Program(gl, "shadow depth", source({kDepthVs}), source({kDepthFs}));
+  soft_program = Program(gl, "soft particle", source({kShadowGlsl, kParticleVs}),
+                         source({kParticleSoftFs}));
+  add_program = Program(gl, "additive particle", source({kShadowGlsl, kParticleVs}),
+                        source({kParticleAddFs}));
+  post_program = Program(gl, "tone map", source({kFullscreenVs}), source({kPostFs}));
+
+  GLint max_samples = 0;
+  gl.GetIntegerv(GL_MAX_SAMPLES, &max_samples);
+  samples = settings.msaa_samples > 1 ? std::min(settings.msaa_samples, int(max_samples)) : 0;
+  if (samples < 2) samples = 0;
+
+  // Resolve target (also the scene target without multisampling).
+  gl.GenTextures(1, &resolve_tex);
+  gl.BindTexture(GL_TEXTURE_2D, resolve_tex);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  gl.GenFramebuffers(1, &resolve_fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
+  gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, resolve_tex, 0);
+  if (samples == 0) {
+    gl.GenRenderbuffers(1, &resolve_depth);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, resolve_depth);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth);
+  }
+  check_framebuffer("resolve");
+
+  if (samples > 0) {
+    gl.GenRenderbuffers(1, &msaa_color);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, msaa_color);
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA16F, w, h);
+    gl.GenRenderbuffers(1, &msaa_depth);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, msaa_depth);
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w, h);
+    gl.GenFramebuffers(1, &msaa_fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_color);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
+    check_framebuffer("multisampled scene");
+  }
+
+  gl.GenRenderbuffers(1, &out_color);
+  gl.BindRenderbuffer(GL_RENDERBUFFER, out_color);
+  gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  gl.GenFramebuffers(1, &out_fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, out_fbo);
+  gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, out_color);
+  check_framebuffer("RGBA8 output");
+
+  gl.GenTextures(1, &shadow_tex);
+  gl.BindTexture(GL_TEXTURE_2D, shadow_tex);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, kShadowMapSize, kShadowMapSize, 0,
+                GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  gl.GenFramebuffers(1, &shadow_fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_tex, 0);
+  gl.DrawBuffer(GL_NONE);
+  gl.ReadBuffer(GL_NONE);
+  check_framebuffer("shadow map");
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+
+  // Core profile draws nothing without a bound vertex array, even with no attributes.
+  gl.GenVertexArrays(1, &empty_vao);
+
+  std::vector<Vertex> vertices;
+  std::vector<GLuint> indices;
+  unit_cube(vertices, indices);
+  cube = upload_mesh(gl, vertices, indices);
+
+  const float corners[] = {-1.f, -1.f, 1.f, -1.f, -1.f, 1.f, 1.f, 1.f};
+  gl.GenBuffers(1, &quad_vbo);
+  gl.BindBuffer(GL_ARRAY_BUFFER, quad_vbo);
+  gl.BufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  for (ParticleStream* stream : {&soft, &additive}) {
+    gl.GenVertexArrays(1, &stream->vao);
+    gl.BindVertexArray(stream->vao);
+    gl.BindBuffer(GL_ARRAY_BUFFER, quad_vbo);
+    gl.EnableVertexAttribArray(0);
+    gl.VertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+    gl.GenBuffers(1, &stream->instances);
+    gl.BindBuffer(GL_ARRAY_BUFFER, stream->instances);
+    const GLsizei stride = GLsizei(kInstanceFloats * sizeof(float));
+    gl.EnableVertexAttribArray(1);
+    gl.VertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, stride, nullptr);
+    gl.VertexAttribDivisor(1, 1);
+    gl.EnableVertexAttribArray(2);
+    gl.VertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, stride,
+                           reinterpret_cast<const void*>(4 * sizeof(float)));
+    gl.VertexAttribDivisor(2, 1);
+  }
+  gl.BindVertexArray(0);
+  gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+  check_error("creating the renderer's framebuffers and buffers");
+}
+
+void Renderer::Impl::destroy() noexcept {
+  for (auto& [key, d] : drawables) destroy_mesh(gl, d.mesh);
+  drawables.clear();
+  destroy_mesh(gl, cube);
+  for (ParticleStream* stream : {&soft, &additive}) {
+    if (stream->vao != 0) gl.DeleteVertexArrays(1, &stream->vao);
+    if (stream->instances != 0) gl.DeleteBuffers(1, &stream->instances);
+    *stream = ParticleStream{};
+  }
+  if (quad_vbo != 0) gl.DeleteBuffers(1, &quad_vbo);
+  if (empty_vao != 0) gl.DeleteVertexArrays(1, &empty_vao);
+  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo}) {
+    if (*fbo != 0) gl.DeleteFramebuffers(1, fbo);
+  }
+  for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color}) {
+    if (*rb != 0) gl.DeleteRenderbuffers(1, rb);
+  }
+  for (GLuint* tex : {&resolve_tex, &shadow_tex}) {
+    if (*tex != 0) gl.DeleteTextures(1, tex);
+  }
+  quad_vbo = empty_vao = 0;
+  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = 0;
+  msaa_color = msaa_depth = resolve_depth = out_color = 0;
+  resolve_tex = shadow_tex = 0;
+  sky_program = Program();
+  lit_program = Program();
+  depth_program = Program();
+  soft_program = Program();
+  add_program = Program();
+  post_program = Program();
+}
+
+Renderer::Impl::Drawable& Renderer::Impl::add(ObjectKey key, Kind kind) {
+  auto [it, inserted] = drawables.try_emplace(key);
+  if (!inserted) {
+    throw std::invalid_argument("renderer: key " + std::to_string(key) + " is already used");
+  }
+  it->second.kind = kind;
+  order.insert(std::lower_bound(order.begin(), order.end(), key), key);
+  return it->second;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Drawing
+
+void Renderer::Impl::draw_shadow_map() {
+  // Fit an orthographic sun view around every box (the only shadow casters).
+  Eigen::AlignedBox3f bounds;
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind != Kind::box) continue;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3f corner((c & 1) ? 1.f : -1.f, (c & 2) ? 1.f : -1.f, (c & 4) ? 1.f : -1.f);
+      bounds.extend(d.rotation * corner.cwiseProduct(d.half_extents) + d.translation);
+    }
+  }
+  shadow_enabled = !bounds.isEmpty();
+  if (!shadow_enabled) return;
+
+  const Vec3f center = bounds.center();
+  const float radius = std::max(0.5f * bounds.diagonal().norm() * 1.05f, 1e-3f);
+  Vec3f dir = light.direction;
+  dir = dir.squaredNorm() > 0.f ? dir.normalized() : Vec3f(0.f, 0.f, -1.f);
+  const Vec3f eye = center - dir * (2.f * radius);
+  const float far_m = 4.f * radius;
+  light_view_proj = ortho(radius, radius, 0.f, far_m) * look_at(eye, center, any_perpendicular(dir));
+  const float texel_m = 2.f * radius / float(kShadowMapSize);
+  shadow_offset = 1.5f * texel_m;
+  shadow_bias = 1.5f * texel_m / far_m;
+  // A soft-edged sun: about 2 cm of penumbra at this scale, never sharper than two texels.
+  shadow_radius = std::max(2.f / float(kShadowMapSize), 0.02f / (2.f * radius));
+
+  gl.BindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  gl.Viewport(0, 0, kShadowMapSize, kShadowMapSize);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.DepthMask(GL_TRUE);
+  gl.Clear(GL_DEPTH_BUFFER_BIT);
+  gl.Enable(GL_POLYGON_OFFSET_FILL);
+  gl.PolygonOffset(1.5f, 2.f);
+  depth_program.use();
+  depth_program.set("u_light_view_proj", light_view_proj);
+  gl.BindVertexArray(cube.vao);
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind != Kind::box) continue;
+    depth_program.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
+    gl.DrawElements(GL_TRIANGLES, cube.index_count, GL_UNSIGNED_INT, nullptr);
+  }
+  gl.Disable(GL_POLYGON_OFFSET_FILL);
+}
+
+void Renderer::Impl::draw_meshes() {
+  const Program& p = lit_program;
+  p.use();
+  p.set("u_view_proj", Mat4f(proj * view));
+  p.set("u_eye", camera.position);
+  p.set("u_light_dir", light.direction.squaredNorm() > 0.f ? Vec3f(light.direction.normalized())
+                                                           : Vec3f(0.f, 0.f, -1.f));
+  p.set("u_light_color", light.color);
+  p.set("u_ambient", light.ambient);
+  p.set("u_sky_top", settings.sky_top);
+  p.set("u_sky_bottom", settings.sky_bottom);
+  p.set("u_viewport", float(settings.width), float(settings.height));
+  // Fog scales with how far the camera stands from what it looks at, so it reads the same in
+  // a tabletop scene and a field.
+  p.set("u_fog_distance", std::max(5.f * (camera.target - camera.position).norm(), 1e-3f));
+  p.set("u_shadow_map", 1);
+  p.set("u_shadow_enabled", shadow_enabled ? 1 : 0);
+  p.set("u_light_view_proj", light_view_proj);
+  p.set("u_shadow_bias", shadow_bias);
+  p.set("u_shadow_offset", shadow_offset);
+  p.set("u_shadow_radius", shadow_radius);
+
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind == Kind::plane) {
+      p.set("u_model", affine(d.rotation, d.translation));
+      p.set("u_normal_matrix", d.rotation);
+      p.set("u_color", d.plane.color);
+      p.set("u_specular", 0.06f);
+      p.set("u_checker_m", std::max(d.plane.checker_m, 0.f));
+      p.set("u_half_size", std::max(d.plane.half_size, 1e-6f));
+      gl.BindVertexArray(d.mesh.vao);
+      gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
+    } else if (d.kind == Kind::box) {
+      p.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
+      p.set("u_normal_matrix", d.rotation);
+      p.set("u_color", d.color);
+      p.set("u_specular", 0.25f);
+      p.set("u_checker_m", 0.f);
+      p.set("u_half_size", 0.f);
+      gl.BindVertexArray(cube.vao);
+      gl.DrawElements(GL_TRIANGLES, cube.index_count, GL_UNSIGNED_INT, nullptr);
+    }
+  }
+}
+
+void Renderer::Impl::upload_stream(ParticleStream& stream) {
+  stream.count = stream.staging.size() / kInstanceFloats;
+  if (stream.count == 0) return;
+  gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
+  const GLsizeiptr bytes = GLsizeiptr(stream.staging.size() * sizeof(float));
+  if (stream.count > stream.capacity) {
+    stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(stream.capacity * kInstanceFloats * sizeof(float)),
+                  nullptr, GL_STREAM_DRAW);
+  }
+  gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.staging.data());
+}
+
+void Renderer::Impl::draw_particles() {
+  // Soft particles of every batch are merged and sorted back to front, so two overlapping
+  // batches blend correctly; additive ones need no order.
+  gather.clear();
+  additive.staging.clear();
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind != Kind::particles) continue;
+    auto& dst = d.style == ParticleStyle::soft ? gather : additive.staging;
+    dst.insert(dst.end(), d.instances.begin(), d.instances.end());
+  }
+
+  const std::size_t n = gather.size() / kInstanceFloats;
+  soft.staging.resize(gather.size());
+  if (n > 0) {
+    const Vec3f forward = (camera.target - camera.position).normalized();
+    sort_depth.resize(n);
+    sort_index.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const float* c = &gather[i * kInstanceFloats];
+      sort_depth[i] = (Vec3f(c[0], c[1], c[2]) - camera.position).dot(forward);
+      sort_index[i] = std::uint32_t(i);
+    }
+    std::stable_sort(sort_index.begin(), sort_index.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return sort_depth[a] > sort_depth[b];
+    });
+    for (std::size_t i = 0; i < n; ++i) {
+      std::memcpy(&soft.staging[i * kInstanceFloats], &gather[sort_index[i] * kInstanceFloats],
+                  kInstanceFloats * sizeof(float));
+    }
+  }
+  upload_stream(soft);
+  upload_stream(additive);
+  if (soft.count == 0 && additive.count == 0) return;
+
+  const Vec3f to_sun = light.direction.squaredNorm() > 0.f ? Vec3f(-light.direction.normalized())
+                                                           : Vec3f(0.f, 0.f, 1.f);
+  const Vec3f to_sun_view = view.block<3, 3>(0, 0) * to_sun;
+  const float pixels_per_unit = proj(1, 1) * 0.5f * float(settings.height);
+
+  gl.Enable(GL_BLEND);
+  gl.DepthMask(GL_FALSE);
+  for (const bool is_soft : {true, false}) {
+    const ParticleStream& stream = is_soft ? soft : additive;
+    if (stream.count == 0) continue;
+    const Program& p = is_soft ? soft_program : add_program;
+    p.use();
+    p.set("u_view", view);
+    p.set("u_proj", proj);
+    p.set("u_pixels_per_unit", pixels_per_unit);
+    p.set("u_light_view", to_sun_view);
+    p.set("u_half_view", Vec3f((to_sun_view + Vec3f::UnitZ()).normalized()));
+    p.set("u_light_color", light.color);
+    p.set("u_ambient", light.ambient);
+    p.set("u_shadow_map", 1);
+    p.set("u_shadow_enabled", shadow_enabled ? 1 : 0);
+    p.set("u_light_view_proj", light_view_proj);
+    p.set("u_shadow_bias", shadow_bias);
+    p.set("u_shadow_offset", 0.f);
+    p.set("u_shadow_radius", shadow_radius);
+    if (is_soft) {
+      gl.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);  // premultiplied alpha
+    } else {
+      gl.BlendFunc(GL_ONE, GL_ONE);
+    }
+    gl.BindVertexArray(stream.vao);
+    gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(stream.count));
+  }
+  gl.DepthMask(GL_TRUE);
+  gl.Disable(GL_BLEND);
+}
+
+Image Renderer::Impl::read_back() {
+  const int w = settings.width;
+  const int h = settings.height;
+  const std::size_t row = std::size_t(w) * 4;
+  pixels.resize(row * std::size_t(h));
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, out_fbo);
+  gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+  // GL rows run bottom to top; Image rows top to bottom.
+  Image image(w, h);
+  for (int y = 0; y < h; ++y) {
+    std::memcpy(&image.rgba[std::size_t(y) * row], &pixels[std::size_t(h - 1 - y) * row], row);
+  }
+  return image;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Public interface
+
+Renderer::Renderer(Context& context, const RenderSettings& settings)
+    : impl_(std::make_unique<Impl>(context, settings)) {}
+
+Renderer::~Renderer() = default;
+
+void Renderer::set_camera(const Camera& camera) {
+  if (!(camera.fov_deg > 0.f && camera.fov_deg < 180.f)) {
+    throw std::invalid_argument("camera fov_deg must be in (0, 180), got " +
+                                std::to_string(camera.fov_deg));
+  }
+  if (!(camera.near_m > 0.f && camera.far_m > camera.near_m)) {
+    throw std::invalid_argument("camera clip distances need 0 < near_m < far_m");
+  }
+  if ((camera.target - camera.position).squaredNorm() <= 0.f) {
+    throw std::invalid_argument("camera target coincides with its position");
+  }
+  impl_->camera = camera;
+}
+
+void Renderer::set_light(const Light& light) { impl_->light = light; }
+
+void Renderer::add_plane(ObjectKey key, const PlaneDesc& desc) {
+  if (!(desc.half_size > 0.f) || desc.normal.squaredNorm() <= 0.f) {
+    throw std::invalid_argument("plane needs half_size > 0 and a non-zero normal");
+  }
+  const GlTable& gl = impl_->gl;
+  Impl::Drawable& d = impl_->add(key, Impl::Kind::plane);
+  d.plane = desc;
+  const Vec3f n = desc.normal.normalized();
+  const Vec3f u = any_perpendicular(n);
+  const Vec3f v = n.cross(u);
+  const float h = desc.half_size;
+  std::vector<Vertex> vertices;
+  for (const auto& [a, b] : {std::pair{-h, -h}, {h, -h}, {h, h}, {-h, h}}) {
+    const Vec3f p = desc.point + a * u + b * v;
+    vertices.push_back(Vertex{{p.x(), p.y(), p.z()}, {n.x(), n.y(), n.z()}, {a, b}});
+  }
+  d.mesh = upload_mesh(gl, vertices, {0, 1, 2, 0, 2, 3});
+}
+
+void Renderer::add_box(ObjectKey key, const BoxDesc& desc) {
+  if (!(desc.half_extents.minCoeff() > 0.f)) {
+    throw std::invalid_argument("box half_extents must be positive");
+  }
+  Impl::Drawable& d = impl_->add(key, Impl::Kind::box);
+  d.half_extents = desc.half_extents;
+  d.color = desc.color;
+}
+
+void Renderer::set_transform(ObjectKey key, const Vec3f& translation, const Mat3f& rotation) {
+  auto it = impl_->drawables.find(key);
+  if (it == impl_->drawables.end()) {
+    throw std::out_of_range("renderer: no drawable under key " + std::to_string(key));
+  }
+  if (it->second.kind == Impl::Kind::particles) {
+    throw std::invalid_argument("renderer: key " + std::to_string(key) +
+                                " holds particles, which are given in the world frame");
+  }
+  it->second.translation = translation;
+  it->second.rotation = rotation;
+}
+
+void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
+  if (batch.count > 0 &&
+      (batch.position == nullptr || batch.color == nullptr || batch.radius == nullptr)) {
+    throw std::invalid_argument("renderer: particle batch with count > 0 has a null array");
+  }
+  auto it = impl_->drawables.find(key);
+  Impl::Drawable* d = nullptr;
+  if (it == impl_->drawables.end()) {
+    d = &impl_->add(key, Impl::Kind::particles);
+  } else if (it->second.kind != Impl::Kind::particles) {
+    throw std::invalid_argument("renderer: key " + std::to_string(key) + " is a mesh, not particles");
+  } else {
+    d = &it->second;
+  }
+  d->style = batch.style;
+  d->instances.resize(batch.count * kInstanceFloats);  // keeps its capacity when shrinking
+  float* out = d->instances.data();
+  for (std::size_t i = 0; i < batch.count; ++i, out += kInstanceFloats) {
+    std::memcpy(out, batch.position + 3 * i, 3 * sizeof(float));
+    out[3] = batch.radius[i];
+    std::memcpy(out + 4, batch.color + 4 * i, 4 * sizeof(float));
+  }
+}
+
+void Renderer::remove(ObjectKey key) {
+  auto it = impl_->drawables.find(key);
+  if (it == impl_->drawables.end()) return;
+  destroy_mesh(impl_->gl, it->second.mesh);
+  impl_->drawables.erase(it);
+  auto& order = impl_->order;
+  order.erase(std::lower_bound(order.begin(), order.end(), key));
+}
+
+const RenderSettings& Renderer::settings() const { return impl_->settings; }
+
+Image Renderer::render() {
+  Impl& r = *impl_;
+  const GlTable& gl = r.gl;
+  const int w = r.settings.width;
+  const int h = r.settings.height;
+  const Camera& cam = r.camera;
+  r.view = look_at(cam.position, cam.target, cam.up);
+  r.proj = perspective(cam.fov_deg * std::numbers::pi_v<float> / 180.f, float(w) / float(h),
+                       cam.near_m, cam.far_m);
+
+  gl.Disable(GL_BLEND);
+  gl.Disable(GL_CULL_FACE);
+  r.draw_shadow_map();
+
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.samples > 0 ? r.msaa_fbo : r.resolve_fbo);
+  gl.Viewport(0, 0, w, h);
+  gl.DepthMask(GL_TRUE);
+  gl.Clear(GL_DEPTH_BUFFER_BIT);
+  gl.Disable(GL_DEPTH_TEST);
+  r.sky_program.use();
+  r.sky_program.set("u_sky_top", r.settings.sky_top);
+  r.sky_program.set("u_sky_bottom", r.settings.sky_bottom);
+  r.sky_program.set("u_viewport", float(w), float(h));
+  gl.BindVertexArray(r.empty_vao);
+  gl.DrawArrays(GL_TRIANGLES, 0, 3);
+
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.ActiveTexture(GL_TEXTURE1);
+  gl.BindTexture(GL_TEXTURE_2D, r.shadow_tex);
+  r.draw_meshes();
+  r.draw_particles();
+
+  if (r.samples > 0) {
+    gl.BindFramebuffer(GL_READ_FRAMEBUFFER, r.msaa_fbo);
+    gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, r.resolve_fbo);
+    gl.BlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  }
+
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.out_fbo);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D, r.resolve_tex);
+  r.post_program.use();
+  r.post_program.set("u_hdr", 0);
+  gl.BindVertexArray(r.empty_vao);
+  gl.DrawArrays(GL_TRIANGLES, 0, 3);
+  gl.BindVertexArray(0);
+
+  Image image = r.read_back();
+  r.check_error("drawing a frame");
+  return image;
+}
+
+}  // namespace simreel::render

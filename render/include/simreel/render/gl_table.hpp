@@ -49,7 +49,13 @@ struct GlTable {
   X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers)                                         \
   X(PFNGLRENDERBUFFERSTORAGEMULTISAMPLEPROC, RenderbufferStorageMultisample)                   \
   X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage)                                         \
-  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)
+  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                                               \
+  X(PFNGLGENTEXTURESPROC, GenTextures) X(PFNGLDELETETEXTURESPROC, DeleteTextures)              \
+  X(PFNGLBINDTEXTUREPROC, BindTexture) X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                \
+  X(PFNGLTEXIMAGE2DPROC, TexImage2D) X(PFNGLTEXPARAMETERIPROC, TexParameteri)                  \
+  X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)                                       \
+  X(PFNGLDRAWBUFFERPROC, DrawBuffer) X(PFNGLREADBUFFERPROC, ReadBuffer)                        \
+  X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)
 #define SIMREEL_GL_MEMBER(type, name) type name = nullptr;
   SIMREEL_GL_FUNCTIONS(SIMREEL_GL_MEMBER)
 #undef SIMREEL_GL_MEMBER

@@ -1,0 +1,252 @@
+#pragma once
+// Private: GLSL sources of the renderer. Everything is shaded in linear RGB into a half-float
+// target; the post pass alone tone-maps, gamma-encodes and dithers to 8 bits.
+
+namespace simreel::render::detail {
+
+inline constexpr char kGlslVersion[] = "#version 330 core\n";
+
+/// The background: the fog colour of every mesh is the sky behind it, so far ground and the
+/// edge of the ground square dissolve into the sky instead of ending on a line.
+inline constexpr char kSkyGlsl[] = R"(
+uniform vec3 u_sky_top;
+uniform vec3 u_sky_bottom;
+uniform vec2 u_viewport;
+vec3 sky_at(vec2 frag) {
+  float t = clamp(frag.y / u_viewport.y, 0.0, 1.0);
+  return mix(u_sky_bottom, u_sky_top, t);
+}
+)";
+
+/// Sun shadow lookup, usable from vertex and fragment stages (explicit LOD).
+inline constexpr char kShadowGlsl[] = R"(
+uniform sampler2DShadow u_shadow_map;
+uniform mat4 u_light_view_proj;
+uniform int u_shadow_enabled;
+uniform float u_shadow_bias;     // light-depth units
+uniform float u_shadow_offset;   // (m) normal offset against acne
+uniform float u_shadow_radius;   // shadow-map uv units, penumbra width
+const vec2 k_poisson[12] = vec2[](
+  vec2(-0.326, -0.406), vec2(-0.840, -0.074), vec2(-0.696, 0.457), vec2(-0.203, 0.621),
+  vec2(0.962, -0.195), vec2(0.473, -0.480), vec2(0.519, 0.767), vec2(0.185, -0.893),
+  vec2(0.507, 0.064), vec2(0.896, 0.412), vec2(-0.322, -0.933), vec2(-0.792, -0.598));
+float sun_visibility(vec3 world, vec3 normal) {
+  if (u_shadow_enabled == 0) return 1.0;
+  vec4 lp = u_light_view_proj * vec4(world + normal * u_shadow_offset, 1.0);
+  vec3 p = lp.xyz / lp.w * 0.5 + 0.5;
+  if (p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0) return 1.0;
+  // Receivers beyond the far plane compare as 1.0: shadowed under a caster, lit elsewhere.
+  float ref = min(p.z - u_shadow_bias, 1.0);
+  float sum = 0.0;
+  for (int i = 0; i < 12; ++i) {
+    sum += textureLod(u_shadow_map, vec3(p.xy + k_poisson[i] * u_shadow_radius, ref), 0.0);
+  }
+  return sum / 12.0;
+}
+// One bilinear comparison: enough for particles, which are small and already soft.
+float sun_visibility_fast(vec3 world) {
+  if (u_shadow_enabled == 0) return 1.0;
+  vec4 lp = u_light_view_proj * vec4(world, 1.0);
+  vec3 p = lp.xyz / lp.w * 0.5 + 0.5;
+  if (p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0) return 1.0;
+  return textureLod(u_shadow_map, vec3(p.xy, min(p.z - u_shadow_bias, 1.0)), 0.0);
+}
+)";
+
+inline constexpr char kFullscreenVs[] = R"(
+out vec2 v_uv;
+void main() {
+  // One triangle covering the viewport; no vertex buffer needed.
+  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  v_uv = p;
+  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}
+)";
+
+inline constexpr char kSkyFs[] = R"(
+out vec4 o_color;
+void main() { o_color = vec4(sky_at(gl_FragCoord.xy), 1.0); }
+)";
+
+inline constexpr char kLitVs[] = R"(
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec2 a_uv;
+uniform mat4 u_model;
+uniform mat3 u_normal_matrix;
+uniform mat4 u_view_proj;
+out vec3 v_world;
+out vec3 v_normal;
+out vec2 v_uv;
+void main() {
+  vec4 w = u_model * vec4(a_position, 1.0);
+  v_world = w.xyz;
+  v_normal = u_normal_matrix * a_normal;
+  v_uv = a_uv;
+  gl_Position = u_view_proj * w;
+}
+)";
+
+inline constexpr char kLitFs[] = R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+out vec4 o_color;
+uniform vec3 u_eye;
+uniform vec3 u_light_dir;     // direction the light travels
+uniform vec3 u_light_color;
+uniform vec3 u_ambient;
+uniform vec4 u_color;
+uniform float u_specular;
+uniform float u_checker_m;    // 0: plain colour
+uniform float u_half_size;    // 0: no edge fade (boxes)
+uniform float u_fog_distance; // (m)
+
+// Box-filtered checker (1 on dark cells): the filter width is the pixel footprint, so cells
+// smaller than a pixel average to grey instead of producing moire.
+float checker(vec2 p, out float footprint) {
+  vec2 w = fwidth(p) + 1e-4;
+  footprint = max(w.x, w.y);
+  vec2 i = 2.0 * (abs(fract((p - 0.5 * w) * 0.5) - 0.5) - abs(fract((p + 0.5 * w) * 0.5) - 0.5)) / w;
+  return 0.5 - 0.5 * i.x * i.y;
+}
+
+void main() {
+  vec3 n = normalize(v_normal);
+  if (!gl_FrontFacing) n = -n;
+  vec3 to_eye = u_eye - v_world;
+  float dist = length(to_eye);
+  vec3 v = to_eye / dist;
+  vec3 l = normalize(-u_light_dir);
+
+  vec3 albedo = u_color.rgb;
+  float fog = 1.0 - exp(-(dist * dist) / (u_fog_distance * u_fog_distance));
+  if (u_checker_m > 0.0) {
+    float footprint;
+    float c = checker(v_uv / u_checker_m, footprint);
+    // Fade the pattern out well before the filter has to, and with the fog.
+    float contrast = (1.0 - smoothstep(0.15, 0.6, footprint)) * (1.0 - fog);
+    albedo *= 1.0 - 0.12 * c * contrast;
+  }
+  float edge = 0.0;
+  if (u_half_size > 0.0) {
+    // Rounded-square distance to the centre: the square's corners fade a little earlier.
+    vec2 q = abs(v_uv) / u_half_size;
+    q *= q;
+    edge = smoothstep(0.5, 1.0, sqrt(sqrt(dot(q, q))));
+  }
+
+  float ndl = max(dot(n, l), 0.0);
+  float sun = ndl > 0.0 ? sun_visibility(v_world, n) : 0.0;
+  vec3 h = normalize(l + v);
+  float spec = u_specular * pow(max(dot(n, h), 0.0), 48.0) * ndl;
+  // Hemisphere ambient (z up): faces turned to the sky get more of it than those facing down.
+  vec3 ambient = u_ambient * (0.78 + 0.22 * n.z);
+  vec3 color = albedo * (ambient + u_light_color * (ndl * sun)) + u_light_color * (spec * sun);
+  color = mix(color, sky_at(gl_FragCoord.xy), max(fog, edge));
+  o_color = vec4(color, 1.0);
+}
+)";
+
+inline constexpr char kDepthVs[] = R"(
+layout(location = 0) in vec3 a_position;
+uniform mat4 u_model;
+uniform mat4 u_light_view_proj;
+void main() { gl_Position = u_light_view_proj * (u_model * vec4(a_position, 1.0)); }
+)";
+
+inline constexpr char kDepthFs[] = R"(
+void main() {}
+)";
+
+inline constexpr char kParticleVs[] = R"(
+layout(location = 0) in vec2 a_corner;        // quad corner in [-1, 1]^2
+layout(location = 1) in vec4 a_center_radius; // per instance: world position (m), radius (m)
+layout(location = 2) in vec4 a_color;         // per instance: linear RGBA
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform float u_pixels_per_unit; // projected pixels per metre at unit depth
+out vec2 v_corner;
+out vec4 v_color;
+out float v_sun;
+void main() {
+  vec4 c = u_view * vec4(a_center_radius.xyz, 1.0);
+  float depth = max(-c.z, 1e-4);
+  // A sprite under a pixel would flicker in and out of the sample grid: draw it one pixel
+  // wide and fainter instead, keeping its coverage.
+  float r = a_center_radius.w;
+  float px = r * u_pixels_per_unit / depth;
+  float grow = px < 1.0 ? 1.0 / max(px, 1e-3) : 1.0;
+  c.xy += a_corner * (r * grow);
+  v_corner = a_corner;
+  v_color = vec4(a_color.rgb, a_color.a / (grow * grow));
+  v_sun = sun_visibility_fast(a_center_radius.xyz);
+  gl_Position = u_proj * c;
+}
+)";
+
+inline constexpr char kParticleSoftFs[] = R"(
+in vec2 v_corner;
+in vec4 v_color;
+in float v_sun;
+out vec4 o_color;
+uniform vec3 u_light_view;   // towards the sun, view frame
+uniform vec3 u_half_view;    // half vector between the sun and the viewer, view frame
+uniform vec3 u_light_color;
+uniform vec3 u_ambient;
+void main() {
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  float r = sqrt(r2);
+  float aa = fwidth(r);
+  float alpha = v_color.a * (1.0 - smoothstep(1.0 - 0.18 - aa, 1.0, r));
+  // A sphere's normal from the sprite coordinates, in the view frame.
+  vec3 n = vec3(v_corner, sqrt(max(1.0 - r2, 0.0)));
+  float wrap = max((dot(n, u_light_view) + 0.25) / 1.25, 0.0);
+  float spec = 0.35 * pow(max(dot(n, u_half_view), 0.0), 40.0);
+  vec3 ambient = u_ambient * (0.75 + 0.25 * n.y);
+  vec3 color = v_color.rgb * (ambient + u_light_color * (wrap * v_sun)) + u_light_color * (spec * v_sun);
+  o_color = vec4(color * alpha, alpha);  // premultiplied
+}
+)";
+
+inline constexpr char kParticleAddFs[] = R"(
+in vec2 v_corner;
+in vec4 v_color;
+in float v_sun;
+out vec4 o_color;
+void main() {
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  // Bright core with a long falloff; exactly zero at the rim so quads leave no edges.
+  float falloff = (1.0 - r2) * (1.0 - r2);
+  float glow = falloff * (0.35 + 0.65 * exp(-6.0 * r2));
+  o_color = vec4(v_color.rgb * (v_color.a * glow * 1.6), 0.0);
+}
+)";
+
+inline constexpr char kPostFs[] = R"(
+uniform sampler2D u_hdr;
+out vec4 o_color;
+// Linear up to the knee, then a smooth shoulder towards 1: the colours a scene gives come out
+// as given, highlights and stacked glow roll off instead of clipping.
+vec3 tonemap(vec3 x) {
+  const float k = 0.8;
+  vec3 over = max(x - k, 0.0);
+  return min(x, vec3(k)) + (1.0 - k) * (1.0 - exp(-over / (1.0 - k)));
+}
+vec3 srgb_encode(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+void main() {
+  vec3 c = texelFetch(u_hdr, ivec2(gl_FragCoord.xy), 0).rgb;
+  c = srgb_encode(tonemap(max(c, 0.0)));
+  // Half-LSB interleaved-gradient dither: no banding in the sky gradient; fixed per pixel.
+  float noise = fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+  c += (noise - 0.5) / 255.0;
+  o_color = vec4(c, 1.0);
+}
+)";
+
+}  // namespace simreel::render::detail

@@ -1,0 +1,95 @@
+// PNG output is exact and atomic; failures name the file and leave nothing behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "render_test_util.hpp"
+#include "simreel/render/image.hpp"
+
+namespace simreel::render {
+namespace {
+
+namespace fs = std::filesystem;
+
+Image pattern(int w, int h) {
+  Image img(w, h);
+  unsigned state = 12345u;
+  for (auto& byte : img.rgba) {
+    state = state * 1103515245u + 12345u;
+    byte = std::uint8_t(state >> 16);
+  }
+  return img;
+}
+
+bool has_temp_files(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(RenderImage, PngRoundTripsBytesExactly) {
+  const test::TempDir dir("png");
+  for (const int level : {0, 4, 9}) {
+    const Image img = pattern(37, 23);  // odd sizes, random alpha too
+    const fs::path path = dir.path() / ("img" + std::to_string(level) + ".png");
+    write_png(path, img, level);
+    const Image back = read_image(path);
+    ASSERT_EQ(back.width, img.width);
+    ASSERT_EQ(back.height, img.height);
+    EXPECT_EQ(back.rgba, img.rgba) << "level " << level;
+  }
+  EXPECT_FALSE(has_temp_files(dir.path()));
+}
+
+TEST(RenderImage, WritePngReplacesAnExistingFile) {
+  const test::TempDir dir("png-replace");
+  const fs::path path = dir.path() / "a.png";
+  write_png(path, pattern(4, 4));
+  const Image second = pattern(8, 2);
+  write_png(path, second);
+  EXPECT_EQ(read_image(path).rgba, second.rgba);
+  EXPECT_EQ(dir.entries(), 1);
+}
+
+TEST(RenderImage, WritingIntoAMissingDirectoryNamesThePath) {
+  const test::TempDir dir("png-missing");
+  const fs::path path = dir.path() / "no" / "such" / "frame.png";
+  try {
+    write_png(path, pattern(4, 4));
+    FAIL() << "write_png succeeded into a missing directory";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "no"));
+  EXPECT_EQ(dir.entries(), 0);
+}
+
+TEST(RenderImage, FailedRenameLeavesNoTemporaryFile) {
+  // The target is a non-empty directory: encoding succeeds, the final rename cannot.
+  const test::TempDir dir("png-rename");
+  const fs::path target = dir.path() / "frame.png";
+  fs::create_directories(target / "child");
+  EXPECT_THROW(write_png(target, pattern(4, 4)), IoError);
+  EXPECT_FALSE(has_temp_files(dir.path()));
+  EXPECT_EQ(dir.entries(), 1);
+}
+
+TEST(RenderImage, ReadErrorsNameThePath) {
+  const test::TempDir dir("png-read");
+  const fs::path missing = dir.path() / "missing.png";
+  try {
+    (void)read_image(missing);
+    FAIL() << "read_image succeeded on a missing file";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
+  }
+  const fs::path junk = dir.path() / "junk.png";
+  std::ofstream(junk) << "not an image";
+  EXPECT_THROW((void)read_image(junk), IoError);
+}
+
+}  // namespace
+}  // namespace simreel::render
