@@ -1,13 +1,15 @@
 #include "simreel/render/renderer.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -157,7 +159,8 @@ class Program {
     return shader;
   }
 
-  // Uniforms a shader does not use report -1, which GL ignores on upload.
+  // Uniforms a shader does not use report -1, which GL ignores on upload. Keyed by the
+  // literal's address: no string is built per upload.
   GLint loc(const char* name) const {
     auto it = locations_.find(name);
     if (it == locations_.end()) {
@@ -168,7 +171,7 @@ class Program {
 
   const GlTable* gl_ = nullptr;
   GLuint id_ = 0;
-  mutable std::unordered_map<std::string, GLint> locations_;
+  mutable std::unordered_map<const char*, GLint> locations_;
 };
 
 std::string source(std::initializer_list<const char*> parts) {
@@ -386,9 +389,9 @@ void Renderer::Impl::create() {
   lit_program = Program(gl, "lit mesh", source({kLitVs}), source({kSkyGlsl, kShadowGlsl, kLitFs}));
   depth_program = Program(gl, "shadow depth", source({kDepthVs}), source({kDepthFs}));
   soft_program = Program(gl, "soft particle", source({kShadowGlsl, kParticleVs}),
-                         source({kParticleSoftFs}));
+                         source({kSphereDepthGlsl, kParticleSoftFs}));
   add_program = Program(gl, "additive particle", source({kShadowGlsl, kParticleVs}),
-                        source({kParticleAddFs}));
+                        source({kSphereDepthGlsl, kParticleAddFs}));
   post_program = Program(gl, "tone map", source({kFullscreenVs}), source({kPostFs}));
 
   GLint max_samples = 0;
@@ -691,7 +694,8 @@ void Renderer::Impl::draw_particles() {
     p.set("u_proj", proj);
     p.set("u_pixels_per_unit", pixels_per_unit);
     p.set("u_light_view", to_sun_view);
-    p.set("u_half_view", Vec3f((to_sun_view + Vec3f::UnitZ()).normalized()));
+    const Vec3f half = to_sun_view + Vec3f::UnitZ();  // zero only with the sun dead behind
+    p.set("u_half_view", half.squaredNorm() > 1e-12f ? Vec3f(half.normalized()) : Vec3f::UnitZ());
     p.set("u_light_color", light.color);
     p.set("u_ambient", light.ambient);
     p.set("u_shadow_map", 1);

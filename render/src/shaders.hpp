@@ -133,7 +133,7 @@ void main() {
     // Rounded-square distance to the centre: the square's corners fade a little earlier.
     vec2 q = abs(v_uv) / u_half_size;
     q *= q;
-    edge = smoothstep(0.5, 1.0, sqrt(sqrt(dot(q, q))));
+    edge = smoothstep(0.6, 1.0, sqrt(sqrt(dot(q, q))));
   }
 
   float ndl = max(dot(n, l), 0.0);
@@ -169,6 +169,7 @@ uniform float u_pixels_per_unit; // projected pixels per metre at unit depth
 out vec2 v_corner;
 out vec4 v_color;
 out float v_sun;
+flat out vec4 v_center_view;  // sprite centre, view frame (m), and drawn radius (m)
 void main() {
   vec4 c = u_view * vec4(a_center_radius.xyz, 1.0);
   float depth = max(-c.z, 1e-4);
@@ -177,6 +178,7 @@ void main() {
   float r = a_center_radius.w;
   float px = r * u_pixels_per_unit / depth;
   float grow = px < 1.0 ? 1.0 / max(px, 1e-3) : 1.0;
+  v_center_view = vec4(c.xyz, r * grow);
   c.xy += a_corner * (r * grow);
   v_corner = a_corner;
   v_color = vec4(a_color.rgb, a_color.a / (grow * grow));
@@ -185,10 +187,22 @@ void main() {
 }
 )";
 
-inline constexpr char kParticleSoftFs[] = R"(
+/// Particle fragments take the depth of the sphere they stand for, not of the flat sprite, so a
+/// droplet resting on the ground or touching a box meets it along a round outline.
+inline constexpr char kSphereDepthGlsl[] = R"(
 in vec2 v_corner;
 in vec4 v_color;
 in float v_sun;
+flat in vec4 v_center_view;
+uniform mat4 u_proj;
+void write_sphere_depth(float r2) {
+  vec3 p = v_center_view.xyz + v_center_view.w * vec3(v_corner, sqrt(max(1.0 - r2, 0.0)));
+  vec4 clip = u_proj * vec4(p, 1.0);
+  gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
+}
+)";
+
+inline constexpr char kParticleSoftFs[] = R"(
 out vec4 o_color;
 uniform vec3 u_light_view;   // towards the sun, view frame
 uniform vec3 u_half_view;    // half vector between the sun and the viewer, view frame
@@ -197,13 +211,17 @@ uniform vec3 u_ambient;
 void main() {
   float r2 = dot(v_corner, v_corner);
   if (r2 >= 1.0) discard;
+  write_sphere_depth(r2);
   float r = sqrt(r2);
   float aa = fwidth(r);
   float alpha = v_color.a * (1.0 - smoothstep(1.0 - 0.18 - aa, 1.0, r));
   // A sphere's normal from the sprite coordinates, in the view frame.
   vec3 n = vec3(v_corner, sqrt(max(1.0 - r2, 0.0)));
   float wrap = max((dot(n, u_light_view) + 0.25) / 1.25, 0.0);
-  float spec = 0.35 * pow(max(dot(n, u_half_view), 0.0), 40.0);
+  float s8 = max(dot(n, u_half_view), 0.0);
+  s8 *= s8; s8 *= s8; s8 *= s8;
+  float s32 = s8 * s8; s32 *= s32;
+  float spec = 0.35 * s32 * s8;  // exponent 40 by squaring: pow() is costly on llvmpipe
   vec3 ambient = u_ambient * (0.75 + 0.25 * n.y);
   vec3 color = v_color.rgb * (ambient + u_light_color * (wrap * v_sun)) + u_light_color * (spec * v_sun);
   o_color = vec4(color * alpha, alpha);  // premultiplied
@@ -211,17 +229,15 @@ void main() {
 )";
 
 inline constexpr char kParticleAddFs[] = R"(
-in vec2 v_corner;
-in vec4 v_color;
-in float v_sun;
 out vec4 o_color;
 void main() {
   float r2 = dot(v_corner, v_corner);
   if (r2 >= 1.0) discard;
+  write_sphere_depth(r2);
   // Bright core with a long falloff; exactly zero at the rim so quads leave no edges.
   float falloff = (1.0 - r2) * (1.0 - r2);
   float glow = falloff * (0.35 + 0.65 * exp(-6.0 * r2));
-  o_color = vec4(v_color.rgb * (v_color.a * glow * 1.6), 0.0);
+  o_color = vec4(v_color.rgb * (v_color.a * glow), 0.0);
 }
 )";
 

@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "render_test_util.hpp"
@@ -186,6 +187,22 @@ TEST(RenderSettingsCheck, ZeroSizeIsRejected) {
   RenderSettings s = test::small_settings();
   s.width = 0;
   EXPECT_THROW(Renderer(*context, s), std::invalid_argument);
+}
+
+TEST(RenderSettingsCheck, FramebufferBeyondTheLimitIsAContextError) {
+  const auto context = create_context(Backend::osmesa);
+  RenderSettings s = test::small_settings();
+  s.width = 1 << 20;  // above any GL_MAX_TEXTURE_SIZE / GL_MAX_RENDERBUFFER_SIZE
+  s.height = 1;
+  try {
+    Renderer r(*context, s);
+    FAIL() << "a 2^20-pixel-wide framebuffer was accepted";
+  } catch (const ContextError& e) {
+    EXPECT_NE(std::string(e.what()).find("framebuffer"), std::string::npos) << e.what();
+  }
+  // The context is still usable afterwards.
+  Renderer ok(*context, test::small_settings());
+  EXPECT_EQ(ok.render().width, test::kWidth);
 }
 
 TEST(RenderSettingsCheck, WithoutMultisamplingStillRenders) {

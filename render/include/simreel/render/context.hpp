@@ -34,7 +34,9 @@ class Context {
   [[nodiscard]] std::string version_string() const;
 };
 
-/// Creates and makes current a context. @throws ContextError naming the backend and reason.
+/// Creates a context and makes it current on the calling thread; destroying it releases it.
+/// @throws ContextError naming the backend and reason, e.g. "egl: eglInitialize failed
+///         (EGL_NOT_INITIALIZED)".
 std::unique_ptr<Context> create_context(Backend backend);
 
 }  // namespace simreel::render

@@ -24,7 +24,9 @@ class FrameSink {
   [[nodiscard]] virtual std::string describe() const = 0;  ///< e.g. "out/fountain.mp4"
 };
 
-/// PNG sequence `dir/frame_00000.png`, ... (directory created if missing).
+/// PNG sequence `dir/frame_00000.png`, ... (directory created if missing). Each frame is written
+/// atomically, so finish() and abort() have nothing to do and written frames stay.
+/// @throws IoError if the directory cannot be created.
 std::unique_ptr<FrameSink> make_png_sequence(const std::filesystem::path& dir, int compression = 4);
 
 struct VideoOptions {
@@ -34,8 +36,10 @@ struct VideoOptions {
 
 /// MP4 (H.264, yuv420p, odd sizes padded to even) or GIF (palette generated from the frames),
 /// chosen by the extension, through `ffmpeg` fed raw RGBA frames on a pipe.
+/// The parent directory is created if missing; frames must be width x height. ffmpeg's stderr
+/// is captured and its last lines end any IoError that write() or finish() raise.
 /// @throws IoError with one line if ffmpeg cannot be found or started, or the extension is
-///         neither .mp4 nor .gif.
+///         neither .mp4 nor .gif, e.g. "cannot encode out/x.mp4: ffmpeg not found on PATH".
 std::unique_ptr<FrameSink> make_video(const std::filesystem::path& path, int width, int height,
                                       const VideoOptions& options);
 

@@ -12,6 +12,7 @@ namespace simreel::render {
 using GetProcAddress = void* (*)(const char* name);
 
 /// Every GL entry point the renderer uses. Members named as in GL without the `gl` prefix.
+/// Nothing in simreel calls GL except through this table.
 struct GlTable {
 #define SIMREEL_GL_FUNCTIONS(X)                                                                \
   X(PFNGLGETSTRINGPROC, GetString) X(PFNGLGETERRORPROC, GetError)                              \

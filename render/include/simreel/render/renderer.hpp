@@ -30,13 +30,17 @@ struct Camera {
   float far_m = 500.f;             ///< far clip distance (m)
 };
 
-/// Directional sun plus constant ambient.
+/// Directional sun plus constant ambient. Boxes cast soft sun shadows (a shadow map fitted
+/// to them each frame) on planes, boxes and particles.
 struct Light {
   Vec3f direction{-0.4f, 0.3f, -1.f};  ///< direction the light travels (from the sun), world frame
   Vec3f color{1.f, 0.97f, 0.92f};      ///< linear RGB intensity
   Vec3f ambient{0.30f, 0.33f, 0.38f};  ///< linear RGB added everywhere
 };
 
+/// Output size and background. All colours in the renderer's inputs are linear RGB; shading
+/// and blending happen in linear half-float, then the frame is tone-mapped (unchanged up to
+/// 0.8, a soft shoulder towards 1 above), sRGB-encoded and dithered by half a level.
 struct RenderSettings {
   int width = 1280;        ///< (pixels) >= 1
   int height = 720;        ///< (pixels) >= 1
@@ -45,7 +49,9 @@ struct RenderSettings {
   Vec3f sky_bottom{0.80f, 0.86f, 0.93f};  ///< background gradient, bottom of the frame
 };
 
-/// A finite, drawn piece of an infinite ground plane, centred on the plane's origin.
+/// A finite, drawn piece of an infinite ground plane, centred on the plane's origin. Its
+/// checker (cells aligned with the world x/y axes when the normal is z) fades with distance,
+/// and the square fades into the sky colour towards its edge and with distance (fog).
 struct PlaneDesc {
   Vec3f point{0.f, 0.f, 0.f};   ///< (m) the plane's origin, world frame
   Vec3f normal{0.f, 0.f, 1.f};
@@ -76,27 +82,35 @@ struct ParticleBatch {
 
 class Renderer {
  public:
-  /// The context must be current on this thread. @throws ContextError if the framebuffer or a
-  /// shader cannot be created (message names the stage and the GL log).
+  /// The context must be current on this thread and outlive the renderer. @throws ContextError
+  /// if the framebuffer or a shader cannot be created (message names the stage and the GL log);
+  /// std::invalid_argument if width or height < 1. msaa_samples is clamped to GL_MAX_SAMPLES.
   Renderer(Context& context, const RenderSettings& settings);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
+  /// @throws std::invalid_argument unless 0 < fov_deg < 180, 0 < near_m < far_m and
+  ///         target != position.
   void set_camera(const Camera& camera);
   void set_light(const Light& light);
 
-  /// Adds drawables under a key. @throws std::invalid_argument if the key is already used.
+  /// Adds drawables under a key, at the identity transform. @throws std::invalid_argument if the
+  /// key is already used, half_size <= 0, the normal is zero, or a half extent is <= 0.
   void add_plane(ObjectKey key, const PlaneDesc& desc);
   void add_box(ObjectKey key, const BoxDesc& desc);
-  /// Moves a mesh drawable: x_world = rotation * x_local + translation.
-  /// @throws std::out_of_range if the key is unknown.
+  /// Moves a mesh drawable (box or plane): x_world = rotation * x_local + translation, where a
+  /// plane's local frame is the world frame its PlaneDesc was given in.
+  /// @throws std::out_of_range if the key is unknown; std::invalid_argument if it holds particles.
   void set_transform(ObjectKey key, const Vec3f& translation, const Mat3f& rotation);
-  /// Replaces the particles drawn under `key` (creates the drawable on first use).
+  /// Replaces the particles drawn under `key` (creates the drawable on first use). The arrays
+  /// are copied. Soft particles of all keys are sorted back to front together every frame.
+  /// @throws std::invalid_argument if count > 0 and an array is null, or the key holds a mesh.
   void set_particles(ObjectKey key, const ParticleBatch& batch);
-  void remove(ObjectKey key);
+  void remove(ObjectKey key);  ///< unknown keys are ignored
 
   /// Draws the frame and reads it back: RGBA8, rows top to bottom, alpha 255.
+  /// @throws ContextError if OpenGL reports an error.
   [[nodiscard]] Image render();
 
   [[nodiscard]] const RenderSettings& settings() const;
