@@ -16,8 +16,12 @@ namespace simreel::sim {
 
 /// ODE integrators (Coutinho Appendix B).
 enum class Integrator {
-  semi_implicit_euler,  ///< v += a h; x += v h (symplectic, first order; the default)
-  rk4,                  ///< classical fourth-order Runge–Kutta on (x, v)
+  semi_implicit_euler,  ///< v += a h; x += v h (symplectic, first order; the default). Drag is
+                        ///< taken at the new velocity, v = (v + g h) / (1 + h k_d / m), so it is
+                        ///< stable for any drag and mass
+  rk4,                  ///< classical fourth-order Runge–Kutta on (x, v); a particle with
+                        ///< h k_d / m > 0.5 takes ceil(2 h k_d / m) sub-steps (explicit RK4
+                        ///< diverges past 2.78)
 };
 
 enum class EmitterShape {
@@ -32,7 +36,17 @@ struct ColorKey {
 };
 
 /// Emitter definition (Coutinho §3.8): where and how particles are released. Every per-particle
-/// parameter is a Distribution drawn from N(mean, deviation²) per released particle.
+/// parameter is a Distribution drawn from N(mean, deviation²) per released particle, in a fixed
+/// order from the emitter's own Rng(WorldDef::seed, system index), then clamped to [min, max].
+///
+/// Schedule: particle j (from 0) is born at start_time + (j + 1) / rate while that is <= stop_time,
+/// so floor(rate * (t - start_time)) have been born by time t whatever the fps and step. A particle
+/// born inside an internal step moves only for the rest of that step and starts with that age
+/// (a fast jet shows no bands at the step rate). Births while max_particles are alive are dropped.
+/// Disk start points are uniform over the disk's area. Quad releases (the particles born in one
+/// internal step) are laid out on a grid of cells of side 2 d_max (eq. 3.100; d_max the largest
+/// diameter in the release), or d_max if that is too coarse, one random cell per particle and a
+/// random offset inside it, so a release does not overlap while the quad has room.
 struct EmitterDef {
   EmitterShape shape = EmitterShape::disk;
   double disk_radius = 0.05;               ///< (m), shape == disk
@@ -46,10 +60,15 @@ struct EmitterDef {
   Distribution lifetime{2.0, 0.0, 0.0};    ///< (s), clamped >= 0
   Distribution start_speed{1.0, 0.0, 0.0}; ///< (m/s) along the emission direction
   Distribution spread_deg{0.0, 0.0, 0.0, 180.0};  ///< polar angle from the emitter +z axis
-                                           ///< (degrees); azimuth uniform in [0, 360)
-  Distribution mass{1e-3, 0.0, 1e-12};     ///< (kg), clamped > 0
-  Distribution radius{0.01, 0.0, 1e-6};    ///< (m), clamped > 0
-  std::vector<ColorKey> color_over_lifetime{ColorKey{0.0, {1.f, 1.f, 1.f, 1.f}}};
+                                           ///< (degrees); azimuth uniform in [0, 360). A
+                                           ///< negative draw is folded (-a at azimuth p is a at
+                                           ///< p + 180), then clamped to [min, max] and [0, 180]
+  Distribution mass{1e-3, 0.0, 1e-12};     ///< (kg), clamped > 0 (at least 1e-12); mean > 0
+  Distribution radius{0.01, 0.0, 1e-6};    ///< (m), clamped > 0 (at least 1e-6); mean > 0
+  /// Gradient over normalised age (keys sorted by t; one key = constant colour). Default: one
+  /// white key. (Sized, not brace-initialised: GCC 12 warns -Wmaybe-uninitialized on an
+  /// initializer_list in a default member initialiser.)
+  std::vector<ColorKey> color_over_lifetime = std::vector<ColorKey>(1);
   std::size_t max_particles = 100000;      ///< emission pauses while this many are alive
 };
 

@@ -54,13 +54,36 @@ class World {
   ColliderHandle add_box(const BoxDef& def);
   ParticleSystemHandle add_particle_system(const ParticleSystemDef& def);
 
+  /// Adds one particle to a system now, outside its emitter (tests, tools, scripted effects):
+  /// age 0, colour from the system's gradient, the system's next id (returned). It is integrated
+  /// and collided from the next advance() on. Position (m) and velocity (m/s) are world frame and
+  /// not checked: a non-finite value is reported by advance() as NonFiniteState.
+  /// @throws std::out_of_range if the handle is stale; std::invalid_argument unless mass (kg) > 0,
+  ///         radius (m) > 0 and lifetime (s) >= 0; std::length_error if the system already holds
+  ///         EmitterDef::max_particles live particles.
+  std::uint64_t spawn_particle(ParticleSystemHandle h, const Vec3& position, const Vec3& velocity,
+                               double mass, double radius, double lifetime);
+
   /// Advances the simulation by `sampling_time` (s, > 0) in internal steps of at most
   /// WorldDef::max_step. Returns the objects whose pose changed since the last call (kinematic
   /// colliders), in registration order. The reference stays valid until the next call.
-  /// @throws NonFiniteState if a particle's state becomes NaN/inf.
+  ///
+  /// Each internal step (Coutinho §1.3): kinematic colliders move to their end-of-step pose; per
+  /// system, particles are integrated (gravity + drag, §3.3), collided as swept spheres against
+  /// the colliders held at that pose (§3.4) with restitution and Coulomb friction (§3.6.1) or as
+  /// resting contacts (§3.6.3), the dead are removed (survivors keep their order), the step's
+  /// births are released and colours updated. No particle ends a step with its centre closer than
+  /// its radius to a plane on the solid side; one found inside a box leaves through the nearest
+  /// face with the box's normal velocity.
+  /// @throws std::invalid_argument unless sampling_time is > 0 and finite.
+  /// @throws NonFiniteState if a particle's state becomes NaN/inf; the message names the system,
+  ///         the particle id, the internal step number (1-based, as step_count() would count it)
+  ///         and the time. The world is then left mid-advance and should be discarded.
   const std::vector<MovedObject>& advance(double sampling_time);
 
-  /// Current pose of a collider (for the initial render list). @throws std::out_of_range if stale.
+  /// Current pose of a collider (for the initial render list): a box's centre and rotation; a
+  /// plane's reference point and a rotation taking local +z to its normal.
+  /// @throws std::out_of_range if stale.
   [[nodiscard]] MovedObject pose(ColliderHandle h) const;
   /// Live particles of a system. @throws std::out_of_range if the handle is stale.
   [[nodiscard]] ParticleView particles(ParticleSystemHandle h) const;
@@ -68,7 +91,8 @@ class World {
 
   [[nodiscard]] double time() const;                ///< (s) simulated time
   [[nodiscard]] std::uint64_t step_count() const;   ///< internal steps taken
-  /// Particles ever emitted by the system (for rate tests and statistics).
+  /// Particles ever emitted by the system (for rate tests and statistics): ids handed out so far,
+  /// by the emitter or spawn_particle(); births dropped at max_particles are not counted.
   [[nodiscard]] std::uint64_t emitted_count(ParticleSystemHandle h) const;
   [[nodiscard]] std::vector<ParticleSystemHandle> particle_systems() const;
   [[nodiscard]] std::vector<ColliderHandle> colliders() const;
