@@ -191,4 +191,16 @@ TEST(Golden, FountainFrameMatchesRecordedHash) {
         << algorithm << " " << h.out.substr(0, 16) << " vs golden " << golden.at(algorithm)
         << " recorded on " << golden.at("gl_renderer") << " / " << golden.at("gl_version") << "; this run: " << r.out;
   }
+  // The golden must be able to fail: the same frame without the fountain is out of tolerance
+  // for dHash (pHash's low frequencies barely see a thin spray at this size).
+  TempDir e;
+  ASSERT_EQ(run_simreel("render " + golden.at("scene").get<std::string>() + " -q --frames " + std::to_string(frame + 1) +
+                        " --size " + golden.at("size").get<std::string>() + " --seed " +
+                        std::to_string(golden.at("seed").get<int>()) + " --set /emitters/0/rate=0 -o " + e.path.string())
+                .code,
+            0);
+  const auto h = run_simreel("hash --algorithm dhash " + (e / name).string());
+  const std::uint64_t got = std::stoull(h.out.substr(0, 16), nullptr, 16);
+  const std::uint64_t want = std::stoull(golden.at("dhash").get<std::string>(), nullptr, 16);
+  EXPECT_GT(__builtin_popcountll(got ^ want), golden.at("tolerance").get<int>());
 }
