@@ -1,0 +1,479 @@
+// The recipes of Coutinho §3.9.1: effect knobs -> low-level emitters and force fields (scene
+// JSON). Every number a recipe picks that is not a knob is named here with the reason for it.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "simreel/effects/effects.hpp"
+#include "simreel/effects/physics.hpp"
+
+namespace simreel::effects {
+
+namespace {
+
+using json = nlohmann::json;
+constexpr double kPi = std::numbers::pi;
+
+double num(const json& knobs, const char* key) {
+  if (!knobs.contains(key) || !knobs.at(key).is_number())
+    throw std::invalid_argument(std::string("effects::derive: knob ") + key + " missing or not a number");
+  return knobs.at(key).get<double>();
+}
+std::array<double, 3> vec3(const json& knobs, const char* key) {
+  if (!knobs.contains(key) || !knobs.at(key).is_array() || knobs.at(key).size() < 2)
+    throw std::invalid_argument(std::string("effects::derive: knob ") + key + " missing or not an array");
+  const json& a = knobs.at(key);
+  return {a[0].get<double>(), a[1].get<double>(), a.size() > 2 ? a[2].get<double>() : 0.0};
+}
+std::string str(const json& knobs, const char* key) { return knobs.at(key).get<std::string>(); }
+bool flag(const json& knobs, const char* key) { return knobs.at(key).get<bool>(); }
+
+json dist(double mean, double deviation) { return {{"mean", mean}, {"deviation", deviation}}; }
+json dist(double mean, double deviation, double min, double max) {
+  return {{"mean", mean}, {"deviation", deviation}, {"min", min}, {"max", max}};
+}
+json rgba(double r, double g, double b, double a) { return json::array({r, g, b, a}); }
+json key(double t, const json& color) { return {{"t", t}, {"color", color}}; }
+json vec(const std::array<double, 3>& v) { return json::array({v[0], v[1], v[2]}); }
+
+/// Curl-noise turbulence and a steady drift for systems with no gravity: a uniform force
+/// k_d u pulls a particle toward the air velocity u (its terminal velocity under drag alone is
+/// then u, Coutinho §3.3.2), and the noise stirs it.
+void add_air(Derived& d, const std::string& system, double drag, const std::array<double, 3>& air_velocity,
+             double turbulence, double frequency) {
+  d.force_fields.push_back({{"type", "uniform"},
+                            {"force", json::array({drag * air_velocity[0], drag * air_velocity[1],
+                                                   drag * air_velocity[2]})},
+                            {"systems", json::array({system})}});
+  if (turbulence > 0.0)
+    d.force_fields.push_back({{"type", "curl_noise"},
+                              {"amplitude_m_s", turbulence},
+                              {"frequency_per_m", frequency},
+                              {"scroll_m_s", 0.25},
+                              {"drag", drag},
+                              {"systems", json::array({system})}});
+}
+
+// ---------------------------------------------------------------------------------------------
+// Smoke (§3.9.1): many small light particles, no gravity, an external force balanced by strong
+// viscous drag, long lifespan, an early split age so the column starts dense, small split
+// deviations that accumulate so it opens like a cone.
+
+struct SmokeLook {
+  std::array<double, 3> color;
+  double alpha;
+};
+
+json smoke_emitter(const json& k, const std::string& name, double rise, double lifetime, double density,
+                   double source_radius, const json& colors, double drag) {
+  const double puff = std::max(0.06, 0.6 * source_radius);  // start radius of a puff (m)
+  json e = {
+      {"name", name},
+      {"shape", "disk"},
+      {"disk_radius", source_radius},
+      {"position", vec(vec3(k, "position"))},
+      {"direction", json::array({0, 0, 1})},
+      {"rate", 140.0 * density},
+      {"lifetime", dist(lifetime, 0.15 * lifetime, 0.3 * lifetime, 2.0 * lifetime)},
+      {"start_speed", dist(rise, 0.15 * rise, 0.0, 3.0 * rise)},
+      {"spread_deg", dist(0.0, 6.0)},
+      {"mass", dist(2e-4, 2e-5, 1e-4, 4e-4)},
+      {"particle_radius", dist(puff, 0.2 * puff, 0.3 * puff, 2.0 * puff)},
+      {"gravity", json::array({0, 0, 0})},
+      {"drag", drag},
+      {"collide", false},
+      {"color_over_lifetime", colors},
+      // Puffs grow as they entrain air: about 3.5x their start size by the end of their life.
+      {"size_over_lifetime", json::array({{{"t", 0.0}, {"size", 0.6}},
+                                          {{"t", 0.3}, {"size", 1.6}},
+                                          {{"t", 1.0}, {"size", 3.5}}})},
+      {"split", {{"enabled", true},
+                 {"children", 2},
+                 {"age", 0.12 * lifetime},
+                 {"delay_steps", 0},
+                 {"depth", 1},
+                 {"velocity_fraction", 0.9},
+                 {"direction_deviation_deg", 14.0},
+                 {"size_fraction", 0.85},
+                 {"lifetime_deviation", 0.15 * lifetime}}},
+      {"render_style", "soft"},
+      {"max_particles", 60000}};
+  return e;
+}
+
+Derived smoke(const json& k, const std::string& name) {
+  Derived d;
+  const double rise = num(k, "rise_speed_m_s"), life = num(k, "dissipation_s"), density = num(k, "density");
+  const auto c = vec3(k, "color");
+  // Opacity of one puff: a thin smoke at density 1 lets most light through each puff; many
+  // overlapping puffs make the column read as dense.
+  const double a = std::min(0.85, 0.30 * std::sqrt(density));
+  const json colors = json::array({key(0.0, rgba(c[0], c[1], c[2], 0.0)), key(0.06, rgba(c[0], c[1], c[2], a)),
+                                   key(0.5, rgba(c[0], c[1], c[2], 0.6 * a)),
+                                   key(1.0, rgba(c[0], c[1], c[2], 0.0))});
+  // Strong drag: the velocity relaxes to the air's in m / k_d = 0.25 s (mean mass 2e-4 kg).
+  const double drag = 2e-4 / 0.25;
+  d.emitters.push_back(smoke_emitter(k, name, rise, life, density, num(k, "source_radius_m"), colors, drag));
+  d.emitters.back()["role"] = "smoke";
+  const auto w = vec3(k, "wind_m_s");
+  add_air(d, name, drag, {w[0], w[1], w[2] + rise}, num(k, "turbulence_m_s"), 1.1);
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fire smoke (§3.9.1): yellow -> orange -> dark grey -> black over age; the material sets how
+// long each stage lasts.
+
+/// Ends of the yellow, orange and dark-grey stages as fractions of the smoke's life (black
+/// after): a clean-burning material stays bright longer, a sooty one turns black soon.
+std::array<double, 3> material_stages(const std::string& material) {
+  if (material == "paper") return {0.18, 0.34, 0.75};
+  if (material == "oil") return {0.07, 0.14, 0.35};
+  if (material == "rubber") return {0.04, 0.09, 0.22};
+  return {0.12, 0.24, 0.55};  // wood
+}
+
+Derived fire_smoke(const json& k, const std::string& name) {
+  Derived d;
+  const double rise = num(k, "rise_speed_m_s"), life = num(k, "dissipation_s"), density = num(k, "density");
+  const double radius = num(k, "source_radius_m");
+  const auto st = material_stages(str(k, "material"));
+  const double a = std::min(0.9, 0.4 * std::sqrt(density));
+  // Emissive stages are brighter than 1 (HDR; the renderer tone-maps them).
+  const json colors = json::array({key(0.0, rgba(1.6, 1.3, 0.35, 0.0)), key(0.3 * st[0], rgba(1.6, 1.25, 0.3, a)),
+                                   key(st[0], rgba(1.4, 0.95, 0.2, a)), key(st[1], rgba(1.1, 0.45, 0.08, a)),
+                                   key(0.5 * (st[1] + st[2]), rgba(0.28, 0.25, 0.23, 0.9 * a)),
+                                   key(st[2], rgba(0.16, 0.15, 0.145, 0.85 * a)),
+                                   key(1.0, rgba(0.03, 0.03, 0.03, 0.0))});
+  const double drag = 2e-4 / 0.25;
+  json smoke_e = smoke_emitter(k, name + "/smoke", rise, life, density, radius, colors, drag);
+  smoke_e["role"] = "smoke";
+  d.emitters.push_back(smoke_e);
+
+  // The flame core: short-lived additive particles just above the source, rising faster.
+  json core = {{"name", name + "/core"},
+               {"role", "core"},
+               {"shape", "disk"},
+               {"disk_radius", 0.8 * radius},
+               {"position", vec(vec3(k, "position"))},
+               {"direction", json::array({0, 0, 1})},
+               {"rate", 500.0 * density},
+               {"lifetime", dist(0.45, 0.12, 0.1, 0.9)},
+               {"start_speed", dist(1.6 * rise, 0.3 * rise, 0.0, 4.0 * rise)},
+               {"spread_deg", dist(0.0, 10.0)},
+               {"mass", dist(2e-4, 0.0)},
+               {"particle_radius", dist(0.5 * radius, 0.1 * radius, 0.1 * radius, radius)},
+               {"gravity", json::array({0, 0, 0})},
+               {"drag", drag},
+               {"collide", false},
+               {"color_over_lifetime", json::array({key(0.0, rgba(1.8, 1.5, 0.6, 0.0)),
+                                                     key(0.15, rgba(1.8, 1.2, 0.35, 0.55)),
+                                                     key(0.6, rgba(1.4, 0.5, 0.08, 0.35)),
+                                                     key(1.0, rgba(0.6, 0.12, 0.02, 0.0))})},
+               {"size_over_lifetime", json::array({{{"t", 0.0}, {"size", 1.0}}, {{"t", 1.0}, {"size", 0.35}}})},
+               {"render_style", "additive"},
+               {"max_particles", 20000}};
+  d.emitters.push_back(core);
+  const auto w = vec3(k, "wind_m_s");
+  add_air(d, name + "/smoke", drag, {w[0], w[1], w[2] + rise}, num(k, "turbulence_m_s"), 1.2);
+  add_air(d, name + "/core", drag, {w[0], w[1], w[2] + 1.6 * rise}, 0.5 * num(k, "turbulence_m_s"), 2.0);
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rain (§3.9.1): an emitter surface covering the area; gravity plus viscous drag give a
+// constant fall speed v_t = m g / k_d; intensity and drop size set count and mass.
+
+Derived rain(const json& k, const std::string& name, double g) {
+  Derived d;
+  const double dmm = num(k, "drop_diameter_mm");
+  const double m = drop_mass(dmm);
+  const double vt = raindrop_terminal_velocity(dmm);
+  const double kd = drag_for_terminal_velocity(m, vt, g);
+  const auto area = vec3(k, "area_m");
+  const auto c = vec3(k, "center");
+  const auto w = vec3(k, "wind_m_s");
+  const double h = num(k, "height_m");
+  const double rate = std::min(num(k, "max_drops_per_s"),
+                               rain_drops_per_m2_s(num(k, "intensity_mm_h"), dmm) * area[0] * area[1]);
+  // Drops fall at v = (w_x, w_y, -v_t): release them upwind so the wet area stays over center.
+  const double fall_time = h / vt;
+  const std::array<double, 3> top{c[0] - w[0] * fall_time, c[1] - w[1] * fall_time, c[2] + h};
+  const std::array<double, 3> v{w[0], w[1], -vt};
+  const double speed = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  json e = {{"name", name},
+            {"role", "drops"},
+            {"shape", "quad"},
+            {"quad_size", json::array({area[0], area[1]})},
+            {"position", vec(top)},
+            {"direction", json::array({v[0] / speed, v[1] / speed, v[2] / speed})},
+            {"rate", rate},
+            {"lifetime", dist(1.5 * fall_time + 0.5, 0.0)},
+            {"start_speed", dist(speed, 0.03 * speed, 0.0, 2.0 * speed)},
+            {"spread_deg", dist(0.0, 0.5)},
+            {"mass", dist(m, 0.0)},
+            // Drawn radius: a real 2 mm drop is invisible at video sizes; the streak carries it.
+            {"particle_radius", dist(0.5 * dmm * 1e-3 * 2.5, 0.0)},
+            {"drag", kd},
+            {"color", json::array({0.62, 0.7, 0.82, 0.55})},
+            {"render_style", "streak"},
+            {"max_particles", std::size_t(std::min(2e6, rate * (1.5 * fall_time + 0.5) + 1000))}};
+  if (flag(k, "splash"))
+    e["on_hit"] = {{"action", "split"},
+                   {"children", 4},
+                   {"speed_fraction", 0.25},
+                   {"size_fraction", 0.5},
+                   {"lifetime", 0.35}};
+  d.emitters.push_back(e);
+  // Wind: a uniform force k_d w makes the terminal velocity w + m g / k_d (drag relative to air).
+  if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0)
+    d.force_fields.push_back({{"type", "uniform"},
+                              {"force", json::array({kd * w[0], kd * w[1], kd * w[2]})},
+                              {"systems", json::array({name})}});
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sprinkler and jet (§3.9.1): parabolic drops; start speed from the apex height; deviation is
+// the aperture.
+
+json rotation_keys(double elevation_deg, double azimuth_deg, double rpm, const std::array<double, 3>& pos) {
+  // Emitters fire along their local +z; tilt it down to the elevation, then turn it about z.
+  const double tilt = 90.0 - elevation_deg;
+  json keys = json::array();
+  const double period = 60.0 / std::abs(rpm);
+  for (int i = 0; i <= 8; ++i) {
+    const double t = period * i / 8.0;
+    const double az = azimuth_deg + (rpm > 0 ? 1.0 : -1.0) * 360.0 * i / 8.0;
+    keys.push_back({{"time", t}, {"position", vec(pos)}, {"rotation_deg", json::array({0.0, tilt, az})}});
+  }
+  return {{"loop", true}, {"smooth", false}, {"keys", keys}};
+}
+
+Derived sprinkler(const json& k, const std::string& name, double g) {
+  Derived d;
+  const double elev = num(k, "elevation_deg"), az = num(k, "azimuth_deg"), rpm = num(k, "rotation_rpm");
+  const double v0 = launch_speed_for_apex(num(k, "max_height_m"), elev, g);
+  const auto pos = vec3(k, "position");
+  const double r = num(k, "drop_radius_m");
+  const double e_rad = elev * kPi / 180.0, a_rad = az * kPi / 180.0;
+  json e = {{"name", name},
+            {"role", "drops"},
+            {"shape", "disk"},
+            {"disk_radius", 0.01},
+            {"position", vec(pos)},
+            {"direction", json::array({std::cos(e_rad) * std::cos(a_rad), std::cos(e_rad) * std::sin(a_rad),
+                                        std::sin(e_rad)})},
+            {"rate", num(k, "flow_drops_s")},
+            {"lifetime", dist(4.0, 0.3)},
+            {"start_speed", dist(v0, 0.02 * v0, 0.5 * v0, 1.5 * v0)},
+            {"spread_deg", dist(0.0, num(k, "aperture_deg"))},
+            {"mass", dist(4.0 / 3.0 * kPi * r * r * r * kWaterDensity * 0.05, 0.0)},
+            {"particle_radius", dist(r, 0.25 * r, 0.3 * r, 2.0 * r)},
+            {"color_over_lifetime", json::array({key(0.0, rgba(0.6, 0.82, 1.0, 0.9)),
+                                                  key(0.8, rgba(0.3, 0.55, 0.95, 0.8)),
+                                                  key(1.0, rgba(0.3, 0.55, 0.95, 0.0))})},
+            {"render_style", "droplet"},
+            {"max_particles", 100000}};
+  if (rpm != 0.0) e["path"] = rotation_keys(elev, az, rpm, pos);
+  d.emitters.push_back(e);
+  return d;
+}
+
+Derived jet(const json& k, const std::string& name) {
+  Derived d;
+  const auto dir = vec3(k, "direction");
+  const double r = num(k, "drop_radius_m");
+  json e = {{"name", name},
+            {"role", "drops"},
+            {"shape", "disk"},
+            {"disk_radius", 1.5 * r},
+            {"position", vec(vec3(k, "position"))},
+            {"direction", vec(dir)},
+            {"rate", num(k, "rate")},
+            {"lifetime", dist(3.0, 0.2)},
+            {"start_speed", dist(num(k, "speed_m_s"), 0.01 * num(k, "speed_m_s"))},
+            {"spread_deg", dist(0.0, num(k, "deviation_deg"))},
+            {"mass", dist(num(k, "drop_mass_kg"), 0.0)},
+            {"particle_radius", dist(r, 0.1 * r, 0.5 * r, 1.5 * r)},
+            {"color", json::array({0.45, 0.7, 1.0, 0.95})},
+            {"render_style", "droplet"},
+            {"max_particles", 100000}};
+  d.emitters.push_back(e);
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Explosion (§3.9.1): a burst from a spherical or planar emitter, many small particles, short
+// lifespan, large deviation, heavy splitting; no external forces.
+
+Derived explosion(const json& k, const std::string& name) {
+  Derived d;
+  const bool sphere = str(k, "shape") == "sphere";
+  const double t = num(k, "time_s"), speed = num(k, "blast_speed_m_s"), radius = num(k, "radius_m");
+  const double life = num(k, "dissipation_s");
+  const auto pos = vec3(k, "position");
+  const long long n = k.at("particles").get<long long>();
+  const long long children = k.at("split_children").get<long long>();
+  auto base = [&](const std::string& role, long long count) {
+    json e = {{"name", name + "/" + role},
+              {"role", role},
+              {"position", vec(pos)},
+              {"direction", json::array({0, 0, 1})},
+              {"rate", 0},
+              {"bursts", json::array({{{"time", t}, {"count", count}}})},
+              {"collide", true}};
+    if (sphere) {
+      e["shape"] = "sphere";
+      e["sphere_radius"] = radius;
+    } else {
+      e["shape"] = "disk";
+      e["disk_radius"] = radius;
+    }
+    return e;
+  };
+  json sparks = base("sparks", n);
+  sparks["lifetime"] = dist(0.7, 0.3, 0.1, 2.0);
+  sparks["start_speed"] = dist(1.4 * speed, 0.35 * speed, 0.1 * speed, 3.0 * speed);
+  sparks["spread_deg"] = dist(0.0, sphere ? 25.0 : 55.0);
+  sparks["mass"] = dist(2e-4, 5e-5, 5e-5, 1e-3);
+  sparks["particle_radius"] = dist(0.025, 0.008, 0.008, 0.06);
+  sparks["drag"] = 2e-4;
+  sparks["color_over_lifetime"] = json::array({key(0.0, rgba(2.0, 1.6, 0.7, 1.0)), key(0.4, rgba(1.6, 0.7, 0.15, 0.9)),
+                                               key(1.0, rgba(0.6, 0.1, 0.02, 0.0))});
+  sparks["render_style"] = "additive";
+  sparks["max_particles"] = n + 10;
+  d.emitters.push_back(sparks);
+
+  json smoke = base("smoke", std::max<long long>(1, n / 4));
+  smoke["lifetime"] = dist(life, 0.25 * life, 0.2 * life, 2.0 * life);
+  smoke["start_speed"] = dist(0.6 * speed, 0.3 * speed, 0.0, 1.5 * speed);
+  smoke["spread_deg"] = dist(0.0, sphere ? 30.0 : 60.0);
+  smoke["mass"] = dist(2e-4, 2e-5, 1e-4, 4e-4);
+  smoke["particle_radius"] = dist(2.0 * radius, 0.4 * radius, 0.5 * radius, 4.0 * radius);
+  smoke["gravity"] = json::array({0, 0, 0});
+  // Heavy drag stops the cloud within a metre or two: it billows rather than flies.
+  smoke["drag"] = 2e-4 / 0.18;
+  smoke["color_over_lifetime"] =
+      json::array({key(0.0, rgba(1.4, 0.8, 0.3, 0.9)), key(0.08, rgba(0.35, 0.3, 0.27, 0.8)),
+                   key(0.6, rgba(0.22, 0.21, 0.2, 0.5)), key(1.0, rgba(0.2, 0.2, 0.2, 0.0))});
+  smoke["size_over_lifetime"] = json::array({{{"t", 0.0}, {"size", 0.5}}, {{"t", 1.0}, {"size", 2.5}}});
+  if (children > 0)
+    smoke["split"] = {{"enabled", true},
+                      {"children", children},
+                      {"age", 0.05},
+                      {"delay_steps", 0},
+                      {"depth", 2},
+                      {"velocity_fraction", 0.7},
+                      {"direction_deviation_deg", 35.0},
+                      {"size_fraction", 0.8},
+                      {"lifetime_deviation", 0.2 * life}};
+  smoke["render_style"] = "soft";
+  smoke["max_particles"] = 200000;
+  d.emitters.push_back(smoke);
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fireworks (§3.9.1): a shell rises and bursts at its apex from a spherical emitter along
+// radial directions, with direction and speed deviation for an uneven shell; coloured trails.
+
+std::array<double, 3> palette_color(const std::string& palette, long long shell) {
+  static const std::array<std::array<double, 3>, 6> festival{
+      {{1.8, 0.35, 0.3}, {0.4, 1.6, 0.5}, {0.5, 0.7, 2.0}, {1.8, 1.4, 0.4}, {1.5, 0.5, 1.8}, {0.4, 1.6, 1.7}}};
+  if (palette == "gold") return {1.9, 1.3, 0.45};
+  if (palette == "green") return {0.45, 1.8, 0.5};
+  if (palette == "violet") return {1.3, 0.45, 1.9};
+  if (palette == "red_white_blue") {
+    static const std::array<std::array<double, 3>, 3> rwb{{{1.9, 0.3, 0.3}, {1.7, 1.7, 1.7}, {0.4, 0.6, 2.0}}};
+    return rwb[std::size_t(shell % 3)];
+  }
+  return festival[std::size_t(shell % 6)];
+}
+
+Derived fireworks(const json& k, const std::string& name, double g) {
+  Derived d;
+  const auto launch = vec3(k, "launch_position");
+  const double h = num(k, "burst_height_m"), interval = num(k, "interval_s"), spacing = num(k, "spacing_m");
+  const double v0 = launch_speed_for_apex(h, 90.0, g);
+  const double t_apex = time_to_apex(v0, g);
+  const long long shells = k.at("shells").get<long long>();
+  const long long stars = k.at("stars").get<long long>();
+  const double burst = num(k, "burst_speed_m_s");
+  for (long long s = 0; s < shells; ++s) {
+    const std::array<double, 3> p{launch[0] + spacing * (double(s) - 0.5 * double(shells - 1)), launch[1],
+                                  launch[2]};
+    const double t_launch = interval * double(s);
+    const std::string sn = name + "/shell" + std::to_string(s);
+    // The rising shell: one bright particle on a ballistic path, dying at the apex.
+    d.emitters.push_back({{"name", sn},
+                          {"role", "shell"},
+                          {"shape", "point"},
+                          {"position", vec(p)},
+                          {"direction", json::array({0, 0, 1})},
+                          {"rate", 0},
+                          {"bursts", json::array({{{"time", t_launch}, {"count", 1}}})},
+                          {"lifetime", dist(t_apex, 0.0)},
+                          {"start_speed", dist(v0, 0.0)},
+                          {"mass", dist(0.05, 0.0)},
+                          {"particle_radius", dist(0.06, 0.0)},
+                          {"color", json::array({1.8, 1.3, 0.6, 1.0})},
+                          {"render_style", "additive"},
+                          {"collide", false},
+                          {"max_particles", 4}});
+    const auto c = palette_color(str(k, "palette"), s);
+    json e = {{"name", name + "/stars" + std::to_string(s)},
+              {"role", "stars"},
+              {"shape", "sphere"},
+              {"sphere_radius", 0.15},
+              {"position", json::array({p[0], p[1], p[2] + h})},
+              {"direction", json::array({0, 0, 1})},
+              {"rate", 0},
+              {"bursts", json::array({{{"time", t_launch + t_apex}, {"count", stars}}})},
+              {"lifetime", dist(2.2, 0.4, 0.8, 3.5)},
+              {"start_speed", dist(burst, num(k, "speed_deviation") * burst, 0.1 * burst, 2.0 * burst)},
+              {"spread_deg", dist(0.0, 6.0)},
+              {"mass", dist(2e-3, 2e-4, 1e-3, 4e-3)},
+              {"particle_radius", dist(0.09, 0.015, 0.04, 0.15)},
+              // Drag relaxes the burst in ~1 s so the shell hangs, then droops under gravity.
+              {"drag", 2e-3 / 1.2},
+              {"collide", false},
+              {"color_over_lifetime", json::array({key(0.0, rgba(2.0, 2.0, 2.0, 1.0)),
+                                                    key(0.12, rgba(c[0], c[1], c[2], 1.0)),
+                                                    key(0.75, rgba(0.6 * c[0], 0.6 * c[1], 0.6 * c[2], 0.7)),
+                                                    key(1.0, rgba(0.2 * c[0], 0.2 * c[1], 0.2 * c[2], 0.0))})},
+              {"render_style", "additive"},
+              {"max_particles", stars * 40 + 10}};
+    if (flag(k, "trails"))
+      e["split"] = {{"enabled", true},
+                    {"children", 1},
+                    {"age", 0.05},
+                    {"delay_steps", 3},
+                    {"depth", 200},
+                    {"velocity_fraction", 0.1},
+                    {"direction_deviation_deg", 30.0},
+                    {"size_fraction", 0.55},
+                    {"lifetime_deviation", 0.1}};
+    d.emitters.push_back(e);
+  }
+  return d;
+}
+
+}  // namespace
+
+Derived derive(const EffectSpec& spec, const json& knobs, const std::string& base_name, double gravity_z) {
+  const double g = gravity_z < 0.0 ? -gravity_z : 9.81;
+  const std::string& n = spec.name;
+  if (n == "smoke") return smoke(knobs, base_name);
+  if (n == "fire_smoke") return fire_smoke(knobs, base_name);
+  if (n == "rain") return rain(knobs, base_name, g);
+  if (n == "sprinkler") return sprinkler(knobs, base_name, g);
+  if (n == "jet") return jet(knobs, base_name);
+  if (n == "explosion") return explosion(knobs, base_name);
+  if (n == "fireworks") return fireworks(knobs, base_name, g);
+  throw std::invalid_argument("effects::derive: no recipe for effect \"" + n + "\"");
+}
+
+}  // namespace simreel::effects
