@@ -342,6 +342,13 @@ void check_vec(const std::string& field, const Vec3& v) {
 
 void validate_forces(const ParticleSystemDef& def) {
   const std::string p = "ParticleSystemDef(" + def.name + ").";
+  switch (def.integrator) {
+    case Integrator::semi_implicit_euler: case Integrator::rk4: case Integrator::explicit_euler:
+    case Integrator::rk2: case Integrator::implicit_euler: case Integrator::adaptive:
+      break;
+    default:
+      bad(p + "integrator", "one of the Integrator values", double(int(def.integrator)));
+  }
   check_pos(p + "tolerance", def.tolerance);
   if (def.initial_particles.size() > def.emitter.max_particles)
     bad(p + "initial_particles.size()", "<= emitter.max_particles",
@@ -353,6 +360,7 @@ void validate_forces(const ParticleSystemDef& def) {
     check_vec(f + "velocity", q.velocity);
     check_pos(f + "mass", q.mass);
     check_pos(f + "radius", q.radius);
+    if (!std::isfinite(q.charge)) bad(f + "charge", "finite", q.charge);
   }
   for (std::size_t i = 0; i < def.springs.size(); ++i) {
     const SpringDef& s = def.springs[i];

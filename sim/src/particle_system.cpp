@@ -101,6 +101,7 @@ ParticleView ParticleStore::view() const {
   v.age = age.data();
   v.lifetime = lifetime.data();
   v.id = id.data();
+  v.charge = has_charge ? charge.data() : nullptr;
   return v;
 }
 

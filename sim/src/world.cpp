@@ -252,13 +252,20 @@ ColliderHandle World::add_box(const BoxDef& def) {
 }
 
 ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
-  detail::validate(def);
+  // The emitter's validation (emitter.cpp) knows only the first two integrators; the integrator
+  // and the force definitions are checked by validate_forces (forces.cpp).
+  detail::validate_forces(def);
+  {
+    ParticleSystemDef emitter_part = def;
+    emitter_part.integrator = Integrator::semi_implicit_euler;
+    detail::validate(emitter_part);
+  }
   const std::size_t index = impl_->systems.size();
   detail::ParticleSystemState ps;
   ps.def = def;
-  detail::validate_forces(def);
   ps.store.track_prev = def.collide && def.integrator != Integrator::semi_implicit_euler;
   ps.store.has_charge = def.charge.mean != 0.0 || def.charge.deviation != 0.0;
+  for (const InitialParticle& p : def.initial_particles) ps.store.has_charge |= p.charge != 0.0;
   ps.store.reserve(def.emitter.max_particles);
   ps.charge_rng = Rng(impl_->def.seed, 0x5eed0000u + index);
   ps.emitter.rng = Rng(impl_->def.seed, index);
@@ -279,8 +286,7 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
     st.lifetime[i] = std::numeric_limits<float>::infinity();
     st.age[i] = 0.0f;
     st.id[i] = ps.next_id++;
-    if (st.has_charge)
-      st.charge[i] = float(ps.charge_rng.normal(def.charge.mean, def.charge.deviation));
+    if (st.has_charge) st.charge[i] = float(p.charge);
     ps.gradient.apply(st, i, i + 1);
   }
   for (SpringDef s : def.springs) {

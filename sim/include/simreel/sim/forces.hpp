@@ -22,6 +22,8 @@ struct InitialParticle {
   Vec3 velocity = Vec3::Zero();  ///< (m/s), world frame
   double mass = 1e-3;            ///< (kg), > 0
   double radius = 0.01;          ///< (m), > 0
+  double charge = 0.0;           ///< (C) for pair forces (ParticleSystemDef::charge is for
+                                 ///< emitted particles)
 };
 
 /// Damped spring between two particles (Coutinho §3.3.3, eq. 3.6):

@@ -95,8 +95,9 @@ struct ParticleSystemDef {
   std::vector<InitialParticle> initial_particles;
   /// Damped springs (§3.3.3); a and b index initial_particles.
   std::vector<SpringDef> springs;
-  /// Electric charge q (C) of each particle: drawn per particle at birth from its own generator
-  /// Rng(seed, 0x5eed0000 + system index) (a deviation of 0 draws nothing).
+  /// Electric charge q (C) of each emitted particle: drawn per particle at birth from the
+  /// system's own generator Rng(seed, 0x5eed0000 + system index) (a deviation of 0 draws
+  /// nothing). Initial particles carry their own InitialParticle::charge.
   Distribution charge{0.0, 0.0};
   PairForceDef pair_forces;
 };
@@ -111,6 +112,7 @@ struct ParticleView {
   const float* radius = nullptr;       ///< (count) (m)
   const float* age = nullptr;          ///< (count) (s)
   const float* lifetime = nullptr;     ///< (count) (s)
+  const float* charge = nullptr;       ///< (count) (C), or nullptr when the system has none
   const std::uint64_t* id = nullptr;   ///< (count) stable id, unique within the system, in
                                        ///< emission order; survivors keep their relative order
 };
