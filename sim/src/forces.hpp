@@ -76,9 +76,9 @@ struct Dynamics {
   // grid scratch (reused; no allocation once grown)
   std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle
   std::vector<std::uint32_t> order_;        // (n) particle indices sorted by (cell key, index)
-  std::vector<std::uint64_t> table_key_;    // open-addressing hash of occupied cells
-  std::vector<std::uint32_t> table_begin_;  // first entry in cell_key_ of each cell
-  std::vector<std::uint32_t> table_count_;
+  std::vector<double> sorted_;              // (n x 5) x, y, z, q, m in that order
+  std::vector<std::uint64_t> cell_keys_;    // occupied cells' keys, increasing
+  std::vector<std::uint32_t> cell_start_;   // first particle (in order_) of each cell, + n
 };
 
 /// Validation of the force-related definitions: std::invalid_argument naming the field.

@@ -399,7 +399,7 @@ std::uint64_t fnv(const void* data, std::size_t bytes, std::uint64_t h) {
 }
 
 std::uint64_t busy_scene_hash(int threads) {
-  World world(WorldDef{1.0 / 120, 42, 0.05, threads});
+  World world(WorldDef{1.0 / 60, 42, 0.05, threads});
   ParticleSystemDef d = test::spawn_only_system("busy");
   d.integrator = Integrator::rk2;
   d.drag = 1e-4;
@@ -427,7 +427,7 @@ std::uint64_t busy_scene_hash(int threads) {
   vortex.falloff = Falloff::quadratic;
   vortex.strength = 3;
   world.add_force_field(vortex);
-  for (int i = 0; i < 4; ++i) world.advance(1.0 / 60);
+  for (int i = 0; i < 3; ++i) world.advance(1.0 / 60);
   const ParticleView v = world.particles(ps);
   std::uint64_t h = 0xcbf29ce484222325ULL;
   h = fnv(v.position, 3 * v.count * sizeof(float), h);
