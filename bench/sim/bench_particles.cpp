@@ -69,16 +69,16 @@ void particle_steps(benchmark::State& state, Scene scene) {
 void sizes(benchmark::internal::Benchmark* b) {
   for (int threads : {1, 2})
     for (int n : {10'000, 100'000, 1'000'000}) b->Args({n, threads});
-  b->Unit(benchmark::kMillisecond);
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
 }  // namespace
 
 BENCHMARK_CAPTURE(particle_steps, no_colliders, Scene::no_colliders)->Apply(sizes);
 BENCHMARK_CAPTURE(particle_steps, ground_airborne, Scene::ground_airborne)
-    ->Args({100'000, 1})->Args({1'000'000, 1})->Unit(benchmark::kMillisecond);
+    ->Args({100'000, 1})->Args({1'000'000, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(particle_steps, ground_resting, Scene::ground_resting)
-    ->Args({100'000, 1})->Args({1'000'000, 1})->Unit(benchmark::kMillisecond);
+    ->Args({100'000, 1})->Args({1'000'000, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(particle_steps, curl_noise, Scene::curl_noise)->Apply(sizes);
 BENCHMARK_CAPTURE(particle_steps, pair_forces, Scene::pair_forces)
-    ->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond);
+    ->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -141,9 +141,18 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
   for (Vec* a : {&w.x, &w.v, &w.a1, &w.a2, &w.a3, &w.a4, &w.xt, &w.vt, &w.v2, &w.v3})
     if (a->size() < m) a->resize(m);
   if (w.m.size() < n) w.m.resize(n);
-  for (std::size_t k = 0; k < m; ++k) {
-    w.x[k] = s.position[3 * begin + k];
-    w.v[k] = s.velocity[3 * begin + k];
+  const int th = dyn.threads;
+  const bool par = n >= kParallelMin && th > 1;
+  {
+    double* __restrict wx = w.x.data();
+    double* __restrict wv = w.v.data();
+    const float* __restrict px = s.position.data() + 3 * begin;
+    const float* __restrict pv = s.velocity.data() + 3 * begin;
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
+    for (std::size_t k = 0; k < m; ++k) {
+      wx[k] = px[k];
+      wv[k] = pv[k];
+    }
   }
   for (std::size_t i = 0; i < n; ++i) w.m[i] = s.mass[begin + i];
   dyn.n = n;
@@ -158,7 +167,6 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
     std::memcpy(&s.prev_position[3 * begin], &s.position[3 * begin], m * sizeof(float));
   double* x = w.x.data();
   double* v = w.v.data();
-  const int th = dyn.threads;
 
   switch (integrator) {
     case Integrator::explicit_euler: {
@@ -173,6 +181,7 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
     case Integrator::semi_implicit_euler: {
       // Drag at the new velocity (see Integrator::semi_implicit_euler), the rest explicit.
       dyn.eval(t0, x, v, w.a1.data(), false);
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
       for (std::size_t i = 0; i < n; ++i) {
         const double damp = 1.0 / (1.0 + h * dyn.drag / w.m[i]);
         for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
@@ -242,11 +251,14 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
   }
 
   unsigned bad = 0;
+  float* __restrict px = s.position.data() + 3 * begin;
+  float* __restrict pv = s.velocity.data() + 3 * begin;
+#pragma omp parallel for schedule(static) num_threads(th) reduction(| : bad) if (par)
   for (std::size_t k = 0; k < m; ++k) {
     bad |= unsigned(!(std::abs(x[k]) <= double(FLT_MAX))) |
            unsigned(!(std::abs(v[k]) <= double(FLT_MAX)));
-    s.position[3 * begin + k] = float(x[k]);
-    s.velocity[3 * begin + k] = float(v[k]);
+    px[k] = float(x[k]);
+    pv[k] = float(v[k]);
   }
   if (age_particles) {
     const float hf = float(h);
