@@ -75,9 +75,12 @@ double GradientNoise::sample(const Vec3& p, Vec3& grad) const {
   const double x = u.x(), y = u.y(), z = u.z();
   const double value = va + k1 * x + k2 * y + k3 * z + k4 * x * y + k5 * y * z + k6 * z * x +
                        k7 * x * y * z;
-  grad = ga + x * (gb - ga) + y * (gc - ga) + z * (ge - ga) + x * y * (ga - gb - gc + gd) +
-         y * z * (ga - gc - ge + gg) + z * x * (ga - gb - ge + gf) +
-         x * y * z * (-ga + gb + gc - gd + ge - gf - gg + gh);
+  // The same trilinear blend of the corner gradients, written as nested lerps (cheaper than
+  // the expanded form and algebraically equal).
+  const Vec3 gx00 = ga + x * (gb - ga), gx10 = gc + x * (gd - gc);
+  const Vec3 gx01 = ge + x * (gf - ge), gx11 = gg + x * (gh - gg);
+  const Vec3 gy0 = gx00 + y * (gx10 - gx00), gy1 = gx01 + y * (gx11 - gx01);
+  grad = gy0 + z * (gy1 - gy0);
   grad.x() += du.x() * (k1 + k4 * y + k6 * z + k7 * y * z);
   grad.y() += du.y() * (k2 + k4 * x + k5 * z + k7 * x * z);
   grad.z() += du.z() * (k3 + k5 * y + k6 * x + k7 * x * y);
