@@ -31,6 +31,18 @@ struct EmitterScene {
   render::ParticleStyle style = render::ParticleStyle::soft;
 };
 
+/// A force field with the names of the systems (emitters) it acts on (empty = all).
+struct ForceFieldScene {
+  sim::ForceFieldDef def;
+  std::vector<std::string> systems;
+};
+
+/// An attractor spring pulling particles of the named system.
+struct AttractorSpringScene {
+  sim::AttractorSpringDef def;
+  std::string system;
+};
+
 /// A loaded, checked scene. Every value is in engine units (SI, radians) except where named.
 struct Scene {
   std::string file;  ///< path as given, used in messages
@@ -44,6 +56,8 @@ struct Scene {
   render::Light light;
   std::vector<ColliderScene> colliders;
   std::vector<EmitterScene> emitters;
+  std::vector<ForceFieldScene> force_fields;
+  std::vector<AttractorSpringScene> attractor_springs;
 };
 
 /// Turns a parsed document into a Scene, checking every key. @throws SceneError listing every

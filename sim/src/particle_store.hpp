@@ -25,10 +25,12 @@ struct ParticleStore {
   std::vector<float> age;            ///< (count) (s)
   std::vector<float> lifetime;       ///< (count) (s)
   std::vector<std::uint64_t> id;     ///< (count) emission order
+  std::vector<float> charge;         ///< (count) (C), kept only when `has_charge`
   /// The swept collision test needs each particle's start-of-step position. Semi-implicit Euler
   /// moves in a straight line at the new velocity (x1 = x0 + dt v1), so x0 is recovered from the
   /// end state for free; RK4's chord is not dt v1, so RK4 systems that collide store it.
   bool track_prev = false;
+  bool has_charge = false;  ///< the system has a charge distribution other than 0
 
   void reserve(std::size_t capacity);
   /// Appends n zero-initialised particles; returns the index of the first.
@@ -45,11 +47,12 @@ struct ForceParams {
   float drag;  ///< k_d (kg/s)
 };
 
-/// Advances particles [begin, end) by h with the chosen integrator, adds h to their ages, and
-/// (when s.track_prev) saves the start-of-step positions for the swept collision test.
-/// Returns true if any resulting position or velocity is not finite.
+/// The fast path for gravity + drag only (semi_implicit_euler or rk4): advances particles
+/// [begin, end) by h, adds h to their ages, and (when s.track_prev) saves the start-of-step
+/// positions for the swept collision test, split statically over `threads` when the range is
+/// large. Returns true if any resulting position or velocity is not finite.
 bool integrate(ParticleStore& s, std::size_t begin, std::size_t end, double h,
-               const ForceParams& f, Integrator integrator);
+               const ForceParams& f, Integrator integrator, int threads = 1);
 
 /// Advances one particle by its own dt (a newborn released part-way through a step).
 /// The age is not changed. Returns true if the result is not finite.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "forces.hpp"
 #include "particle_store.hpp"
 
 namespace simreel::sim::detail {
@@ -21,6 +22,7 @@ void ParticleStore::reserve(std::size_t capacity) {
   age.reserve(capacity);
   lifetime.reserve(capacity);
   id.reserve(capacity);
+  if (has_charge) charge.reserve(capacity);
 }
 
 namespace {
@@ -34,6 +36,7 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.age.resize(n);
   s.lifetime.resize(n);
   s.id.resize(n);
+  if (s.has_charge) s.charge.resize(n);
   s.count = n;
 }
 
@@ -82,6 +85,7 @@ void ParticleStore::compact(std::size_t first) {
     move_run(age, 1, w, run, len);
     move_run(lifetime, 1, w, run, len);
     move_run(id, 1, w, run, len);
+    if (has_charge) move_run(charge, 1, w, run, len);
     w += len;
   }
   resize_all(*this, w);
@@ -97,6 +101,7 @@ ParticleView ParticleStore::view() const {
   v.age = age.data();
   v.lifetime = lifetime.data();
   v.id = id.data();
+  v.charge = has_charge ? charge.data() : nullptr;
   return v;
 }
 
@@ -189,14 +194,27 @@ inline unsigned rk4_one(float* x, float* v, double m, double h, const ForceParam
 }  // namespace
 
 bool integrate(ParticleStore& s, std::size_t begin, std::size_t end, double h,
-               const ForceParams& f, Integrator integrator) {
+               const ForceParams& f, Integrator integrator, int threads) {
   if (begin >= end) return false;
   unsigned bad = 0;
   const float hf = float(h);
   if (integrator == Integrator::semi_implicit_euler) {
-    bad = f.drag != 0.0f ? semi_implicit_euler<true>(s, begin, end, hf, f)
-                         : semi_implicit_euler<false>(s, begin, end, hf, f);
+    // Static partition into blocks of whole 128-particle chunks: each particle's arithmetic is
+    // the same whichever thread runs it, so results are bit-identical at any thread count.
+    const std::size_t n = end - begin;
+    const int parts = n >= kParallelMin && threads > 1 ? threads : 1;
+    const std::size_t per = ((n + std::size_t(parts) - 1) / std::size_t(parts) + 127) / 128 * 128;
+#pragma omp parallel for schedule(static) num_threads(parts) reduction(| : bad) if (parts > 1)
+    for (int p = 0; p < parts; ++p) {
+      const std::size_t b = begin + std::min(n, std::size_t(p) * per);
+      const std::size_t e = begin + std::min(n, std::size_t(p + 1) * per);
+      if (b < e)
+        bad |= f.drag != 0.0f ? semi_implicit_euler<true>(s, b, e, hf, f)
+                              : semi_implicit_euler<false>(s, b, e, hf, f);
+    }
   } else {
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(| : bad) \
+    if (end - begin >= kParallelMin && threads > 1)
     for (std::size_t i = begin; i < end; ++i) {
       if (s.track_prev)
         std::memcpy(&s.prev_position[3 * i], &s.position[3 * i], 3 * sizeof(float));

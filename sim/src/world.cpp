@@ -4,11 +4,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
+#include <thread>
 #include <sstream>
 #include <stdexcept>
 
 #include "collider_impl.hpp"
 #include "emitter.hpp"
+#include "forces.hpp"
+#include "integrators.hpp"
 #include "particle_store.hpp"
 #include "validate.hpp"
 
@@ -38,6 +43,12 @@ struct ParticleSystemState {
   ColorGradient gradient;
   ForceParams forces{};
   std::uint64_t next_id = 0;
+  // Forces beyond gravity + drag and the general integrators (forces.hpp, integrators.hpp).
+  std::vector<SpringDef> springs;  ///< by particle id, rest lengths resolved
+  Rng charge_rng;
+  IntegratorState integrator_state;
+  IntegratorWorkspace workspace;
+  Dynamics dynamics;
 };
 
 }  // namespace detail
@@ -57,6 +68,9 @@ struct World::Impl {
   std::vector<detail::Collider> colliders;
   std::vector<detail::ParticleSystemState> systems;
   std::vector<MovedObject> moved;
+  std::vector<std::unique_ptr<detail::FieldState>> fields;
+  std::vector<std::unique_ptr<AttractorSpringDef>> attractors;
+  int threads = 1;
 
   detail::Collider& collider(ColliderHandle h) {
     if (h.id.kind != ObjectKind::collider || h.id.index >= colliders.size() ||
@@ -73,6 +87,8 @@ struct World::Impl {
 
   void step(double t0, double t1);
   void step_system(std::size_t index, double t0, double t1);
+  bool general(std::size_t index) const;
+  void build_dynamics(std::size_t index, bool interactions);
   [[noreturn]] void non_finite(std::size_t index, std::size_t begin, std::size_t end,
                                double t1) const;
 };
@@ -96,16 +112,39 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
 
   // 1. Particles alive at t0: integrate, then collide along their step.
   const std::size_t n_old = st.count;
-  if (detail::integrate(st, 0, n_old, h, ps.forces, ps.def.integrator))
-    non_finite(index, 0, n_old, t1);
+  const bool full = general(index);
+  if (full) {
+    build_dynamics(index, true);
+    if (detail::integrate_system(st, 0, n_old, t0, h, ps.dynamics, ps.def.integrator,
+                                 ps.def.tolerance, ps.integrator_state, ps.workspace))
+      non_finite(index, 0, n_old, t1);
+  } else {
+    ++ps.integrator_state.substeps;
+    if (detail::integrate(st, 0, n_old, h, ps.forces, ps.def.integrator, threads))
+      non_finite(index, 0, n_old, t1);
+  }
   if (collide) detail::collide(st, 0, n_old, h, colliders, def.contact_speed, ps.forces);
   st.compact(0);
 
   // 2. Particles born in (t0, t1]: each moves only for its own age (no banding in jets).
   const std::size_t first_new = detail::emit(ps.def.emitter, ps.emitter, st, t0, t1, ps.next_id);
+  if (st.has_charge)
+    for (std::size_t i = first_new; i < st.count; ++i)
+      st.charge[i] = float(ps.charge_rng.normal(ps.def.charge.mean, ps.def.charge.deviation));
   bool bad = false;
-  for (std::size_t i = first_new; i < st.count; ++i)
-    bad |= detail::integrate_one(st, i, st.age[i], ps.forces, ps.def.integrator);
+  if (full && first_new < st.count) {
+    // A newborn moves alone for its partial step: external forces only (gravity, drag, fields);
+    // springs, pair forces and attractor springs act on it from the next step.
+    build_dynamics(index, false);
+    detail::IntegratorState scratch;
+    for (std::size_t i = first_new; i < st.count; ++i)
+      bad |= detail::integrate_system(st, i, i + 1, t1 - double(st.age[i]), double(st.age[i]),
+                                      ps.dynamics, ps.def.integrator, ps.def.tolerance, scratch,
+                                      ps.workspace, false);
+  } else {
+    for (std::size_t i = first_new; i < st.count; ++i)
+      bad |= detail::integrate_one(st, i, st.age[i], ps.forces, ps.def.integrator);
+  }
   if (bad) non_finite(index, first_new, st.count, t1);
   if (collide) detail::collide(st, first_new, st.count, h, colliders, def.contact_speed, ps.forces);
   ps.gradient.apply(st, first_new, st.count);
@@ -113,6 +152,55 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
 
   // 3. Colour over lifetime.
   if (!ps.gradient.constant()) ps.gradient.apply(st, 0, first_new);
+}
+
+bool World::Impl::general(std::size_t index) const {
+  const detail::ParticleSystemState& ps = systems[index];
+  const Integrator in = ps.def.integrator;
+  if (in != Integrator::semi_implicit_euler && in != Integrator::rk4) return true;
+  if (!ps.springs.empty() || ps.def.pair_forces.enabled()) return true;
+  if (!ps.dynamics.fields.empty()) return true;
+  for (const auto& a : attractors)
+    if (a->system.id.index == index) return true;
+  return false;
+}
+
+void World::Impl::build_dynamics(std::size_t index, bool interactions) {
+  detail::ParticleSystemState& ps = systems[index];
+  detail::ParticleStore& st = ps.store;
+  detail::Dynamics& d = ps.dynamics;
+  d.gravity = ps.def.gravity;
+  d.drag = ps.def.drag;
+  d.threads = threads;
+  d.pair = ps.def.pair_forces;
+  if (!interactions) d.pair.gravitational_G = d.pair.coulomb_K = 0.0;
+  d.springs.clear();
+  d.pulls.clear();
+  if (!interactions) return;
+  // Ids increase along the arrays (emission order, survivors keep theirs): binary search.
+  const auto find = [&](std::uint64_t id) -> std::size_t {
+    const auto* b = st.id.data();
+    const auto* e = b + st.count;
+    const auto* it = std::lower_bound(b, e, id);
+    return it != e && *it == id ? std::size_t(it - b) : st.count;
+  };
+  std::size_t keep = 0;
+  for (const SpringDef& s : ps.springs) {
+    const std::size_t i = find(s.a), j = find(s.b);
+    if (i == st.count || j == st.count) continue;  // an end died: the spring goes with it
+    ps.springs[keep++] = s;
+    d.springs.push_back({std::uint32_t(i), std::uint32_t(j), s.stiffness, s.damping, s.rest_length});
+  }
+  ps.springs.resize(keep);
+  for (const auto& a : attractors) {
+    if (a->system.id.index != index) continue;
+    detail::Dynamics::Pull p{a.get(), {}, a->ids.empty()};
+    for (std::uint64_t id : a->ids) {
+      const std::size_t i = find(id);
+      if (i < st.count) p.index.push_back(std::uint32_t(i));
+    }
+    d.pulls.push_back(std::move(p));
+  }
 }
 
 void World::Impl::non_finite(std::size_t index, std::size_t begin, std::size_t end,
@@ -141,7 +229,10 @@ void World::Impl::non_finite(std::size_t index, std::size_t begin, std::size_t e
 
 World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
   detail::validate(def);
+  if (def.threads < 0) throw std::invalid_argument("WorldDef.threads must be >= 0 (0 = hardware)");
   impl_->def = def;
+  impl_->threads = def.threads > 0 ? def.threads
+                                   : std::max(1, int(std::thread::hardware_concurrency()));
 }
 
 World::~World() = default;
@@ -161,16 +252,50 @@ ColliderHandle World::add_box(const BoxDef& def) {
 }
 
 ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
-  detail::validate(def);
+  // The emitter's validation (emitter.cpp) knows only the first two integrators; the integrator
+  // and the force definitions are checked by validate_forces (forces.cpp).
+  detail::validate_forces(def);
+  {
+    ParticleSystemDef emitter_part = def;
+    emitter_part.integrator = Integrator::semi_implicit_euler;
+    detail::validate(emitter_part);
+  }
   const std::size_t index = impl_->systems.size();
   detail::ParticleSystemState ps;
   ps.def = def;
-  ps.store.track_prev = def.collide && def.integrator == Integrator::rk4;
+  ps.store.track_prev = def.collide && def.integrator != Integrator::semi_implicit_euler;
+  ps.store.has_charge = def.charge.mean != 0.0 || def.charge.deviation != 0.0;
+  for (const InitialParticle& p : def.initial_particles) ps.store.has_charge |= p.charge != 0.0;
   ps.store.reserve(def.emitter.max_particles);
+  ps.charge_rng = Rng(impl_->def.seed, 0x5eed0000u + index);
   ps.emitter.rng = Rng(impl_->def.seed, index);
   ps.gradient = detail::ColorGradient(def.emitter.color_over_lifetime);
   for (int k = 0; k < 3; ++k) ps.forces.gravity[k] = float(def.gravity[k]);
   ps.forces.drag = float(def.drag);
+  // Initial particles: ids 0..k-1, immortal; springs between them by index = id.
+  for (const InitialParticle& p : def.initial_particles) {
+    detail::ParticleStore& st = ps.store;
+    const std::size_t i = st.append(1);
+    for (int k = 0; k < 3; ++k) {
+      st.position[3 * i + std::size_t(k)] = float(p.position[k]);
+      if (st.track_prev) st.prev_position[3 * i + std::size_t(k)] = float(p.position[k]);
+      st.velocity[3 * i + std::size_t(k)] = float(p.velocity[k]);
+    }
+    st.mass[i] = float(p.mass);
+    st.radius[i] = float(p.radius);
+    st.lifetime[i] = std::numeric_limits<float>::infinity();
+    st.age[i] = 0.0f;
+    st.id[i] = ps.next_id++;
+    if (st.has_charge) st.charge[i] = float(p.charge);
+    ps.gradient.apply(st, i, i + 1);
+  }
+  for (SpringDef s : def.springs) {
+    if (s.rest_length < 0.0)
+      s.rest_length = (def.initial_particles[s.a].position - def.initial_particles[s.b].position).norm();
+    ps.springs.push_back(s);
+  }
+  for (const auto& f : impl_->fields)
+    if (f->def.systems.empty()) ps.dynamics.fields.push_back(f.get());
   impl_->systems.push_back(std::move(ps));
   return ParticleSystemHandle{
       Handle{std::uint32_t(index), impl_->systems.back().generation, ObjectKind::particle_system}};
@@ -203,6 +328,63 @@ std::uint64_t World::spawn_particle(ParticleSystemHandle h, const Vec3& position
   st.id[i] = ps.next_id++;
   ps.gradient.apply(st, i, i + 1);
   return st.id[i];
+}
+
+std::size_t World::add_force_field(const ForceFieldDef& def) {
+  detail::validate(def);
+  for (const ParticleSystemHandle& h : def.systems) (void)impl_->system(h);
+  auto f = std::make_unique<detail::FieldState>();
+  f->def = def;
+  f->def.axis = def.axis.normalized();
+  f->noise = detail::GradientNoise(impl_->def.seed ^ (0x9E3779B97F4A7C15ULL * (impl_->fields.size() + 1)));
+  f->pose_at(impl_->time);
+  for (std::size_t s = 0; s < impl_->systems.size(); ++s) {
+    bool applies = def.systems.empty();
+    for (const ParticleSystemHandle& h : def.systems) applies = applies || h.id.index == s;
+    if (applies) impl_->systems[s].dynamics.fields.push_back(f.get());
+  }
+  impl_->fields.push_back(std::move(f));
+  return impl_->fields.size() - 1;
+}
+
+std::size_t World::add_attractor_spring(const AttractorSpringDef& def) {
+  (void)impl_->system(def.system);
+  detail::validate(def);
+  impl_->attractors.push_back(std::make_unique<AttractorSpringDef>(def));
+  return impl_->attractors.size() - 1;
+}
+
+void World::add_spring(ParticleSystemHandle h, const SpringDef& spring) {
+  detail::ParticleSystemState& ps = impl_->system(h);
+  const detail::ParticleStore& st = ps.store;
+  const auto find = [&](std::uint64_t id) -> std::size_t {
+    const auto* b = st.id.data();
+    const auto* e = b + st.count;
+    const auto* it = std::lower_bound(b, e, id);
+    return it != e && *it == id ? std::size_t(it - b) : st.count;
+  };
+  const std::size_t i = find(spring.a), j = find(spring.b);
+  if (i == st.count || j == st.count || spring.a == spring.b)
+    throw std::invalid_argument("World::add_spring: ids a and b must name two different live "
+                                "particles of the system");
+  if (!(spring.stiffness >= 0.0) || !(spring.damping >= 0.0) || !std::isfinite(spring.stiffness) ||
+      !std::isfinite(spring.damping))
+    throw std::invalid_argument("World::add_spring: stiffness and damping must be >= 0 and finite");
+  SpringDef s = spring;
+  if (s.rest_length < 0.0) {
+    Vec3 d;
+    for (int k = 0; k < 3; ++k)
+      d[k] = double(st.position[3 * i + std::size_t(k)]) - double(st.position[3 * j + std::size_t(k)]);
+    s.rest_length = d.norm();
+  }
+  ps.springs.push_back(s);
+}
+
+std::uint64_t World::integrator_steps(ParticleSystemHandle h) const {
+  return impl_->system(h).integrator_state.substeps;
+}
+std::uint64_t World::rejected_steps(ParticleSystemHandle h) const {
+  return impl_->system(h).integrator_state.rejected;
 }
 
 const std::vector<MovedObject>& World::advance(double sampling_time) {

@@ -9,19 +9,29 @@
 #include <string>
 #include <vector>
 
+#include "simreel/sim/forces.hpp"
 #include "simreel/sim/keyframes.hpp"
 #include "simreel/sim/types.hpp"
 
 namespace simreel::sim {
 
-/// ODE integrators (Coutinho Appendix B).
+/// ODE integrators (Coutinho Appendix B). All of them advance the whole system at once through
+/// one shared force evaluation (springs, fields and pair forces work with every one of them).
 enum class Integrator {
   semi_implicit_euler,  ///< v += a h; x += v h (symplectic, first order; the default). Drag is
-                        ///< taken at the new velocity, v = (v + g h) / (1 + h k_d / m), so it is
-                        ///< stable for any drag and mass
-  rk4,                  ///< classical fourth-order Runge–Kutta on (x, v); a particle with
-                        ///< h k_d / m > 0.5 takes ceil(2 h k_d / m) sub-steps (explicit RK4
-                        ///< diverges past 2.78)
+                        ///< taken at the new velocity, v = (v + a' h) / (1 + h k_d / m) with a'
+                        ///< every other acceleration, so it is stable for any drag and mass
+  rk4,                  ///< classical fourth-order Runge–Kutta on (x, v); with gravity + drag
+                        ///< only, a particle with h k_d / m > 0.5 takes ceil(2 h k_d / m)
+                        ///< sub-steps (explicit RK4 diverges past 2.78)
+  explicit_euler,       ///< x += v h; v += a h (first order; gains energy on oscillators)
+  rk2,                  ///< explicit midpoint method (second order)
+  implicit_euler,       ///< linearised backward Euler (first order, loses energy; for stiff
+                        ///< springs): (M - h ∂f/∂v - h² ∂f/∂x) Δv = h (f + h ∂f/∂x v), solved
+                        ///< by conjugate gradients (per particle in closed form without springs)
+  adaptive,             ///< RK4 with step doubling: one step of h vs two of h/2, error =
+                        ///< max |Δx| (m); rejected and redone above `tolerance`; next step
+                        ///< h · 0.8 (tolerance / error)^(1/5), never beyond the internal step
 };
 
 enum class EmitterShape {
@@ -79,7 +89,17 @@ struct ParticleSystemDef {
   Vec3 gravity{0.0, 0.0, -9.81};   ///< (m/s²) gravitational acceleration, world frame
   double drag = 0.0;               ///< viscous drag coefficient k_d (kg/s): F = -k_d v (§3.3.2)
   Integrator integrator = Integrator::semi_implicit_euler;
+  double tolerance = 1e-4;         ///< (m) adaptive integrator: largest position error per step
   bool collide = true;             ///< collide with the world's colliders
+  /// Particles present from the start, ids 0..k-1 (counted in emitter.max_particles).
+  std::vector<InitialParticle> initial_particles;
+  /// Damped springs (§3.3.3); a and b index initial_particles.
+  std::vector<SpringDef> springs;
+  /// Electric charge q (C) of each emitted particle: drawn per particle at birth from the
+  /// system's own generator Rng(seed, 0x5eed0000 + system index) (a deviation of 0 draws
+  /// nothing). Initial particles carry their own InitialParticle::charge.
+  Distribution charge{0.0, 0.0};
+  PairForceDef pair_forces;
 };
 
 /// Read-only view of a particle system's live particles, valid until the next World::advance().
@@ -92,6 +112,7 @@ struct ParticleView {
   const float* radius = nullptr;       ///< (count) (m)
   const float* age = nullptr;          ///< (count) (s)
   const float* lifetime = nullptr;     ///< (count) (s)
+  const float* charge = nullptr;       ///< (count) (C), or nullptr when the system has none
   const std::uint64_t* id = nullptr;   ///< (count) stable id, unique within the system, in
                                        ///< emission order; survivors keep their relative order
 };

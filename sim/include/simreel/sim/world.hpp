@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "simreel/sim/collider.hpp"
+#include "simreel/sim/forces.hpp"
 #include "simreel/sim/handle.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/types.hpp"
@@ -23,6 +24,9 @@ struct WorldDef {
   std::uint64_t seed = 0;         ///< scene seed; emitter i draws from Rng(seed, i)
   double contact_speed = 0.05;    ///< (m/s) normal speed under which a collision becomes a
                                   ///< resting contact (§3.6.3)
+  int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
+                                  ///< 0 = the hardware's count. Results are bit-identical at any
+                                  ///< count (static partitioning, per-particle gathers)
 };
 
 /// One entry of the moved list: the object's pose at the end of advance().
@@ -63,6 +67,25 @@ class World {
   ///         EmitterDef::max_particles live particles.
   std::uint64_t spawn_particle(ParticleSystemHandle h, const Vec3& position, const Vec3& velocity,
                                double mass, double radius, double lifetime);
+
+  /// Adds a force field (Coutinho §3.3) acting from the next step on the systems it names (all
+  /// when its list is empty). Returns its index (registration order).
+  /// @throws std::invalid_argument on a non-positive radius/half extent/frequency, a zero vortex
+  ///         axis, a negative drag, a non-finite value or a stale system handle.
+  std::size_t add_force_field(const ForceFieldDef& def);
+  /// Adds an animated zero-rest-length attractor spring (§3.3.5). Returns its index.
+  /// @throws std::invalid_argument on negative stiffness/damping; std::out_of_range on a stale
+  ///         handle.
+  std::size_t add_attractor_spring(const AttractorSpringDef& def);
+  /// Connects two live particles of a system, named by id, with a damped spring (eq. 3.6); a
+  /// negative rest length takes their current distance. The spring is dropped when either dies.
+  /// @throws std::invalid_argument if an id is not alive, a == b, or k_s/k_d < 0;
+  ///         std::out_of_range on a stale handle.
+  void add_spring(ParticleSystemHandle h, const SpringDef& spring);
+  /// Integrator (sub)steps accepted so far by the system (an adaptive system may take several
+  /// per internal step, or one per several), and trial steps it rejected (adaptive only).
+  [[nodiscard]] std::uint64_t integrator_steps(ParticleSystemHandle h) const;
+  [[nodiscard]] std::uint64_t rejected_steps(ParticleSystemHandle h) const;
 
   /// Advances the simulation by `sampling_time` (s, > 0) in internal steps of at most
   /// WorldDef::max_step. Returns the objects whose pose changed since the last call (kinematic
