@@ -21,6 +21,10 @@ void ParticleStore::reserve(std::size_t capacity) {
   age.reserve(capacity);
   lifetime.reserve(capacity);
   id.reserve(capacity);
+  base_radius.reserve(capacity);
+  tint.reserve(capacity);
+  split_generation.reserve(capacity);
+  split_countdown.reserve(capacity);
 }
 
 namespace {
@@ -34,6 +38,10 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.age.resize(n);
   s.lifetime.resize(n);
   s.id.resize(n);
+  s.base_radius.resize(n);
+  s.tint.resize(n);
+  s.split_generation.resize(n);
+  s.split_countdown.resize(n);
   s.count = n;
 }
 
@@ -82,6 +90,10 @@ void ParticleStore::compact(std::size_t first) {
     move_run(age, 1, w, run, len);
     move_run(lifetime, 1, w, run, len);
     move_run(id, 1, w, run, len);
+    move_run(base_radius, 1, w, run, len);
+    move_run(tint, 1, w, run, len);
+    move_run(split_generation, 1, w, run, len);
+    move_run(split_countdown, 1, w, run, len);
     w += len;
   }
   resize_all(*this, w);

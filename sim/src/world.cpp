@@ -10,6 +10,7 @@
 #include "collider_impl.hpp"
 #include "emitter.hpp"
 #include "particle_store.hpp"
+#include "split.hpp"
 #include "validate.hpp"
 
 namespace simreel::sim {
@@ -36,6 +37,8 @@ struct ParticleSystemState {
   ParticleStore store;
   EmitterState emitter;
   ColorGradient gradient;
+  SizeCurve size_curve;  ///< size over lifetime (emitter.hpp)
+  Rng split_rng;         ///< particle split draws (split.hpp), a stream apart from the emitter's
   ForceParams forces{};
   std::uint64_t next_id = 0;
 };
@@ -99,6 +102,8 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
   if (detail::integrate(st, 0, n_old, h, ps.forces, ps.def.integrator))
     non_finite(index, 0, n_old, t1);
   if (collide) detail::collide(st, 0, n_old, h, colliders, def.contact_speed, ps.forces);
+  // Particle split (§3.9.1): parents whose condition is met are replaced by their children.
+  detail::split_particles(ps.def.emitter, ps.split_rng, st, n_old, ps.next_id);
   st.compact(0);
 
   // 2. Particles born in (t0, t1]: each moves only for its own age (no banding in jets).
@@ -113,6 +118,11 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
 
   // 3. Colour over lifetime.
   if (!ps.gradient.constant()) ps.gradient.apply(st, 0, first_new);
+
+  // 4. Emitter curves: brightness variation on freshly written colours, size over lifetime.
+  if (ps.def.emitter.color_deviation > 0.0)
+    detail::apply_tint(st, ps.gradient.constant() ? first_new : 0, st.count);
+  if (!ps.size_curve.empty()) ps.size_curve.apply(st, 0, st.count);
 }
 
 void World::Impl::non_finite(std::size_t index, std::size_t begin, std::size_t end,
@@ -169,6 +179,8 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   ps.store.reserve(def.emitter.max_particles);
   ps.emitter.rng = Rng(impl_->def.seed, index);
   ps.gradient = detail::ColorGradient(def.emitter.color_over_lifetime);
+  ps.size_curve = detail::SizeCurve(def.emitter.size_over_lifetime);
+  ps.split_rng = Rng(impl_->def.seed, (std::uint64_t{1} << 32) + index);
   for (int k = 0; k < 3; ++k) ps.forces.gravity[k] = float(def.gravity[k]);
   ps.forces.drag = float(def.drag);
   impl_->systems.push_back(std::move(ps));
@@ -198,6 +210,8 @@ std::uint64_t World::spawn_particle(ParticleSystemHandle h, const Vec3& position
   }
   st.mass[i] = float(mass);
   st.radius[i] = float(radius);
+  st.base_radius[i] = float(radius);
+  st.tint[i] = 1.0f;
   st.lifetime[i] = float(lifetime);
   st.age[i] = 0.0f;
   st.id[i] = ps.next_id++;
