@@ -486,7 +486,8 @@ void validate(const ParticleSystemDef& def) {
   const SplitDef& sp = e.split;
   if (sp.enabled) {
     const std::string where = sys + ": emitter.split.";
-    if (sp.children < 1 || sp.children > 1000) fail(where + "children must be in [1, 1000]");
+    if (sp.children < 1 || sp.children > 1000000)
+      fail(where + "children must be in [1, 1000000]");
     if (!(sp.age >= 0.0) || !std::isfinite(sp.age)) fail(where + "age must be >= 0 and finite");
     if (sp.delay_steps < 1) fail(where + "delay_steps must be >= 1");
     if (sp.depth < 1 || sp.depth > 32) fail(where + "depth must be in [1, 32]");

@@ -106,6 +106,7 @@ ParticleView ParticleStore::view() const {
   v.velocity = velocity.data();
   v.color = color.data();
   v.radius = radius.data();
+  v.mass = mass.data();
   v.age = age.data();
   v.lifetime = lifetime.data();
   v.id = id.data();

@@ -97,7 +97,7 @@ struct Burst {
 /// max_particles waits (splits at a later step when they do).
 struct SplitDef {
   bool enabled = false;
-  std::size_t children = 2;              ///< >= 1
+  std::size_t children = 2;              ///< in [1, 10^6]
   double age = 0.5;                      ///< (s) >= 0
   std::size_t delay_steps = 1;           ///< >= 1 internal steps
   std::size_t depth = 1;                 ///< in [1, 32]
@@ -184,6 +184,7 @@ struct ParticleView {
   const float* velocity = nullptr;     ///< (count x 3) world frame (m/s)
   const float* color = nullptr;        ///< (count x 4) linear RGBA in [0, 1], from color over lifetime
   const float* radius = nullptr;       ///< (count) (m)
+  const float* mass = nullptr;         ///< (count) (kg)
   const float* age = nullptr;          ///< (count) (s)
   const float* lifetime = nullptr;     ///< (count) (s)
   const std::uint64_t* id = nullptr;   ///< (count) stable id, unique within the system, in
