@@ -446,8 +446,11 @@ void validate(const ParticleSystemDef& def) {
   check_distribution(e.spread_deg, sys + ": emitter.spread_deg");
   check_distribution(e.mass, sys + ": emitter.mass");
   check_distribution(e.radius, sys + ": emitter.radius");
-  positive(e.mass.mean, sys + ": emitter.mass.mean");
-  positive(e.radius.mean, sys + ": emitter.radius.mean");
+  // A uniform draw ignores the mean: it must then be able to draw a positive value.
+  positive(e.mass.uniform ? e.mass.max : e.mass.mean,
+           sys + (e.mass.uniform ? ": emitter.mass.max" : ": emitter.mass.mean"));
+  positive(e.radius.uniform ? e.radius.max : e.radius.mean,
+           sys + (e.radius.uniform ? ": emitter.radius.max" : ": emitter.radius.mean"));
   if (e.color_over_lifetime.empty())
     fail(sys + ": emitter.color_over_lifetime needs at least one key");
   for (std::size_t k = 0; k < e.color_over_lifetime.size(); ++k) {
