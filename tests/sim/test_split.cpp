@@ -67,6 +67,17 @@ TEST(SimSplit, ChildrenAndDepthGiveExactGenerations) {
   EXPECT_EQ(h3.created[19], 1u + 3u + 9u + 27u);
 }
 
+TEST(SimSplit, ParentsWaitWhileTheirChildrenDoNotFit) {
+  // max_particles 5: the first split (1 + 4 <= 5) happens; the second generation (4 + 4 > 5)
+  // cannot, so the 4 children live on unsplit.
+  ParticleSystemDef def = splitting_system(4, 2, 1);
+  def.emitter.max_particles = 5;
+  const History h = run(def, 40);
+  EXPECT_EQ(h.live[10], 4u);
+  EXPECT_EQ(h.live[39], 4u);
+  EXPECT_EQ(h.created[39], 5u);
+}
+
 TEST(SimSplit, DelayIsCountedInSimulationSteps) {
   // Children created at step 11 split at step 11 + delay, grandchildren at 11 + 2 delay.
   for (std::size_t delay : {1u, 2u, 5u}) {

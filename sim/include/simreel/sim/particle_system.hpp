@@ -32,7 +32,9 @@ enum class EmitterShape {
   quad,    ///< rectangle `quad_size` (x by y, local axes), laid out as a grid (§3.8, eq. 3.100)
   point,   ///< the emitter origin, normal = +z
   sphere,  ///< surface of the sphere of `sphere_radius` around the origin, start points uniform
-           ///< over the area, normal = outward radial direction (§3.9: fireworks, explosions)
+           ///< over the area, normal = outward radial direction (§3.9: fireworks, explosions).
+           ///< The book decomposes the sphere into a grid of cells, one particle per cell; here
+           ///< points are random (no overlap guarantee within a release)
   box,     ///< volume of the box `box_size` (x, y, z) centred on the origin, start points
            ///< uniform over the volume, normal = +z
   mesh,    ///< surface of the triangle mesh `mesh_positions`/`mesh_triangles`: a triangle is
@@ -93,8 +95,8 @@ struct Burst {
 ///     child's lifetime is the parent's plus a uniform draw in [-dev, +dev] (clamped >= 0).
 /// A child starts at the parent's position with the parent's age and colour (so the colour and
 /// size curves continue), and draws in a fixed order (direction, then lifetime per child, parents
-/// in store order) from the system's own split Rng. A parent whose children do not fit under
-/// max_particles waits (splits at a later step when they do).
+/// in store order) from the system's own split Rng. A parent waits (splits at a later step) while
+/// the live particles, itself included, plus its children would exceed max_particles.
 struct SplitDef {
   bool enabled = false;
   std::size_t children = 2;              ///< in [1, 10^6]
