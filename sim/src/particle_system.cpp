@@ -39,7 +39,7 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.lifetime.resize(n);
   s.id.resize(n);
   s.base_radius.resize(n);
-  s.tint.resize(n);
+  s.tint.resize(n, 1.0f);  // a particle not from the emitter keeps its colour
   s.split_generation.resize(n);
   s.split_countdown.resize(n);
   s.count = n;
