@@ -31,6 +31,12 @@ struct ParticleStore {
   /// end state for free; RK4's chord is not dt v1, so RK4 systems that collide store it.
   bool track_prev = false;
   bool has_charge = false;  ///< the system has a charge distribution other than 0
+  // Emitter and split state (emitter.cpp, split.cpp).
+  std::vector<float> base_radius;             ///< (count) radius as drawn (m), before size over
+                                              ///< lifetime
+  std::vector<float> tint;                    ///< (count) brightness factor on the gradient RGB
+  std::vector<std::uint8_t> split_generation; ///< (count) splits in the lineage (0 = emitted)
+  std::vector<std::uint32_t> split_countdown; ///< (count) steps left before a child splits
 
   void reserve(std::size_t capacity);
   /// Appends n zero-initialised particles; returns the index of the first.

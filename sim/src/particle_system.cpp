@@ -23,6 +23,10 @@ void ParticleStore::reserve(std::size_t capacity) {
   lifetime.reserve(capacity);
   id.reserve(capacity);
   if (has_charge) charge.reserve(capacity);
+  base_radius.reserve(capacity);
+  tint.reserve(capacity);
+  split_generation.reserve(capacity);
+  split_countdown.reserve(capacity);
 }
 
 namespace {
@@ -37,6 +41,10 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.lifetime.resize(n);
   s.id.resize(n);
   if (s.has_charge) s.charge.resize(n);
+  s.base_radius.resize(n);
+  s.tint.resize(n, 1.0f);  // a particle not from the emitter keeps its colour
+  s.split_generation.resize(n);
+  s.split_countdown.resize(n);
   s.count = n;
 }
 
@@ -86,6 +94,10 @@ void ParticleStore::compact(std::size_t first) {
     move_run(lifetime, 1, w, run, len);
     move_run(id, 1, w, run, len);
     if (has_charge) move_run(charge, 1, w, run, len);
+    move_run(base_radius, 1, w, run, len);
+    move_run(tint, 1, w, run, len);
+    move_run(split_generation, 1, w, run, len);
+    move_run(split_countdown, 1, w, run, len);
     w += len;
   }
   resize_all(*this, w);
@@ -98,6 +110,7 @@ ParticleView ParticleStore::view() const {
   v.velocity = velocity.data();
   v.color = color.data();
   v.radius = radius.data();
+  v.mass = mass.data();
   v.age = age.data();
   v.lifetime = lifetime.data();
   v.id = id.data();

@@ -15,6 +15,7 @@
 #include "forces.hpp"
 #include "integrators.hpp"
 #include "particle_store.hpp"
+#include "split.hpp"
 #include "validate.hpp"
 
 namespace simreel::sim {
@@ -41,6 +42,8 @@ struct ParticleSystemState {
   ParticleStore store;
   EmitterState emitter;
   ColorGradient gradient;
+  SizeCurve size_curve;  ///< size over lifetime (emitter.hpp)
+  Rng split_rng;         ///< particle split draws (split.hpp), a stream apart from the emitter's
   ForceParams forces{};
   std::uint64_t next_id = 0;
   // Forces beyond gravity + drag and the general integrators (forces.hpp, integrators.hpp).
@@ -124,6 +127,8 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
       non_finite(index, 0, n_old, t1);
   }
   if (collide) detail::collide(st, 0, n_old, h, colliders, def.contact_speed, ps.forces);
+  // Particle split (§3.9.1): parents whose condition is met create their children.
+  detail::split_particles(ps.def.emitter, ps.split_rng, st, n_old, ps.next_id);
   st.compact(0);
 
   // 2. Particles born in (t0, t1]: each moves only for its own age (no banding in jets).
@@ -152,6 +157,11 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
 
   // 3. Colour over lifetime.
   if (!ps.gradient.constant()) ps.gradient.apply(st, 0, first_new);
+
+  // 4. Emitter curves: brightness variation on freshly written colours, size over lifetime.
+  if (ps.def.emitter.color_deviation > 0.0)
+    detail::apply_tint(st, ps.gradient.constant() ? first_new : 0, st.count);
+  if (!ps.size_curve.empty()) ps.size_curve.apply(st, 0, st.count);
 }
 
 bool World::Impl::general(std::size_t index) const {
@@ -252,14 +262,10 @@ ColliderHandle World::add_box(const BoxDef& def) {
 }
 
 ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
-  // The emitter's validation (emitter.cpp) knows only the first two integrators; the integrator
-  // and the force definitions are checked by validate_forces (forces.cpp).
+  // The integrator and the force definitions are checked by validate_forces (forces.cpp), the
+  // emitter by validate (emitter.cpp).
   detail::validate_forces(def);
-  {
-    ParticleSystemDef emitter_part = def;
-    emitter_part.integrator = Integrator::semi_implicit_euler;
-    detail::validate(emitter_part);
-  }
+  detail::validate(def);
   const std::size_t index = impl_->systems.size();
   detail::ParticleSystemState ps;
   ps.def = def;
@@ -270,6 +276,8 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   ps.charge_rng = Rng(impl_->def.seed, 0x5eed0000u + index);
   ps.emitter.rng = Rng(impl_->def.seed, index);
   ps.gradient = detail::ColorGradient(def.emitter.color_over_lifetime);
+  ps.size_curve = detail::SizeCurve(def.emitter.size_over_lifetime);
+  ps.split_rng = Rng(impl_->def.seed, (std::uint64_t{1} << 32) + index);
   for (int k = 0; k < 3; ++k) ps.forces.gravity[k] = float(def.gravity[k]);
   ps.forces.drag = float(def.drag);
   // Initial particles: ids 0..k-1, immortal; springs between them by index = id.
@@ -283,6 +291,7 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
     }
     st.mass[i] = float(p.mass);
     st.radius[i] = float(p.radius);
+    st.base_radius[i] = float(p.radius);
     st.lifetime[i] = std::numeric_limits<float>::infinity();
     st.age[i] = 0.0f;
     st.id[i] = ps.next_id++;
@@ -323,6 +332,8 @@ std::uint64_t World::spawn_particle(ParticleSystemHandle h, const Vec3& position
   }
   st.mass[i] = float(mass);
   st.radius[i] = float(radius);
+  st.base_radius[i] = float(radius);
+  st.tint[i] = 1.0f;
   st.lifetime[i] = float(lifetime);
   st.age[i] = 0.0f;
   st.id[i] = ps.next_id++;

@@ -15,11 +15,14 @@ using Quat = Eigen::Quaterniond;
 /// A parameter given as mean + deviation and drawn from a normal distribution
 /// N(mean, deviation²) for every particle (Coutinho §3.8: "for each parameter, we define its
 /// mean value and deviation"). Draws are clamped to [min, max].
+/// With `uniform` set, a draw is instead uniform on [min, max) (mean (min + max) / 2, variance
+/// (max - min)² / 12); mean and deviation are then ignored and min, max must be finite.
 struct Distribution {
   double mean = 0.0;
   double deviation = 0.0;  ///< standard deviation, same unit as mean, >= 0
-  double min = -1e300;     ///< lower clamp of a draw
-  double max = 1e300;      ///< upper clamp of a draw
+  double min = -1e300;     ///< lower clamp of a draw (lower end when `uniform`)
+  double max = 1e300;      ///< upper clamp of a draw (upper end when `uniform`)
+  bool uniform = false;    ///< draw uniformly on [min, max) instead of N(mean, deviation²)
 };
 
 /// Surface response parameters of a collider (Coutinho §3.6.1).
