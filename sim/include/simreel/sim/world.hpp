@@ -52,6 +52,11 @@ class World {
   /// definition (non-positive size, zero normal, restitution outside [0, 1], ...).
   ColliderHandle add_plane(const PlaneDef& def);
   ColliderHandle add_box(const BoxDef& def);
+  /// Solid colliders (collider.hpp). A mesh's AABB tree is built here, once, in its local frame
+  /// (Coutinho §2.2); O(n log n) in the triangle count.
+  ColliderHandle add_sphere(const SphereDef& def);
+  ColliderHandle add_cylinder(const CylinderDef& def);
+  ColliderHandle add_mesh(const MeshDef& def);
   ParticleSystemHandle add_particle_system(const ParticleSystemDef& def);
 
   /// Adds one particle to a system now, outside its emitter (tests, tools, scripted effects):
@@ -94,6 +99,10 @@ class World {
   /// Particles ever emitted by the system (for rate tests and statistics): ids handed out so far,
   /// by the emitter or spawn_particle(); births dropped at max_particles are not counted.
   [[nodiscard]] std::uint64_t emitted_count(ParticleSystemHandle h) const;
+  /// Particles of the system removed because their centre was found inside a solid collider
+  /// (sphere, cylinder, closed mesh) after their step (Coutinho §3.4.2), since registration.
+  /// @throws std::out_of_range if the handle is stale.
+  [[nodiscard]] std::uint64_t removed_inside_count(ParticleSystemHandle h) const;
   [[nodiscard]] std::vector<ParticleSystemHandle> particle_systems() const;
   [[nodiscard]] std::vector<ColliderHandle> colliders() const;
 
