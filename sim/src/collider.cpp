@@ -60,6 +60,8 @@ void Collider::set_pose(const Transform& t) {
 }
 
 void Collider::update(double t) {
+  prev_center = center;
+  prev_R = R;
   set_pose(path.sample(t));
   velocity = path.velocity(t);
   angular_velocity = detail::angular_velocity(path, t);
@@ -98,6 +100,8 @@ Collider& place(Collider& c, const Transform& transform, const KeyframePath& pat
   } else {
     c.set_pose(transform);
   }
+  c.prev_center = c.center;
+  c.prev_R = c.R;
   c.reported_translation = c.center;
   c.reported_rotation = c.rotation;
   return c;
@@ -278,12 +282,21 @@ void sweep_box(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& b
   best = Hit{tmin, Vec3(sign * c.R.col(axis)), Vec3(c.center + c.R * lp), &c};
 }
 
+/// The swept segment in a solid's frame: from a — taken in the body's start-of-step pose on the
+/// first sweep of the step, so the segment follows the relative motion of a kinematic body, and
+/// in its end pose for the remainder after a contact — to b in the end pose (§2.1, §3.4).
+void local_segment(const Collider& c, const Vec3& a, const Vec3& b, bool first, Vec3& la, Vec3& ld) {
+  la = first ? Vec3(c.prev_R.transpose() * (a - c.prev_center)) : Vec3(c.R.transpose() * (a - c.center));
+  ld = c.R.transpose() * (b - c.center) - la;
+}
+
 /// Sphere moving a -> b against the collider sphere grown by r: closed-form ray–sphere. A start
 /// point between the sphere and the grown sphere moving in is a contact at s = 0; one inside the
 /// sphere itself is left to the §3.4.2 removal.
-void sweep_sphere(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& best) {
-  const Vec3 m = a - c.center;
-  const Vec3 d = b - a;
+void sweep_sphere(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                  Hit& best) {
+  Vec3 m, d;
+  local_segment(c, a, b, first, m, d);
   const double Rg = c.radius + r;
   const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - Rg * Rg;
   double s;
@@ -298,17 +311,17 @@ void sweep_sphere(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit
     if (s > 1.0) return;
   }
   if (!(s < best.s)) return;
-  const Vec3 n = (a + s * d - c.center).normalized();
+  const Vec3 n = c.R * (m + s * d).normalized();
   best = Hit{s, n, Vec3(c.center + Rg * n), &c};
 }
 
 /// Sphere moving a -> b against the capped cylinder grown by r with square rims (radius R + r,
 /// half height H + r): the entry time is the later of the entries into the infinite cylinder
 /// (closed-form quadratic) and the slab |z| <= H + r, in the cylinder's frame.
-void sweep_cylinder(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& best) {
-  const Mat3 Rt = c.R.transpose();
-  const Vec3 la = Rt * (a - c.center);
-  const Vec3 ld = Rt * (b - a);
+void sweep_cylinder(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                    Hit& best) {
+  Vec3 la, ld;
+  local_segment(c, a, b, first, la, ld);
   const double Rg = c.radius + r, Hg = c.half_height + r;
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double t0 = -kInf, t1 = kInf;
@@ -359,10 +372,10 @@ void sweep_cylinder(const Collider& c, const Vec3& a, const Vec3& b, double r, H
 /// Sphere moving a -> b against a triangle mesh: the segment goes into the mesh frame (§2.1), the
 /// AABB tree gives the triangles near the segment's box grown by r (§2.2), and each is swept
 /// exactly (narrow_phase.hpp, §3.7).
-void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& best) {
-  const Mat3 Rt = c.R.transpose();
-  const Vec3 la = Rt * (a - c.center);
-  const Vec3 ld = Rt * (b - a);
+void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                Hit& best) {
+  Vec3 la, ld;
+  local_segment(c, a, b, first, la, ld);
   const Vec3 lb = la + ld;
   const Vec3 grow = Vec3::Constant(r);
   SweepHit h;
@@ -374,13 +387,13 @@ void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& 
   best = Hit{h.s, Vec3(c.R * h.normal), Vec3(c.center + c.R * h.point), &c};
 }
 
-void sweep(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& best) {
+void sweep(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first, Hit& best) {
   switch (c.shape) {
     case Collider::Shape::plane: sweep_plane(c, a, b, r, best); break;
     case Collider::Shape::box: sweep_box(c, a, b, r, best); break;
-    case Collider::Shape::sphere: sweep_sphere(c, a, b, r, best); break;
-    case Collider::Shape::cylinder: sweep_cylinder(c, a, b, r, best); break;
-    case Collider::Shape::mesh: sweep_mesh(c, a, b, r, best); break;
+    case Collider::Shape::sphere: sweep_sphere(c, a, b, r, first, best); break;
+    case Collider::Shape::cylinder: sweep_cylinder(c, a, b, r, first, best); break;
+    case Collider::Shape::mesh: sweep_mesh(c, a, b, r, first, best); break;
   }
 }
 
@@ -511,7 +524,7 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
 
   for (int contact = 0;; ++contact) {
     Hit hit;
-    for (const Collider& c : colliders) sweep(c, a, b, r, hit);
+    for (const Collider& c : colliders) sweep(c, a, b, r, contact == 0, hit);
     if (hit.collider == nullptr) break;
     const Material& mat = hit.collider->material;
     const Vec3 vc = hit.collider->point_velocity(hit.point);
@@ -611,6 +624,16 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     }
     if (near) resolve(s, i, dt, colliders, ctx, f);
   }
+}
+
+void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
+                            const std::vector<Collider>& colliders) {
+  float* pf = &s.position[3 * i];
+  const Vec3 to(pf[0], pf[1], pf[2]);
+  Hit hit;
+  for (const Collider& c : colliders) sweep(c, from, to, s.radius[i], false, hit);
+  if (hit.collider == nullptr) return;
+  for (int k = 0; k < 3; ++k) pf[k] = float(hit.point[k]);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -50,6 +50,11 @@ struct Collider {
   Mat3 R = Mat3::Identity();     ///< local -> world
   Vec3 velocity = Vec3::Zero();  ///< (m/s) of the centre, from the path
   Vec3 angular_velocity = Vec3::Zero();  ///< (rad/s), world frame
+  /// Pose at the start of the current step (kinematic solids; equal to the pose when static):
+  /// the first sweep of a step runs in the body's frame from the particle's start point in the
+  /// start pose to its end point in the end pose, i.e. along the relative motion (§2.1, §3.7).
+  Vec3 prev_center = Vec3::Zero();
+  Mat3 prev_R = Mat3::Identity();
   Vec3 aabb_center = Vec3::Zero();  ///< world AABB of the solid (unexpanded)
   Vec3 aabb_half = Vec3::Zero();
 
@@ -93,6 +98,12 @@ struct CollisionContext {
 /// position, travelled in min(age, h) seconds (a newborn moves only for its age).
 void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
              const std::vector<Collider>& colliders, CollisionContext& ctx, const ForceParams& f);
+
+/// Moves particle i from `from` to its stored position as a swept sphere against the colliders
+/// and stops it at the first contact (its velocity is kept): displacements made outside the
+/// integrator (particle–particle overlap correction) cannot carry it through a surface.
+void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
+                            const std::vector<Collider>& colliders);
 
 /// Impulse response of a particle against an immovable collider, see collider.cpp. Exposed for
 /// the tests of the critical-friction case.

@@ -39,10 +39,12 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       friction[k] = m.friction;
     }
   }
+  x_before.clear();
   if (n < 2) return;
   find_contacts(contact_speed);
   if (contacts.empty()) return;
   solve();
+  x_before = x;
   // Overlaps left by the discrete step are reduced without changing velocities (a fixed share
   // per step, split by inverse mass), in contact order.
   for (const Contact& c : contacts) {

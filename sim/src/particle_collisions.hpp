@@ -24,6 +24,7 @@ struct ParticleGroupMember {
   ParticleStore* store = nullptr;
   double restitution = 0.5;
   double friction = 0.1;
+  bool collide = true;  ///< the system collides with colliders (its corrections are swept)
 };
 
 class ParticleCollider {
@@ -39,6 +40,7 @@ class ParticleCollider {
   // Flat working arrays, public for the solver test (set x, v, inv_mass, radius, e, mu, then
   // find_contacts() and solve()).
   std::vector<Vec3> x, v;
+  std::vector<Vec3> x_before;  ///< positions before the overlap correction (run() fills it)
   std::vector<double> inv_mass, radius, restitution, friction;
   struct Contact {
     std::uint32_t i, j;

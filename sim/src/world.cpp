@@ -178,11 +178,21 @@ void World::Impl::collide_particles() {
       const bool same = u == s || (!d.collision_group.empty() && du.collision_group == d.collision_group);
       if (!same || done[u]) continue;
       done[u] = true;
-      members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction});
+      members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction, du.collide});
     }
     // A lone system without collide_particles has nobody to collide with.
     if (members.size() == 1 && !d.collide_particles) continue;
     particle_collider.run(members, def.contact_speed);
+    if (colliders.empty() || particle_collider.x_before.empty()) continue;
+    // The overlap correction moved particles: sweep those moves against the colliders (§3.4).
+    std::size_t k = 0;
+    for (const detail::ParticleGroupMember& m : members) {
+      for (std::size_t i = 0; i < m.store->count; ++i, ++k) {
+        const Vec3& from = particle_collider.x_before[k];
+        if (m.collide && from != particle_collider.x[k])
+          detail::constrain_displacement(*m.store, i, from, colliders);
+      }
+    }
   }
 }
 

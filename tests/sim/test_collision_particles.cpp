@@ -100,7 +100,8 @@ TEST(SimParticleCollision, SequentialImpulsesConvergeToTheSimultaneousLinearSyst
   const auto m = pc.contacts.size();
   ASSERT_EQ(m, 4u);  // 0-1, 0-2, 1-2, 1-3
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(Eigen::Index(m), 12);
-  Eigen::VectorXd W(12), v(12), target(Eigen::Index(m));
+  Eigen::VectorXd W(12), v(12);
+  Eigen::VectorXd target = Eigen::VectorXd::Zero(Eigen::Index(m));
   for (int i = 0; i < 4; ++i) {
     W.segment<3>(3 * i).setConstant(pc.inv_mass[std::size_t(i)]);
     v.segment<3>(3 * i) = v0[std::size_t(i)];

@@ -49,6 +49,11 @@ struct SplitOnHit {
 
 /// Surface response parameters of a collider (Coutinho §3.6.1).
 struct Material {
+  Material() = default;
+  /// The two coefficients most scenes set ({e, mu} still reads as before the other fields).
+  Material(double restitution_e, double friction_mu)
+      : restitution(restitution_e), friction(friction_mu) {}
+
   double restitution = 0.5;  ///< coefficient of restitution e in [0, 1]: v_n' = -e v_n
   double friction = 0.3;     ///< dynamic Coulomb friction coefficient mu_d >= 0
   /// Static Coulomb coefficient mu_s >= 0 for a resting contact that is not sliding: it holds a
