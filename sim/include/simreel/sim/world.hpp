@@ -75,11 +75,16 @@ class World {
   ///
   /// Each internal step (Coutinho §1.3): kinematic colliders move to their end-of-step pose; per
   /// system, particles are integrated (gravity + drag, §3.3), collided as swept spheres against
-  /// the colliders held at that pose (§3.4) with restitution and Coulomb friction (§3.6.1) or as
-  /// resting contacts (§3.6.3), the dead are removed (survivors keep their order), the step's
-  /// births are released and colours updated. No particle ends a step with its centre closer than
+  /// the colliders held at that pose (§3.4; against kinematic solids along the relative motion)
+  /// with restitution and Coulomb friction (§3.6.1) or as resting contacts (§3.6.3), hit actions
+  /// applied (Material::on_hit; split droplets join the system at age 0), the dead are removed
+  /// (survivors keep their order), the step's births are released and colours updated. Then the
+  /// systems that opted in (ParticleSystemDef::collide_particles / collision_group) collide with
+  /// each other's particles (hashed grid §2.3.1, sequential impulses §3.6.2), their overlap
+  /// corrections swept against the colliders. No particle ends a step with its centre closer than
   /// its radius to a plane on the solid side; one found inside a box leaves through the nearest
-  /// face with the box's normal velocity.
+  /// face with the box's normal velocity; one inside a sphere, cylinder or closed mesh is
+  /// removed and counted (§3.4.2, removed_inside_count()).
   /// @throws std::invalid_argument unless sampling_time is > 0 and finite.
   /// @throws NonFiniteState if a particle's state becomes NaN/inf; the message names the system,
   ///         the particle id, the internal step number (1-based, as step_count() would count it)
