@@ -10,6 +10,8 @@
 #include <fstream>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
+
 #include "simreel/assets/mesh.hpp"
 
 namespace fs = std::filesystem;
