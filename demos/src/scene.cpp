@@ -158,7 +158,7 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
     c.plane.point = to_vec(r.vec3("point", {0, 0, 0}));
     c.plane.normal = to_vec(r.vec3("normal", {0, 0, 1}));
     if (c.plane.normal.norm() < 1e-9) r.error_at(r.pointer("normal"), "expected a non-zero normal, found [0, 0, 0]");
-    c.plane.material = material(r);
+    c.plane.material = collider_material(r);
     c.checker_m = float(r.number("checker_m", 1.0, 0.0, kInf));
     c.draw_half_size = float(r.number("draw_half_size", 20.0, 0.0, kInf, true));
   } else if (type == "box") {
