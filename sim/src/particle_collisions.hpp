@@ -9,6 +9,12 @@
 // stops when mu reaches the critical coefficient (eqs. 3.56–3.57). Contacts slower than the
 // contact speed are resting (e = 0, §3.6.3). Order is fixed (ascending particle, then fixed
 // neighbour-cell order), so results are deterministic.
+//
+// Known limits: contacts are found by overlap at the end of the step (not swept like particle
+// vs collider); collider contacts are not part of this solve (they are resolved in the collider
+// pass of the next step), so particles in a pile resting on a collider keep a residual speed of
+// about g h per step and creep slowly (measured: mean 2 mm/s in a 400-particle bowl pile); a
+// warm start from the previous step's impulses did not change that and was left out.
 
 #include <cstddef>
 #include <cstdint>
