@@ -1,5 +1,6 @@
 #include "commands.hpp"
 
+#include <algorithm>
 #include <unistd.h>
 
 #include <charconv>
@@ -76,6 +77,11 @@ void add_scene_drawables(const Scene& scene, const SceneWorld& sw, render::Rende
       d.color = c.color;
       d.checker_m = c.checker_m;
       r.add_plane(key, d);
+    } else if (c.type != ColliderScene::Type::box) {
+      // TODO(renderer mesh API): draw spheres, cylinders and meshes (c.mesh_asset, scaled by
+      // c.mesh_scale, colour c.color) under `key`, with the pose below; the moved list updates
+      // it. Until then they are simulated but not drawn, and set_transform skips their keys.
+      continue;
     } else {
       render::BoxDesc d;
       d.half_extents = c.box.half_extents.cast<float>();
@@ -167,8 +173,15 @@ int render_command(const RenderOptions& o) {
   for (int frame = 0; frame < scene.frames; ++frame) {
     // Frame k shows the state at t = k / fps: frame 0 is the initial state.
     if (frame > 0) {
-      for (const sim::MovedObject& m : sw.world.advance(dt))
-        renderer.set_transform(m.handle.packed(), m.translation.cast<float>(), m.rotation.cast<float>());
+      for (const sim::MovedObject& m : sw.world.advance(dt)) {
+        // TODO(renderer mesh API): remove this check once every collider type is drawn.
+        const auto drawn = std::find_if(sw.colliders.begin(), sw.colliders.end(),
+                                        [&](const sim::ColliderHandle& h) { return h.id == m.handle; });
+        if (drawn == sw.colliders.end() ||
+            scene.colliders[std::size_t(drawn - sw.colliders.begin())].type == ColliderScene::Type::plane ||
+            scene.colliders[std::size_t(drawn - sw.colliders.begin())].type == ColliderScene::Type::box)
+          renderer.set_transform(m.handle.packed(), m.translation.cast<float>(), m.rotation.cast<float>());
+      }
     }
     upload_particles(scene, sw, renderer);
     const render::Image image = renderer.render();

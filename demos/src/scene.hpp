@@ -8,8 +8,10 @@
 #include <string>
 #include <vector>
 
+#include <memory>
 #include <nlohmann/json.hpp>
 
+#include "simreel/assets/mesh.hpp"
 #include "simreel/render/context.hpp"
 #include "simreel/render/renderer.hpp"
 #include "simreel/sim/world.hpp"
@@ -18,9 +20,16 @@ namespace simreel::app {
 
 struct ColliderScene {
   std::string name;
-  enum class Type { plane, box } type = Type::plane;
+  enum class Type { plane, box, sphere, cylinder, mesh } type = Type::plane;
   sim::PlaneDef plane;
   sim::BoxDef box;
+  sim::SphereDef sphere;
+  sim::CylinderDef cylinder;
+  sim::MeshDef mesh;  ///< vertices already scaled, in the mesh's local frame
+  /// The imported file (positions unscaled, normals, UVs, materials) for drawing; `scale`
+  /// below maps it to the collider's local frame.
+  std::shared_ptr<const assets::TriangleMesh> mesh_asset;
+  std::array<double, 3> mesh_scale{1, 1, 1};
   render::Vec4f color{0.6f, 0.6f, 0.62f, 1.f};
   float checker_m = 0.f;        ///< (m) plane checker cell; 0 = plain
   float draw_half_size = 20.f;  ///< (m) drawn extent of an infinite plane

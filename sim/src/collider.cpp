@@ -1,13 +1,16 @@
-// Colliders and the particle collision pass: Coutinho §3.4 (swept spheres against a collider
-// fixed at its end-of-step pose), §3.6.1 (impulse with restitution and directional Coulomb
-// friction, critical friction), §3.6.3 (resting contact under a normal-speed threshold).
+// Colliders and the particle collision pass: Coutinho §2.1–2.2 (queries in the body's frame, AABB
+// tree), §3.4 (swept spheres against a collider fixed at its end-of-step pose), §3.4.2 (particles
+// found inside a body are removed), §3.6.1 (impulse with restitution and Coulomb friction,
+// critical friction), §3.6.3 (resting contact under a normal-speed threshold, static friction).
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "collider_impl.hpp"
+#include "narrow_phase.hpp"
 #include "path_math.hpp"
 #include "validate.hpp"
 
@@ -16,14 +19,49 @@ namespace simreel::sim::detail {
 // ---------------------------------------------------------------------------------------------
 // Colliders
 
+bool MeshShape::contains(const Vec3& p) const {
+  if (!closed || ((p - local_center).cwiseAbs().array() > local_half.array()).any()) return false;
+  // A fixed oblique direction: rays along a coordinate axis graze the edges of axis-aligned
+  // meshes, where a crossing may count twice or not at all.
+  const Vec3 dir = Vec3(0.2138, 0.1402, 0.9668).normalized();
+  const double len = 2.0 * ((p - local_center).norm() + local_half.norm());
+  const Vec3 q = p + len * dir;
+  int crossings = 0;
+  bvh.query(p.cwiseMin(q), p.cwiseMax(q), [&](std::uint32_t t) {
+    crossings += ray_crosses(triangles[t], p, dir, len) ? 1 : 0;
+  });
+  return (crossings & 1) != 0;
+}
+
 void Collider::set_pose(const Transform& t) {
   center = t.translation;
   rotation = t.rotation.normalized();
   R = rotation.toRotationMatrix();
-  aabb_half = R.cwiseAbs() * half_extents;
+  switch (shape) {
+    case Shape::box:
+      aabb_center = center;
+      aabb_half = R.cwiseAbs() * half_extents;
+      break;
+    case Shape::sphere:
+      aabb_center = center;
+      aabb_half = Vec3::Constant(radius);
+      break;
+    case Shape::cylinder:
+      aabb_center = center;
+      aabb_half = R.cwiseAbs() * Vec3(radius, radius, half_height);
+      break;
+    case Shape::mesh:
+      aabb_center = center + R * mesh->local_center;
+      aabb_half = R.cwiseAbs() * mesh->local_half;
+      break;
+    case Shape::plane:
+      break;
+  }
 }
 
 void Collider::update(double t) {
+  prev_center = center;
+  prev_R = R;
   set_pose(path.sample(t));
   velocity = path.velocity(t);
   angular_velocity = detail::angular_velocity(path, t);
@@ -52,21 +90,125 @@ Collider make_collider(const PlaneDef& def) {
   return c;
 }
 
+namespace {
+
+/// Pose setup shared by the solids: static at `transform`, or on its path at `time`.
+Collider& place(Collider& c, const Transform& transform, const KeyframePath& path, double time) {
+  c.path = path;
+  if (c.kinematic()) {
+    c.update(time);
+  } else {
+    c.set_pose(transform);
+  }
+  c.prev_center = c.center;
+  c.prev_R = c.R;
+  c.reported_translation = c.center;
+  c.reported_rotation = c.rotation;
+  return c;
+}
+
+void validate_pose(const Transform& t, const KeyframePath& path, const std::string& what) {
+  if (!t.translation.allFinite() || !t.rotation.coeffs().allFinite() ||
+      !(t.rotation.norm() > 1e-12))
+    throw std::invalid_argument(what +
+                                ".transform must be finite with a non-zero rotation quaternion");
+  validate(path, what + ".path");
+}
+
+}  // namespace
+
 Collider make_collider(const BoxDef& def, double time) {
   validate(def);
   Collider c;
   c.shape = Collider::Shape::box;
   c.material = def.material;
   c.half_extents = def.half_extents;
-  c.path = def.path;
-  if (c.kinematic()) {
-    c.update(time);
-  } else {
-    c.set_pose(def.transform);
+  return place(c, def.transform, def.path, time);
+}
+
+Collider make_collider(const SphereDef& def, double time) {
+  if (!(def.radius > 0.0) || !std::isfinite(def.radius)) {
+    std::ostringstream m;
+    m << "SphereDef.radius must be > 0 and finite (got " << def.radius << ")";
+    throw std::invalid_argument(m.str());
   }
-  c.reported_translation = c.center;
-  c.reported_rotation = c.rotation;
-  return c;
+  validate_pose(def.transform, def.path, "SphereDef");
+  validate(def.material, "SphereDef.material");
+  Collider c;
+  c.shape = Collider::Shape::sphere;
+  c.material = def.material;
+  c.radius = def.radius;
+  return place(c, def.transform, def.path, time);
+}
+
+Collider make_collider(const CylinderDef& def, double time) {
+  if (!(def.radius > 0.0) || !std::isfinite(def.radius) || !(def.half_height > 0.0) ||
+      !std::isfinite(def.half_height)) {
+    std::ostringstream m;
+    m << "CylinderDef.radius and half_height must be > 0 and finite (got " << def.radius << ", "
+      << def.half_height << ")";
+    throw std::invalid_argument(m.str());
+  }
+  validate_pose(def.transform, def.path, "CylinderDef");
+  validate(def.material, "CylinderDef.material");
+  Collider c;
+  c.shape = Collider::Shape::cylinder;
+  c.material = def.material;
+  c.radius = def.radius;
+  c.half_height = def.half_height;
+  return place(c, def.transform, def.path, time);
+}
+
+Collider make_collider(const MeshDef& def, double time) {
+  if (def.triangles.empty())
+    throw std::invalid_argument("MeshDef.triangles must not be empty");
+  for (const Vec3& v : def.vertices)
+    if (!v.allFinite()) throw std::invalid_argument("MeshDef.vertices must be finite");
+  auto shape = std::make_shared<MeshShape>();
+  shape->triangles.reserve(def.triangles.size());
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+  edges.reserve(3 * def.triangles.size());
+  for (std::size_t t = 0; t < def.triangles.size(); ++t) {
+    const auto& tri = def.triangles[t];
+    for (std::uint32_t k : tri)
+      if (k >= def.vertices.size()) {
+        std::ostringstream m;
+        m << "MeshDef.triangles[" << t << "] refers to vertex " << k << " of "
+          << def.vertices.size();
+        throw std::invalid_argument(m.str());
+      }
+    Triangle x{def.vertices[tri[0]], def.vertices[tri[1]], def.vertices[tri[2]], Vec3::Zero()};
+    const Vec3 n = (x.b - x.a).cross(x.c - x.a);
+    if (!(n.norm() > 0.0)) continue;  // degenerate: its edges belong to the neighbours
+    x.normal = n.normalized();
+    shape->triangles.push_back(x);
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t i = tri[std::size_t(k)], j = tri[std::size_t((k + 1) % 3)];
+      edges.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  if (shape->triangles.empty())
+    throw std::invalid_argument("MeshDef.triangles are all degenerate (zero area)");
+  validate_pose(def.transform, def.path, "MeshDef");
+  validate(def.material, "MeshDef.material");
+  std::sort(edges.begin(), edges.end());
+  bool closed = true;
+  for (std::size_t i = 0; i < edges.size() && closed;) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    closed = j - i == 2;
+    i = j;
+  }
+  shape->closed = closed;
+  shape->bvh = Bvh(shape->triangles);
+  const Aabb& b = shape->bvh.bounds();
+  shape->local_center = 0.5 * (b.lo + b.hi);
+  shape->local_half = 0.5 * (b.hi - b.lo);
+  Collider c;
+  c.shape = Collider::Shape::mesh;
+  c.material = def.material;
+  c.mesh = std::move(shape);
+  return place(c, def.transform, def.path, time);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -140,31 +282,177 @@ void sweep_box(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& b
   best = Hit{tmin, Vec3(sign * c.R.col(axis)), Vec3(c.center + c.R * lp), &c};
 }
 
+/// The swept segment in a solid's frame: from a — taken in the body's start-of-step pose on the
+/// first sweep of the step, so the segment follows the relative motion of a kinematic body, and
+/// in its end pose for the remainder after a contact — to b in the end pose (§2.1, §3.4).
+void local_segment(const Collider& c, const Vec3& a, const Vec3& b, bool first, Vec3& la, Vec3& ld) {
+  la = first ? Vec3(c.prev_R.transpose() * (a - c.prev_center)) : Vec3(c.R.transpose() * (a - c.center));
+  ld = c.R.transpose() * (b - c.center) - la;
+}
+
+/// Sphere moving a -> b against the collider sphere grown by r: closed-form ray–sphere. A start
+/// point between the sphere and the grown sphere moving in is a contact at s = 0; one inside the
+/// sphere itself is left to the §3.4.2 removal.
+void sweep_sphere(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                  Hit& best) {
+  Vec3 m, d;
+  local_segment(c, a, b, first, m, d);
+  const double Rg = c.radius + r;
+  const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - Rg * Rg;
+  double s;
+  if (C <= 0.0) {
+    if (m.norm() < c.radius || !(B < 0.0)) return;
+    s = 0.0;
+  } else {
+    if (!(B < 0.0) || A == 0.0) return;
+    const double disc = B * B - A * C;
+    if (disc < 0.0) return;
+    s = (-B - std::sqrt(disc)) / A;
+    if (s > 1.0) return;
+  }
+  if (!(s < best.s)) return;
+  const Vec3 n = c.R * (m + s * d).normalized();
+  best = Hit{s, n, Vec3(c.center + Rg * n), &c};
+}
+
+/// Sphere moving a -> b against the capped cylinder grown by r with square rims (radius R + r,
+/// half height H + r): the entry time is the later of the entries into the infinite cylinder
+/// (closed-form quadratic) and the slab |z| <= H + r, in the cylinder's frame.
+void sweep_cylinder(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                    Hit& best) {
+  Vec3 la, ld;
+  local_segment(c, a, b, first, la, ld);
+  const double Rg = c.radius + r, Hg = c.half_height + r;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double t0 = -kInf, t1 = kInf;
+  const double A = ld.head<2>().squaredNorm(), B = la.head<2>().dot(ld.head<2>()),
+               C = la.head<2>().squaredNorm() - Rg * Rg;
+  if (A == 0.0) {
+    if (C > 0.0) return;
+  } else {
+    const double disc = B * B - A * C;
+    if (disc < 0.0) return;
+    t0 = (-B - std::sqrt(disc)) / A;
+    t1 = (-B + std::sqrt(disc)) / A;
+  }
+  double z0 = -kInf, z1 = kInf;
+  if (ld.z() == 0.0) {
+    if (std::abs(la.z()) > Hg) return;
+  } else {
+    z0 = (-Hg - la.z()) / ld.z();
+    z1 = (Hg - la.z()) / ld.z();
+    if (z0 > z1) std::swap(z0, z1);
+  }
+  const double enter = std::max(t0, z0), exit = std::min(t1, z1);
+  if (enter > exit || exit < 0.0 || enter > 1.0) return;
+  bool side = t0 >= z0;
+  double s = enter;
+  if (enter < 0.0) {  // the start point is inside the grown cylinder
+    const double rho = la.head<2>().norm();
+    if (rho < c.radius && std::abs(la.z()) < c.half_height) return;  // inside: removal
+    side = Rg - rho < Hg - std::abs(la.z());
+    s = 0.0;
+  }
+  if (!(s < best.s)) return;
+  Vec3 lp = la + s * ld;
+  Vec3 ln;
+  if (side) {
+    const double rho = lp.head<2>().norm();
+    if (!(rho > 0.0)) return;
+    ln = Vec3(lp.x() / rho, lp.y() / rho, 0.0);
+    lp.head<2>() = ln.head<2>() * Rg;
+  } else {
+    ln = Vec3(0.0, 0.0, lp.z() >= 0.0 ? 1.0 : -1.0);
+    lp.z() = ln.z() * Hg;
+  }
+  if (!(ln.dot(ld) < 0.0)) return;  // moving out along the contact normal
+  best = Hit{s, Vec3(c.R * ln), Vec3(c.center + c.R * lp), &c};
+}
+
+/// Sphere moving a -> b against a triangle mesh: the segment goes into the mesh frame (§2.1), the
+/// AABB tree gives the triangles near the segment's box grown by r (§2.2), and each is swept
+/// exactly (narrow_phase.hpp, §3.7).
+void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                Hit& best) {
+  Vec3 la, ld;
+  local_segment(c, a, b, first, la, ld);
+  const Vec3 lb = la + ld;
+  const Vec3 grow = Vec3::Constant(r);
+  SweepHit h;
+  h.s = best.s;
+  const MeshShape& m = *c.mesh;
+  m.bvh.query(la.cwiseMin(lb) - grow, la.cwiseMax(lb) + grow,
+              [&](std::uint32_t t) { sweep_triangle(m.triangles[t], la, ld, r, h); });
+  if (!(h.s < best.s)) return;
+  best = Hit{h.s, Vec3(c.R * h.normal), Vec3(c.center + c.R * h.point), &c};
+}
+
+void sweep(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first, Hit& best) {
+  switch (c.shape) {
+    case Collider::Shape::plane: sweep_plane(c, a, b, r, best); break;
+    case Collider::Shape::box: sweep_box(c, a, b, r, best); break;
+    case Collider::Shape::sphere: sweep_sphere(c, a, b, r, first, best); break;
+    case Collider::Shape::cylinder: sweep_cylinder(c, a, b, r, first, best); break;
+    case Collider::Shape::mesh: sweep_mesh(c, a, b, r, first, best); break;
+  }
+}
+
+/// Is the centre p inside the solid (§3.4.2)? Boxes are excluded: they push particles out.
+bool inside_solid(const Collider& c, const Vec3& p) {
+  switch (c.shape) {
+    case Collider::Shape::sphere: return (p - c.center).squaredNorm() < c.radius * c.radius;
+    case Collider::Shape::cylinder: {
+      const Vec3 l = c.R.transpose() * (p - c.center);
+      return l.head<2>().squaredNorm() < c.radius * c.radius && std::abs(l.z()) < c.half_height;
+    }
+    case Collider::Shape::mesh:
+      return c.mesh->closed && c.mesh->contains(c.R.transpose() * (p - c.center));
+    default: return false;
+  }
+}
+
+}  // namespace
+
 /// Impulse response of a particle against an immovable collider (Coutinho §3.6.1 with the
 /// collider's mass taken as infinite): relative normal velocity v_n' = -e v_n, tangential
 /// velocity reduced by the Coulomb impulse mu (1 + e) |v_n| but never reversed — when
-/// mu >= |v_t| / ((1 + e) |v_n|), the critical coefficient of eqs. 3.56–3.57, sliding stops.
-/// Under the contact threshold (§3.6.3) the contact is resting: e = 0, so the normal velocity is
-/// cancelled and friction removes mu |v_n| — the contact friction force mu |N| times the step.
-/// `kick` is the approach speed one step of acceleration adds (g h for a particle lying on the
-/// floor): it is not counted as impact speed, so resting is recognised at any step size.
+/// mu >= |v_t| / ((1 + e) |v_n|), the critical coefficient of eqs. 3.56–3.57, sliding stops
+/// exactly. The tangent axes are taken along and across the relative sliding velocity, where
+/// the book's directional model (eqs. 3.37–3.40) with one coefficient for both axes reduces to
+/// this. Under the contact threshold (§3.6.3) the contact is resting: e = 0, so the normal
+/// velocity is cancelled and friction removes mu |v_n| — the contact friction force mu |N|
+/// times the step. A resting contact whose tangential speed is no more than this step's
+/// tangential push (it was not sliding) uses the static coefficient: it holds on an incline of
+/// angle theta when mu_s >= tan theta, and otherwise slides with a = g (sin theta - mu_d cos theta).
+/// `kick` is the velocity one step of acceleration adds (g h for a particle lying on the floor):
+/// its normal part is not counted as impact speed, so resting is recognised at any step size.
 Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, double contact_speed,
-             double kick) {
+             const Vec3& kick) {
   const Vec3 vr = v - vc;
   const double vn = vr.dot(n);
   if (vn >= 0.0) return v;  // already separating
-  const bool resting = -vn < contact_speed + kick;
-  const double e = resting ? 0.0 : m.restitution;
+  const double kick_n = std::max(0.0, -kick.dot(n));
+  const double kick_t = (kick - kick.dot(n) * n).norm();
+  const bool resting = -vn < contact_speed + kick_n;
+  double e = resting ? 0.0 : m.restitution;
   const Vec3 vt = vr - vn * n;
   const double vt_len = vt.norm();
-  const double dvt = std::min(vt_len, m.friction * (1.0 + e) * (-vn));
+  double mu = resting && vt_len <= kick_t * (1.0 + 1e-6) + 1e-12 ? m.static_mu() : m.friction;
+  if (m.on_hit == HitAction::stick) {
+    e = 0.0;
+    mu = std::numeric_limits<double>::infinity();
+  }
+  const double dvt = std::min(vt_len, mu * (1.0 + e) * (-vn));
   const Vec3 vt_new = vt_len > 0.0 ? Vec3(vt * (1.0 - dvt / vt_len)) : vt;
   return vc + (-e * vn) * n + vt_new;
 }
 
+namespace {
+
 /// A particle found inside a box (the box may have moved onto it) leaves through the face it is
 /// least deep behind and takes the box's velocity along that face's normal if it was moving in.
-/// (Coutinho §3.4 removes such particles; simreel keeps them, which suits pushing boxes.)
+/// (Coutinho §3.4.2 removes such particles; simreel keeps them for boxes, which suits pushing
+/// boxes; the other solids remove them.)
 void push_out(const Collider& c, Vec3& p, Vec3& v, double r) {
   Vec3 l = c.R.transpose() * (p - c.center);
   const Vec3 E = c.half_extents + Vec3::Constant(r);
@@ -198,9 +486,32 @@ Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const 
   return p1 - dt * v1;
 }
 
+/// Droplets of a split hit (HitAction::split): see SplitOnHit.
+void splash(const Material& m, const Vec3& contact, const Vec3& n, const Vec3& v_rel,
+            const Vec3& vc, double r, double mass, CollisionContext& ctx) {
+  const SplitOnHit& sp = m.split;
+  if (r < sp.min_radius || ctx.spawns == nullptr || ctx.rng == nullptr) return;
+  const double rd = r * sp.size_fraction;
+  const double speed = sp.speed_fraction * v_rel.norm();
+  const Vec3 t = n.unitOrthogonal();
+  const Vec3 k = n.cross(t);
+  const double cos_max = std::cos(sp.spread_deg * 3.14159265358979323846 / 180.0);
+  const Vec3 surface = contact - r * n;
+  for (int j = 0; j < sp.count; ++j) {
+    const double cz = 1.0 - ctx.rng->uniform() * (1.0 - cos_max);  // uniform over the cap
+    const double phi = 2.0 * 3.14159265358979323846 * ctx.rng->uniform();
+    const double sz = std::sqrt(std::max(0.0, 1.0 - cz * cz));
+    const Vec3 dir = cz * n + sz * (std::cos(phi) * t + std::sin(phi) * k);
+    ctx.spawns->push_back(SpawnRequest{Vec3(surface + 1.01 * rd * n), Vec3(vc + speed * dir), rd,
+                                       mass * sp.size_fraction * sp.size_fraction *
+                                           sp.size_fraction,
+                                       sp.lifetime});
+  }
+}
+
 /// The slow path for one particle that may touch something this step.
 void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Collider>& colliders,
-             double contact_speed, const ForceParams& f) {
+             CollisionContext& ctx, const ForceParams& f) {
   float* pf = &s.position[3 * i];
   float* vf = &s.velocity[3 * i];
   Vec3 b(pf[0], pf[1], pf[2]);
@@ -209,21 +520,23 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   const double r = s.radius[i];
   const double c_drag = double(f.drag) / double(s.mass[i]);
   const Vec3 g(f.gravity[0], f.gravity[1], f.gravity[2]);
+  bool dead = false;
 
   for (int contact = 0;; ++contact) {
     Hit hit;
-    for (const Collider& c : colliders) {
-      if (c.shape == Collider::Shape::plane) {
-        sweep_plane(c, a, b, r, hit);
-      } else {
-        sweep_box(c, a, b, r, hit);
-      }
-    }
+    for (const Collider& c : colliders) sweep(c, a, b, r, contact == 0, hit);
     if (hit.collider == nullptr) break;
-    const Vec3 acc = g - c_drag * v;
-    const double kick = std::max(0.0, -acc.dot(hit.normal)) * dt;
+    const Material& mat = hit.collider->material;
     const Vec3 vc = hit.collider->point_velocity(hit.point);
-    v = respond(v, vc, hit.normal, hit.collider->material, contact_speed, kick);
+    if (mat.on_hit == HitAction::kill || mat.on_hit == HitAction::split) {
+      if (mat.on_hit == HitAction::split)
+        splash(mat, hit.point, hit.normal, v - vc, vc, r, s.mass[i], ctx);
+      dead = true;
+      b = hit.point;
+      break;
+    }
+    const Vec3 kick = (g - c_drag * v) * dt;
+    v = respond(v, vc, hit.normal, mat, ctx.contact_speed, kick);
     // The rest of the step with the new velocity against the collider held at its end pose
     // (§3.4), never back into the surface just left. (Not relative to a moving collider: a
     // particle at rest on a box sliding under it must stay where it is, not slide backwards.)
@@ -240,17 +553,29 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
     b = a + disp;
   }
 
-  for (const Collider& c : colliders)
-    if (c.shape == Collider::Shape::box) push_out(c, b, v, r);
-  for (const Collider& c : colliders) {
-    if (c.shape != Collider::Shape::plane) continue;
-    const double d = c.normal.dot(b - c.point) - r;
-    if (d < 0.0) {
-      b -= d * c.normal;
-      const double vn = v.dot(c.normal);
-      if (vn < 0.0) v -= vn * c.normal;
+  if (!dead) {
+    for (const Collider& c : colliders)
+      if (c.shape == Collider::Shape::box) push_out(c, b, v, r);
+    for (const Collider& c : colliders) {
+      if (c.shape != Collider::Shape::plane) continue;
+      const double d = c.normal.dot(b - c.point) - r;
+      if (d < 0.0) {
+        b -= d * c.normal;
+        const double vn = v.dot(c.normal);
+        if (vn < 0.0) v -= vn * c.normal;
+      }
+    }
+    for (const Collider& c : colliders) {
+      if (c.shape == Collider::Shape::plane || c.shape == Collider::Shape::box) continue;
+      if (((b - c.aabb_center).cwiseAbs().array() > c.aabb_half.array()).any()) continue;
+      if (inside_solid(c, b)) {
+        dead = true;  // §3.4.2
+        ++ctx.removed_inside;
+        break;
+      }
     }
   }
+  if (dead) s.age[i] = s.lifetime[i];
 
   for (int k = 0; k < 3; ++k) {
     pf[k] = float(b[k]);
@@ -274,12 +599,12 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
 }  // namespace
 
 void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
-             const std::vector<Collider>& colliders, double contact_speed, const ForceParams& f) {
+             const std::vector<Collider>& colliders, CollisionContext& ctx, const ForceParams& f) {
   if (colliders.empty()) return;
   const float* x = s.position.data();
   const float* vel = s.velocity.data();
   for (std::size_t i = begin; i < end; ++i) {
-    // Fast rejection: end point clear of every plane, swept bounds clear of every box.
+    // Fast rejection: end point clear of every plane, swept bounds clear of every solid.
     const Vec3 p1(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
     const double r = s.radius[i];
     const double dt = std::min(double(s.age[i]), h);
@@ -290,15 +615,25 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       } else {
         const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
         const Vec3 p0 = start_of_step(s, i, p1, v1, dt);
-        const Vec3 lo = p0.cwiseMin(p1) - c.center;
-        const Vec3 hi = p0.cwiseMax(p1) - c.center;
+        const Vec3 lo = p0.cwiseMin(p1) - c.aabb_center;
+        const Vec3 hi = p0.cwiseMax(p1) - c.aabb_center;
         const Vec3 ext = c.aabb_half + Vec3::Constant(r + surface_tol(p1));
         near = (lo.array() <= ext.array()).all() && (hi.array() >= -ext.array()).all();
       }
       if (near) break;
     }
-    if (near) resolve(s, i, dt, colliders, contact_speed, f);
+    if (near) resolve(s, i, dt, colliders, ctx, f);
   }
+}
+
+void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
+                            const std::vector<Collider>& colliders) {
+  float* pf = &s.position[3 * i];
+  const Vec3 to(pf[0], pf[1], pf[2]);
+  Hit hit;
+  for (const Collider& c : colliders) sweep(c, from, to, s.radius[i], false, hit);
+  if (hit.collider == nullptr) return;
+  for (int k = 0; k < 3; ++k) pf[k] = float(hit.point[k]);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -313,6 +648,21 @@ void validate(const Material& m, const std::string& what) {
   if (!(m.friction >= 0.0) || !std::isfinite(m.friction)) {
     std::ostringstream msg;
     msg << what << ".friction must be >= 0 and finite (got " << m.friction << ")";
+    throw std::invalid_argument(msg.str());
+  }
+  if (!std::isfinite(m.static_friction)) {
+    std::ostringstream msg;
+    msg << what << ".static_friction must be finite (got " << m.static_friction << ")";
+    throw std::invalid_argument(msg.str());
+  }
+  const SplitOnHit& sp = m.split;
+  if (!(sp.count >= 0 && sp.count <= 64) || !(sp.speed_fraction >= 0.0) ||
+      !std::isfinite(sp.speed_fraction) || !(sp.size_fraction > 0.0 && sp.size_fraction <= 1.0) ||
+      !(sp.lifetime > 0.0) || !std::isfinite(sp.lifetime) ||
+      !(sp.spread_deg >= 0.0 && sp.spread_deg <= 90.0) || !(sp.min_radius >= 0.0)) {
+    std::ostringstream msg;
+    msg << what << ".split: expected count in [0, 64], speed_fraction >= 0, size_fraction in "
+        << "(0, 1], lifetime > 0, spread_deg in [0, 90], min_radius >= 0";
     throw std::invalid_argument(msg.str());
   }
 }

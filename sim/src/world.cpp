@@ -14,6 +14,7 @@
 #include "emitter.hpp"
 #include "forces.hpp"
 #include "integrators.hpp"
+#include "particle_collisions.hpp"
 #include "particle_store.hpp"
 #include "split.hpp"
 #include "validate.hpp"
@@ -52,6 +53,10 @@ struct ParticleSystemState {
   IntegratorState integrator_state;
   IntegratorWorkspace workspace;
   Dynamics dynamics;
+  // Collisions (issue 5): splash droplets, §3.4.2 removals.
+  Rng splash_rng;
+  std::vector<SpawnRequest> spawns;
+  std::uint64_t removed_inside = 0;
 };
 
 }  // namespace detail
@@ -74,6 +79,17 @@ struct World::Impl {
   std::vector<std::unique_ptr<detail::FieldState>> fields;
   std::vector<std::unique_ptr<AttractorSpringDef>> attractors;
   int threads = 1;
+  detail::ParticleCollider particle_collider;
+
+  ColliderHandle add_collider(detail::Collider c) {
+    colliders.push_back(std::move(c));
+    return ColliderHandle{Handle{std::uint32_t(colliders.size() - 1), colliders.back().generation,
+                                 ObjectKind::collider}};
+  }
+  /// Colliders of system `index` over particles [begin, end), then its splash droplets.
+  void collide_system(std::size_t index, std::size_t begin, std::size_t end, double h);
+  /// Particle–particle collisions of every opted-in system (internal and by group).
+  void collide_particles();
 
   detail::Collider& collider(ColliderHandle h) {
     if (h.id.kind != ObjectKind::collider || h.id.index >= colliders.size() ||
@@ -104,6 +120,7 @@ void World::Impl::step(double t0, double t1) {
   for (detail::Collider& c : colliders)
     if (c.kinematic()) c.update(t1);
   for (std::size_t s = 0; s < systems.size(); ++s) step_system(s, t0, t1);
+  collide_particles();
   ++steps;
 }
 
@@ -126,7 +143,7 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
     if (detail::integrate(st, 0, n_old, h, ps.forces, ps.def.integrator, threads))
       non_finite(index, 0, n_old, t1);
   }
-  if (collide) detail::collide(st, 0, n_old, h, colliders, def.contact_speed, ps.forces);
+  if (collide) collide_system(index, 0, n_old, h);
   // Particle split (§3.9.1): parents whose condition is met create their children.
   detail::split_particles(ps.def.emitter, ps.split_rng, st, n_old, ps.next_id);
   st.compact(0);
@@ -151,7 +168,7 @@ void World::Impl::step_system(std::size_t index, double t0, double t1) {
       bad |= detail::integrate_one(st, i, st.age[i], ps.forces, ps.def.integrator);
   }
   if (bad) non_finite(index, first_new, st.count, t1);
-  if (collide) detail::collide(st, first_new, st.count, h, colliders, def.contact_speed, ps.forces);
+  if (collide) collide_system(index, first_new, st.count, h);
   ps.gradient.apply(st, first_new, st.count);
   st.compact(first_new);  // lifetimes shorter than the part of the step they lived
 
@@ -213,6 +230,71 @@ void World::Impl::build_dynamics(std::size_t index, bool interactions) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Collisions (Coutinho Ch. 2–3)
+
+void World::Impl::collide_system(std::size_t index, std::size_t begin, std::size_t end, double h) {
+  detail::ParticleSystemState& ps = systems[index];
+  detail::ParticleStore& st = ps.store;
+  detail::CollisionContext ctx;
+  ctx.contact_speed = def.contact_speed;
+  ctx.rng = &ps.splash_rng;
+  ctx.spawns = &ps.spawns;
+  ps.spawns.clear();
+  detail::collide(st, begin, end, h, colliders, ctx, ps.forces);
+  ps.removed_inside += ctx.removed_inside;
+  // Splash droplets (HitAction::split) join the system now, at age 0: they move from the next
+  // step on. Droplets past max_particles are dropped.
+  for (const detail::SpawnRequest& q : ps.spawns) {
+    if (st.count >= ps.def.emitter.max_particles) break;
+    const std::size_t i = st.append(1);
+    for (int k = 0; k < 3; ++k) {
+      st.position[3 * i + std::size_t(k)] = float(q.position[k]);
+      if (st.track_prev) st.prev_position[3 * i + std::size_t(k)] = float(q.position[k]);
+      st.velocity[3 * i + std::size_t(k)] = float(q.velocity[k]);
+    }
+    st.mass[i] = float(q.mass);
+    st.radius[i] = float(q.radius);
+    st.base_radius[i] = float(q.radius);
+    st.lifetime[i] = float(q.lifetime);
+    st.age[i] = 0.0f;
+    st.id[i] = ps.next_id++;
+    ps.gradient.apply(st, i, i + 1);
+  }
+}
+
+void World::Impl::collide_particles() {
+  // Groups in order of their first member; a system without a group is its own group.
+  std::vector<bool> done(systems.size(), false);
+  std::vector<detail::ParticleGroupMember> members;
+  for (std::size_t s = 0; s < systems.size(); ++s) {
+    if (done[s]) continue;
+    const ParticleSystemDef& d = systems[s].def;
+    if (!d.collide_particles && d.collision_group.empty()) continue;
+    members.clear();
+    for (std::size_t u = s; u < systems.size(); ++u) {
+      const ParticleSystemDef& du = systems[u].def;
+      const bool same = u == s || (!d.collision_group.empty() && du.collision_group == d.collision_group);
+      if (!same || done[u]) continue;
+      done[u] = true;
+      members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction, du.collide});
+    }
+    // A lone system without collide_particles has nobody to collide with.
+    if (members.size() == 1 && !d.collide_particles) continue;
+    particle_collider.run(members, def.contact_speed);
+    if (colliders.empty() || particle_collider.x_before.empty()) continue;
+    // The overlap correction moved particles: sweep those moves against the colliders (§3.4).
+    std::size_t k = 0;
+    for (const detail::ParticleGroupMember& m : members) {
+      for (std::size_t i = 0; i < m.store->count; ++i, ++k) {
+        const Vec3& from = particle_collider.x_before[k];
+        if (m.collide && from != particle_collider.x[k])
+          detail::constrain_displacement(*m.store, i, from, colliders);
+      }
+    }
+  }
+}
+
 void World::Impl::non_finite(std::size_t index, std::size_t begin, std::size_t end,
                              double t1) const {
   const detail::ParticleSystemState& ps = systems[index];
@@ -250,15 +332,23 @@ World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
 
 ColliderHandle World::add_plane(const PlaneDef& def) {
-  impl_->colliders.push_back(detail::make_collider(def));
-  return ColliderHandle{Handle{std::uint32_t(impl_->colliders.size() - 1),
-                               impl_->colliders.back().generation, ObjectKind::collider}};
+  return impl_->add_collider(detail::make_collider(def));
+}
+ColliderHandle World::add_box(const BoxDef& def) {
+  return impl_->add_collider(detail::make_collider(def, impl_->time));
+}
+ColliderHandle World::add_sphere(const SphereDef& def) {
+  return impl_->add_collider(detail::make_collider(def, impl_->time));
+}
+ColliderHandle World::add_cylinder(const CylinderDef& def) {
+  return impl_->add_collider(detail::make_collider(def, impl_->time));
+}
+ColliderHandle World::add_mesh(const MeshDef& def) {
+  return impl_->add_collider(detail::make_collider(def, impl_->time));
 }
 
-ColliderHandle World::add_box(const BoxDef& def) {
-  impl_->colliders.push_back(detail::make_collider(def, impl_->time));
-  return ColliderHandle{Handle{std::uint32_t(impl_->colliders.size() - 1),
-                               impl_->colliders.back().generation, ObjectKind::collider}};
+std::uint64_t World::removed_inside_count(ParticleSystemHandle h) const {
+  return impl_->system(h).removed_inside;
 }
 
 ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
@@ -266,6 +356,14 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   // emitter by validate (emitter.cpp).
   detail::validate_forces(def);
   detail::validate(def);
+  if (!(def.particle_restitution >= 0.0 && def.particle_restitution <= 1.0) ||
+      !(def.particle_friction >= 0.0) || !std::isfinite(def.particle_friction)) {
+    std::ostringstream m;
+    m << "ParticleSystemDef '" << def.name << "': particle_restitution must be in [0, 1] and "
+      << "particle_friction >= 0 and finite (got " << def.particle_restitution << ", "
+      << def.particle_friction << ")";
+    throw std::invalid_argument(m.str());
+  }
   const std::size_t index = impl_->systems.size();
   detail::ParticleSystemState ps;
   ps.def = def;
@@ -275,6 +373,7 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   ps.store.reserve(def.emitter.max_particles);
   ps.charge_rng = Rng(impl_->def.seed, 0x5eed0000u + index);
   ps.emitter.rng = Rng(impl_->def.seed, index);
+  ps.splash_rng = Rng(impl_->def.seed, 0x5b1a5400000000ull + index);  // own stream: splashes
   ps.gradient = detail::ColorGradient(def.emitter.color_over_lifetime);
   ps.size_curve = detail::SizeCurve(def.emitter.size_over_lifetime);
   ps.split_rng = Rng(impl_->def.seed, (std::uint64_t{1} << 32) + index);

@@ -204,3 +204,25 @@ TEST(Golden, FountainFrameMatchesRecordedHash) {
   const std::uint64_t want = std::stoull(golden.at("dhash").get<std::string>(), nullptr, 16);
   EXPECT_GT(__builtin_popcountll(got ^ want), golden.at("tolerance").get<int>());
 }
+
+TEST(Cli, BrokenMeshFileExits2NamingSceneFilePointerAndMesh) {
+  TempDir d;
+  write_file(d / "rock.obj", "v 0 0 0\n# no faces\n");
+  write_file(d / "s.json", R"({"colliders": [{"type": "plane"}, {"type": "mesh", "file": "rock.obj"}]})");
+  const auto r = run_simreel("validate " + (d / "s.json").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find((d / "s.json").string() + ": /colliders/1/file: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find((d / "rock.obj").string() + ": cannot import mesh: "), std::string::npos) << r.err;
+}
+
+TEST(Cli, BadColliderResponseValuesExit2) {
+  TempDir d;
+  write_file(d / "s.json", R"({"colliders": [{"type": "sphere", "radius": 0.2,
+      "collider": {"on_hit": "explode", "split": {"size_fraction": 2}}}],
+      "emitters": [{"collide_particles": "yes"}]})");
+  const auto r = run_simreel("validate " + (d / "s.json").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("/colliders/0/collider/on_hit: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("/colliders/0/collider/split/size_fraction: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("/emitters/0/collide_particles: "), std::string::npos) << r.err;
+}

@@ -112,3 +112,23 @@ TEST(SceneOverride, PointerThatNamesNothingIsAnError) {
   EXPECT_THROW(apply_override(doc, "emitters=1", "s.json"), SceneError);
   EXPECT_THROW(apply_override(doc, "/emitters/0/rate", "s.json"), SceneError);
 }
+
+TEST(SceneLoad, SphereCylinderAndMeshColliders) {
+  const auto s = simreel::app::load_scene(std::filesystem::path(SIMREEL_SOURCE_DIR) / "demos/scenes/pour.json");
+  ASSERT_GE(s.colliders.size(), 5u);
+  const auto& bowl = s.colliders[1];
+  EXPECT_EQ(bowl.type, simreel::app::ColliderScene::Type::mesh);
+  EXPECT_EQ(bowl.mesh.triangles.size(), 3072u);
+  EXPECT_DOUBLE_EQ(bowl.mesh.material.static_friction, 0.6);
+  EXPECT_FLOAT_EQ(bowl.color[0], 0.85f);
+  EXPECT_EQ(s.colliders[4].type, simreel::app::ColliderScene::Type::cylinder);
+  EXPECT_TRUE(s.emitters[0].system.collide_particles);
+  const auto doc = json::parse(R"({"colliders":[{"type":"sphere","radius":0.25,"position":[1,2,3],
+      "on_hit":"split","split":{"count":7}},{"type":"mesh","file":"missing.obj"}]})");
+  const std::string err = errors_of(doc);
+  EXPECT_NE(err.find("s.json: /colliders/1/file: missing.obj: cannot import mesh: no such file"), std::string::npos) << err;
+  const auto ok = scene_from_json(json::parse(R"({"colliders":[{"type":"sphere","radius":0.25,
+      "on_hit":"split","split":{"count":7}}]})"), "s.json");
+  EXPECT_EQ(ok.colliders[0].sphere.material.on_hit, simreel::sim::HitAction::split);
+  EXPECT_EQ(ok.colliders[0].sphere.material.split.count, 7);
+}

@@ -14,22 +14,40 @@
 
 namespace simreel::assets {
 
-/// Indexed triangle mesh, z up, metres.
+/// A surface material as the file gives it (base colour and, if any, the colour texture).
+struct MeshMaterial {
+  std::string name;
+  std::array<float, 4> base_color{0.8f, 0.8f, 0.8f, 1.0f};  ///< linear RGBA in [0, 1]
+  std::filesystem::path texture;  ///< diffuse/base-colour texture, resolved against the mesh
+                                  ///< file's folder; empty if none (embedded textures: "*0", ...)
+};
+
+/// Indexed triangle mesh, z up, metres (as the file's units; no unit conversion).
 struct TriangleMesh {
   std::vector<Eigen::Vector3f> positions;           ///< (n) vertex positions (m)
   std::vector<Eigen::Vector3f> normals;             ///< (n) unit vertex normals
+  std::vector<Eigen::Vector2f> uvs;                 ///< (n) first UV channel; (0, 0) where absent
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< (m) counter-clockwise seen from outside
+  std::vector<std::uint32_t> triangle_material;     ///< (m) index into `materials`
+  std::vector<MeshMaterial> materials;              ///< at least one
 };
 
-/// A mesh file could not be imported; the message names the file and assimp's reason.
+/// A mesh file could not be imported; the message is one line naming the file and assimp's reason.
 class AssetError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
 
-/// Imports every mesh of a file (OBJ, STL, PLY, glTF, FBX, DAE, ...) into one mesh with node
-/// transforms applied: triangulated, identical vertices joined, normals generated where missing.
-/// @throws AssetError naming the file when it is missing, unreadable, unsupported or has no triangles.
+/// Imports every mesh of a file (OBJ, STL, PLY, glTF/GLB, FBX, DAE, ...) into one mesh: node
+/// transforms applied, triangulated, identical vertices joined, normals generated where missing
+/// (smooth), lines and points dropped.
+///
+/// Up axis (simreel is z up): glTF files (.gltf, .glb) are y up by specification and files whose
+/// metadata says "UpAxis" = 1 (FBX, Collada) are y up; both are turned to z up by the rotation
+/// (x, y, z) -> (x, -z, y) (+90 degrees about x). OBJ, STL and PLY carry no up axis and are taken
+/// as written, i.e. z up.
+/// @throws AssetError naming the file when it is missing, unreadable, unsupported, broken or has
+///         no triangles.
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
 }  // namespace simreel::assets

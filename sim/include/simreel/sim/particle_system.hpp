@@ -202,6 +202,12 @@ struct ParticleSystemDef {
   /// nothing). Initial particles carry their own InitialParticle::charge.
   Distribution charge{0.0, 0.0};
   PairForceDef pair_forces;
+  // Particle–particle collisions (Coutinho §2.3.1 grid, §3.6.1–3.6.2 impulses).
+  bool collide_particles = false;  ///< particles of this system collide with each other
+  /// Systems sharing a non-empty group collide with each other's particles (and internally).
+  std::string collision_group;
+  double particle_restitution = 0.5;  ///< e in [0, 1] between particles (pair: the mean)
+  double particle_friction = 0.1;     ///< Coulomb mu >= 0 between particles (pair: the mean)
 };
 
 /// Read-only view of a particle system's live particles, valid until the next World::advance().

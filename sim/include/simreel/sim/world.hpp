@@ -56,6 +56,11 @@ class World {
   /// definition (non-positive size, zero normal, restitution outside [0, 1], ...).
   ColliderHandle add_plane(const PlaneDef& def);
   ColliderHandle add_box(const BoxDef& def);
+  /// Solid colliders (collider.hpp). A mesh's AABB tree is built here, once, in its local frame
+  /// (Coutinho §2.2); O(n log n) in the triangle count.
+  ColliderHandle add_sphere(const SphereDef& def);
+  ColliderHandle add_cylinder(const CylinderDef& def);
+  ColliderHandle add_mesh(const MeshDef& def);
   ParticleSystemHandle add_particle_system(const ParticleSystemDef& def);
 
   /// Adds one particle to a system now, outside its emitter (tests, tools, scripted effects):
@@ -93,11 +98,16 @@ class World {
   ///
   /// Each internal step (Coutinho §1.3): kinematic colliders move to their end-of-step pose; per
   /// system, particles are integrated (gravity + drag, §3.3), collided as swept spheres against
-  /// the colliders held at that pose (§3.4) with restitution and Coulomb friction (§3.6.1) or as
-  /// resting contacts (§3.6.3), the dead are removed (survivors keep their order), the step's
-  /// births are released and colours updated. No particle ends a step with its centre closer than
+  /// the colliders held at that pose (§3.4; against kinematic solids along the relative motion)
+  /// with restitution and Coulomb friction (§3.6.1) or as resting contacts (§3.6.3), hit actions
+  /// applied (Material::on_hit; split droplets join the system at age 0), the dead are removed
+  /// (survivors keep their order), the step's births are released and colours updated. Then the
+  /// systems that opted in (ParticleSystemDef::collide_particles / collision_group) collide with
+  /// each other's particles (hashed grid §2.3.1, sequential impulses §3.6.2), their overlap
+  /// corrections swept against the colliders. No particle ends a step with its centre closer than
   /// its radius to a plane on the solid side; one found inside a box leaves through the nearest
-  /// face with the box's normal velocity.
+  /// face with the box's normal velocity; one inside a sphere, cylinder or closed mesh is
+  /// removed and counted (§3.4.2, removed_inside_count()).
   /// @throws std::invalid_argument unless sampling_time is > 0 and finite.
   /// @throws NonFiniteState if a particle's state becomes NaN/inf; the message names the system,
   ///         the particle id, the internal step number (1-based, as step_count() would count it)
@@ -117,6 +127,10 @@ class World {
   /// Particles ever emitted by the system (for rate tests and statistics): ids handed out so far,
   /// by the emitter or spawn_particle(); births dropped at max_particles are not counted.
   [[nodiscard]] std::uint64_t emitted_count(ParticleSystemHandle h) const;
+  /// Particles of the system removed because their centre was found inside a solid collider
+  /// (sphere, cylinder, closed mesh) after their step (Coutinho §3.4.2), since registration.
+  /// @throws std::out_of_range if the handle is stale.
+  [[nodiscard]] std::uint64_t removed_inside_count(ParticleSystemHandle h) const;
   [[nodiscard]] std::vector<ParticleSystemHandle> particle_systems() const;
   [[nodiscard]] std::vector<ColliderHandle> colliders() const;
 

@@ -1,0 +1,216 @@
+// Collision benchmarks (Coutinho Ch. 2–3). Figures go in issue notes, never thresholds in tests.
+//   rain_on_mesh/N        N particles raining onto a 100k-triangle height-field mesh, whole step
+//   mesh_broad/N, mesh_broad_narrow/N
+//                         the same swept segments against the mesh: AABB-tree query alone
+//                         (broad) and query + swept-sphere triangle tests (broad + narrow)
+//   internal/N            N particles in a box with particle–particle collisions, whole step
+//   internal_grid/N, internal_solve/N
+//                         the grid pair search (broad) and the sequential-impulse solve (narrow
+//                         and response) of the same particles
+//   pile_in_bowl          5,000 particles poured into the bowl for 10 s (the full version of the
+//                         test): counters escaped, inside (removed), mean speed at the end
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "bvh.hpp"
+#include "narrow_phase.hpp"
+#include "particle_collisions.hpp"
+#include "simreel/sim/random.hpp"
+#include "simreel/sim/world.hpp"
+
+namespace {
+
+using namespace simreel::sim;
+
+/// Height field of 2 x 224 x 224 = 100,352 triangles over [-50, 50]^2 m with gentle bumps.
+MeshDef terrain() {
+  MeshDef d;
+  const int n = 224;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = -50.0 + 100.0 * i / n, y = -50.0 + 100.0 * j / n;
+      d.vertices.emplace_back(x, y, 0.5 * std::sin(0.3 * x) * std::cos(0.2 * y));
+    }
+  auto at = [&](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      d.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      d.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  d.material = Material(0.3, 0.4);
+  return d;
+}
+
+void rain_on_mesh(benchmark::State& state) {
+  const auto n = std::size_t(state.range(0));
+  World world(WorldDef{1.0 / 240, 1, 0.05});
+  world.add_mesh(terrain());
+  ParticleSystemDef def;
+  def.emitter.rate = 0.0;
+  def.emitter.max_particles = n;
+  const auto ps = world.add_particle_system(def);
+  Rng rng(42);
+  for (std::size_t i = 0; i < n; ++i)
+    world.spawn_particle(ps, Vec3(rng.uniform(-45, 45), rng.uniform(-45, 45), rng.uniform(0.6, 3.0)),
+                         Vec3(0, 0, -rng.uniform(2, 8)), 1e-3, 0.01, 1e9);
+  for (auto _ : state) {
+    world.advance(1.0 / 240);
+    benchmark::DoNotOptimize(world.particles(ps).position);
+  }
+  state.counters["particle_steps"] =
+      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void mesh_phases(benchmark::State& state, bool narrow) {
+  const auto n = std::size_t(state.range(0));
+  const MeshDef def = terrain();
+  std::vector<detail::Triangle> tris;
+  for (const auto& t : def.triangles) {
+    detail::Triangle x{def.vertices[t[0]], def.vertices[t[1]], def.vertices[t[2]], Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  const detail::Bvh bvh(tris);
+  Rng rng(42);
+  std::vector<Vec3> a(n), d(n);
+  for (std::size_t i = 0; i < n; ++i) {  // one step's segments of falling particles near the surface
+    a[i] = Vec3(rng.uniform(-45, 45), rng.uniform(-45, 45), rng.uniform(-0.5, 0.6));
+    d[i] = Vec3(0, 0, -rng.uniform(2, 8) / 240);
+  }
+  std::size_t found = 0;
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 b = a[i] + d[i], g = Vec3::Constant(0.01);
+      detail::SweepHit h;
+      bvh.query(a[i].cwiseMin(b) - g, a[i].cwiseMax(b) + g, [&](std::uint32_t t) {
+        if (narrow) {
+          detail::sweep_triangle(tris[t], a[i], d[i], 0.01, h);
+        } else {
+          ++found;
+        }
+      });
+      found += std::isfinite(h.s);
+    }
+    benchmark::DoNotOptimize(found);
+  }
+  state.counters["segments"] =
+      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["bvh_depth"] = bvh.depth();
+}
+
+/// n particles of radius 1 cm at about 30 % volume fraction in a 3D box with random velocities.
+detail::ParticleCollider cloud(std::size_t n) {
+  detail::ParticleCollider pc;
+  Rng rng(9);
+  const double side = std::cbrt(double(n) * 4.19e-6 / 0.3);
+  for (std::size_t i = 0; i < n; ++i) {
+    pc.x.emplace_back(rng.uniform(0, side), rng.uniform(0, side), rng.uniform(0, side));
+    pc.v.emplace_back(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    pc.inv_mass.push_back(1000.0);
+    pc.radius.push_back(0.01);
+    pc.restitution.push_back(0.5);
+    pc.friction.push_back(0.2);
+  }
+  return pc;
+}
+
+void internal_world(benchmark::State& state) {
+  const auto n = std::size_t(state.range(0));
+  World world(WorldDef{1.0 / 240, 1, 0.05});
+  ParticleSystemDef def;
+  def.emitter.rate = 0.0;
+  def.emitter.max_particles = n;
+  def.gravity = Vec3::Zero();
+  def.collide_particles = true;
+  const auto ps = world.add_particle_system(def);
+  const detail::ParticleCollider pc = cloud(n);
+  for (std::size_t i = 0; i < n; ++i) world.spawn_particle(ps, pc.x[i], pc.v[i], 1e-3, 0.01, 1e9);
+  for (auto _ : state) {
+    world.advance(1.0 / 240);
+    benchmark::DoNotOptimize(world.particles(ps).position);
+  }
+  state.counters["particle_steps"] =
+      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void internal_phase(benchmark::State& state, bool solve) {
+  const auto n = std::size_t(state.range(0));
+  detail::ParticleCollider pc = cloud(n);
+  pc.find_contacts(0.05);
+  const std::vector<Vec3> v0 = pc.v;
+  for (auto _ : state) {
+    if (solve) {
+      pc.v = v0;
+      pc.solve();
+    } else {
+      pc.find_contacts(0.05);
+    }
+    benchmark::DoNotOptimize(pc.contacts.data());
+  }
+  state.counters["contacts"] = double(pc.contacts.size());
+  state.counters["particle_steps"] =
+      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void pile_in_bowl(benchmark::State& state) {
+  // Same bowl as assets/models/bowl.obj's inner shell (radius 0.3 m, rim at z = 0).
+  const double R = 0.3, kPi = std::numbers::pi;
+  for (auto _ : state) {
+    World world;
+    MeshDef d;
+    const int rings = 16, sectors = 48;
+    d.vertices.emplace_back(0, 0, -R);
+    for (int i = 1; i <= rings; ++i)
+      for (int j = 0; j < sectors; ++j) {
+        const double th = 0.5 * kPi * i / rings, ph = 2 * kPi * j / sectors;
+        d.vertices.emplace_back(R * std::sin(th) * std::cos(ph), R * std::sin(th) * std::sin(ph), -R * std::cos(th));
+      }
+    auto at = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * sectors + (j % sectors)); };
+    for (int j = 0; j < sectors; ++j) d.triangles.push_back({0, at(1, j), at(1, j + 1)});
+    for (int i = 1; i < rings; ++i)
+      for (int j = 0; j < sectors; ++j) {
+        d.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        d.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+    d.material = Material(0.3, 0.5);
+    world.add_mesh(d);
+    ParticleSystemDef def;
+    def.collide_particles = true;
+    def.particle_restitution = 0.2;
+    def.particle_friction = 0.3;
+    def.emitter.rate = 1000;
+    def.emitter.stop_time = 5.0;
+    def.emitter.disk_radius = 0.08;
+    def.emitter.transform.translation = Vec3(0, 0, 0.15);
+    def.emitter.transform.rotation = Quat(Eigen::AngleAxisd(kPi, Vec3::UnitX()));
+    def.emitter.start_speed = {0.5, 0.0, 0.0};
+    def.emitter.lifetime = {1e6, 0, 0};
+    def.emitter.radius = {0.008, 0, 1e-6};
+    def.emitter.max_particles = 5000;
+    const auto ps = world.add_particle_system(def);
+    world.advance(10.0);
+    const ParticleView v = world.particles(ps);
+    double escaped = 0, speed = 0;
+    for (std::size_t i = 0; i < v.count; ++i) {
+      const Vec3 x(v.position[3 * i], v.position[3 * i + 1], v.position[3 * i + 2]);
+      escaped += x.norm() > R - 0.008 + 1e-3 || x.z() > 0.02;
+      speed += Vec3(v.velocity[3 * i], v.velocity[3 * i + 1], v.velocity[3 * i + 2]).norm() / double(v.count);
+    }
+    state.counters["particles"] = double(v.count);
+    state.counters["escaped"] = escaped;
+    state.counters["inside_removed"] = double(world.removed_inside_count(ps));
+    state.counters["mean_speed_m_s"] = speed;
+  }
+}
+
+}  // namespace
+
+BENCHMARK(rain_on_mesh)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(mesh_phases, mesh_broad, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(mesh_phases, mesh_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK(internal_world)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(internal_phase, internal_solve, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK(pile_in_bowl)->Iterations(1)->Unit(benchmark::kSecond);

@@ -1,0 +1,86 @@
+#pragma once
+// AABB tree over the triangles of a mesh collider, built once in the mesh's local frame at
+// registration (Coutinho §2.2: bounding-volume hierarchies; §2.1: queries move into the body's
+// frame instead of moving the body). Private.
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "simreel/sim/types.hpp"
+
+namespace simreel::sim::detail {
+
+/// One triangle in the mesh frame, with its unit face normal (right-hand order a, b, c).
+struct Triangle {
+  Vec3 a, b, c;
+  Vec3 normal;
+};
+
+/// Axis-aligned box [lo, hi].
+struct Aabb {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  void grow(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void grow(const Aabb& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
+  [[nodiscard]] bool overlaps(const Vec3& qlo, const Vec3& qhi) const {
+    return (lo.array() <= qhi.array()).all() && (qhi.array() >= lo.array()).all() &&
+           (hi.array() >= qlo.array()).all();
+  }
+};
+
+/// Binary AABB tree: nodes in depth-first order, each leaf holding up to kLeafSize consecutive
+/// entries of `order` (triangle indices). Split at the median of the longest axis of the
+/// centroid bounds, so the depth is O(log n) whatever the mesh.
+class Bvh {
+ public:
+  static constexpr int kLeafSize = 4;
+  Bvh() = default;
+  explicit Bvh(const std::vector<Triangle>& tris);
+
+  /// Calls f(triangle index) for every triangle whose leaf box overlaps [lo, hi] (a superset of
+  /// the triangles whose own box overlaps; the caller runs the exact test). Visiting order is
+  /// fixed (depth first, left before right), so results are deterministic.
+  template <class F>
+  void query(const Vec3& lo, const Vec3& hi, F&& f) const {
+    if (nodes_.empty()) return;
+    std::uint32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if (!n.box.overlaps(lo, hi)) continue;
+      if (n.count > 0) {
+        for (std::uint32_t k = 0; k < n.count; ++k) f(order_[n.first + k]);
+      } else {
+        stack[top++] = n.right;
+        stack[top++] = n.first;  // left child: visited first
+      }
+    }
+  }
+  [[nodiscard]] const Aabb& bounds() const { return nodes_.front().box; }
+  [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }
+  [[nodiscard]] int depth() const { return depth_; }
+
+ private:
+  struct Node {
+    Aabb box;
+    std::uint32_t first = 0;  ///< leaf: first entry in order_; inner: left child index
+    std::uint32_t right = 0;  ///< inner: right child index
+    std::uint32_t count = 0;  ///< leaf: entries; inner: 0
+  };
+  std::uint32_t build(std::vector<Aabb>& boxes, std::vector<Vec3>& centroids, std::uint32_t begin,
+                      std::uint32_t end, int depth);
+  std::vector<Node> nodes_;
+  std::vector<std::uint32_t> order_;
+  int depth_ = 0;
+};
+
+}  // namespace simreel::sim::detail

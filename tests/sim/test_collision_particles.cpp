@@ -1,0 +1,197 @@
+// Particle–particle collisions: hashed grid (Coutinho §2.3.1), pair impulses (§3.6.1) and the
+// simultaneous-impulse linear system (§3.6.2) reached by the sequential-impulse solver.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "particle_collisions.hpp"
+#include "sim_test_util.hpp"
+#include "simreel/sim/random.hpp"
+#include "simreel/sim/world.hpp"
+
+namespace simreel::sim {
+namespace {
+
+using test::position_of;
+using test::velocity_of;
+
+ParticleSystemDef colliding(double e, double mu) {
+  ParticleSystemDef def = test::spawn_only_system();
+  def.gravity = Vec3::Zero();
+  def.collide_particles = true;
+  def.particle_restitution = e;
+  def.particle_friction = mu;
+  return def;
+}
+
+TEST(SimParticleCollision, PairConservesMomentumForAnyRestitutionAndEnergyForEOne) {
+  for (double e : {0.0, 0.3, 0.7, 1.0})
+    for (double mu : {0.0, 0.4}) {
+      World world;
+      const auto ps = world.add_particle_system(colliding(e, mu));
+      const double m1 = 0.02, m2 = 0.05, r = 0.05;
+      const Vec3 v1(1.0, 0.3, 0), v2(-0.5, 0, 0.1);
+      // Off-centre: oblique impact, friction acts.
+      world.spawn_particle(ps, Vec3(-0.3, 0, 0), v1, m1, r, 100);
+      world.spawn_particle(ps, Vec3(0.0, 0.04, 0), v2, m2, r, 100);
+      const Vec3 p0 = m1 * v1 + m2 * v2;
+      const double ke0 = 0.5 * m1 * v1.squaredNorm() + 0.5 * m2 * v2.squaredNorm();
+      world.advance(1.0);
+      const ParticleView v = world.particles(ps);
+      const Vec3 u1 = velocity_of(v, 0), u2 = velocity_of(v, 1);
+      EXPECT_NE(u1, v1) << "no collision";
+      EXPECT_LT((m1 * u1 + m2 * u2 - p0).norm(), 1e-6 * p0.norm()) << e << " " << mu;
+      const double ke1 = 0.5 * m1 * u1.squaredNorm() + 0.5 * m2 * u2.squaredNorm();
+      if (e == 1.0 && mu == 0.0) {
+        EXPECT_NEAR(ke1, ke0, 1e-6 * ke0);
+      } else {
+        EXPECT_LT(ke1, ke0 * (1 - 1e-3)) << e << " " << mu;
+      }
+      // Head-on part: relative normal speed after = e x before (§3.6.1).
+      const Vec3 n = (position_of(v, 1) - position_of(v, 0)).normalized();
+      EXPECT_GE((u2 - u1).dot(n), -1e-6);  // separating
+    }
+}
+
+TEST(SimParticleCollision, HeadOnRestitutionGivesTheTextbookVelocities) {
+  for (double e : {0.0, 0.5, 1.0}) {
+    World world;
+    const auto ps = world.add_particle_system(colliding(e, 0.0));
+    const double m1 = 1.0, m2 = 3.0;
+    world.spawn_particle(ps, Vec3(-0.2, 0, 0), Vec3(2, 0, 0), m1, 0.05, 100);
+    world.spawn_particle(ps, Vec3(0.2, 0, 0), Vec3(0, 0, 0), m2, 0.05, 100);
+    world.advance(0.5);
+    const ParticleView v = world.particles(ps);
+    // v1' = (m1 - e m2) v / (m1 + m2), v2' = (1 + e) m1 v / (m1 + m2)
+    EXPECT_NEAR(v.velocity[0], (m1 - e * m2) * 2 / (m1 + m2), 1e-5) << e;
+    EXPECT_NEAR(v.velocity[3], (1 + e) * m1 * 2 / (m1 + m2), 1e-5) << e;
+  }
+}
+
+TEST(SimParticleCollision, NewtonsCradleTransfersTheVelocityEndToEnd) {
+  // Five equal balls 1 cm apart, e = 1: each impact is a separate pair collision, so the first
+  // ball's velocity passes down the row and the last ball leaves with it.
+  World world;
+  const auto ps = world.add_particle_system(colliding(1.0, 0.0));
+  const double r = 0.05, gap = 0.01;
+  for (int k = 0; k < 5; ++k)
+    world.spawn_particle(ps, Vec3(k * (2 * r + gap), 0, 0), Vec3(k == 0 ? 1.0 : 0.0, 0, 0), 0.1,
+                         r, 100);
+  world.advance(0.5);
+  const ParticleView v = world.particles(ps);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(v.velocity[3 * k], 0.0, 1e-5) << k;
+  EXPECT_NEAR(v.velocity[12], 1.0, 1e-5);
+  EXPECT_GT(v.position[12], 4 * (2 * r + gap) + 0.2);
+}
+
+TEST(SimParticleCollision, SequentialImpulsesConvergeToTheSimultaneousLinearSystem) {
+  // A cluster of 4 touching particles with different masses and velocities (§3.6.2): the
+  // impulses P solve (J W J^T) P = target - J v, with J the contact normals and W = M^-1.
+  detail::ParticleCollider pc;
+  pc.x = {Vec3(0, 0, 0), Vec3(0.0999, 0, 0), Vec3(0.05, 0.0865, 0), Vec3(0.1999, 0.0, 0.0)};
+  pc.v = {Vec3(1.0, 0.5, 0), Vec3(0, 0, 0), Vec3(0.1, -0.8, 0), Vec3(-0.6, 0.1, 0)};
+  pc.inv_mass = {1.0, 0.5, 2.0, 1.0 / 3};
+  pc.radius = {0.05, 0.05, 0.05, 0.05};
+  pc.restitution = {0.6, 0.6, 0.6, 0.6};
+  pc.friction = {0, 0, 0, 0};
+  const std::vector<Vec3> v0 = pc.v;
+  pc.find_contacts(0.0);
+  const auto m = pc.contacts.size();
+  ASSERT_EQ(m, 4u);  // 0-1, 0-2, 1-2, 1-3
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(Eigen::Index(m), 12);
+  Eigen::VectorXd W(12), v(12);
+  Eigen::VectorXd target = Eigen::VectorXd::Zero(Eigen::Index(m));
+  for (int i = 0; i < 4; ++i) {
+    W.segment<3>(3 * i).setConstant(pc.inv_mass[std::size_t(i)]);
+    v.segment<3>(3 * i) = v0[std::size_t(i)];
+  }
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto& c = pc.contacts[k];
+    J.block<1, 3>(Eigen::Index(k), 3 * c.i) = -c.n.transpose();
+    J.block<1, 3>(Eigen::Index(k), 3 * c.j) = c.n.transpose();
+    target[Eigen::Index(k)] = c.target;
+  }
+  const Eigen::MatrixXd A = J * W.asDiagonal() * J.transpose();
+  const Eigen::VectorXd P = A.ldlt().solve(target - J * v);
+  ASSERT_GT(P.minCoeff(), 0.0) << "the case must have all contacts compressive";
+  const Eigen::VectorXd v_exact = v + W.asDiagonal() * J.transpose() * P;
+  double prev = 1e300;
+  for (int iters : {2, 8, 32, 200}) {
+    pc.v = v0;
+    pc.iterations = iters;
+    pc.solve();
+    double err = 0;
+    for (int i = 0; i < 4; ++i)
+      err = std::max(err, (pc.v[std::size_t(i)] - Vec3(v_exact.segment<3>(3 * i))).norm());
+    EXPECT_LT(err, prev) << iters;
+    prev = err;
+  }
+  EXPECT_LT(prev, 1e-10);
+  for (std::size_t k = 0; k < m; ++k) EXPECT_NEAR(pc.contacts[k].pn, P[Eigen::Index(k)], 1e-10);
+}
+
+TEST(SimParticleCollision, GridFindsExactlyTheBruteForceContacts) {
+  detail::ParticleCollider pc;
+  Rng rng(3, 0);
+  for (int i = 0; i < 3000; ++i) {
+    pc.x.emplace_back(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-0.2, 0.2));
+    pc.v.emplace_back(Vec3::Zero());
+    pc.inv_mass.push_back(1.0);
+    pc.radius.push_back(rng.uniform(0.005, 0.03));
+    pc.restitution.push_back(0.5);
+    pc.friction.push_back(0.1);
+  }
+  pc.find_contacts(0.05);
+  std::size_t brute = 0;
+  for (std::size_t i = 0; i < pc.x.size(); ++i)
+    for (std::size_t j = i + 1; j < pc.x.size(); ++j)
+      brute += (pc.x[i] - pc.x[j]).norm() < pc.radius[i] + pc.radius[j];
+  EXPECT_GT(brute, 100u);
+  EXPECT_EQ(pc.contacts.size(), brute);
+  EXPECT_NEAR(pc.cell_size, 2 * 2 * 0.0175, 0.004);  // 2 x mean diameter (mean r = 17.5 mm)
+}
+
+TEST(SimParticleCollision, SystemsCollideAcrossAGroupOnlyWhenTheyOptIn) {
+  for (bool grouped : {false, true}) {
+    World world;
+    ParticleSystemDef a = colliding(1.0, 0.0), b = colliding(1.0, 0.0);
+    a.collide_particles = b.collide_particles = false;
+    if (grouped) a.collision_group = b.collision_group = "balls";
+    const auto sa = world.add_particle_system(a);
+    const auto sb = world.add_particle_system(b);
+    world.spawn_particle(sa, Vec3(-0.2, 0, 0), Vec3(1, 0, 0), 1, 0.05, 100);
+    world.spawn_particle(sb, Vec3(0.2, 0, 0), Vec3(-1, 0, 0), 1, 0.05, 100);
+    world.advance(0.5);
+    EXPECT_NEAR(world.particles(sa).velocity[0], grouped ? -1.0 : 1.0, 1e-5);
+    EXPECT_NEAR(world.particles(sb).velocity[0], grouped ? 1.0 : -1.0, 1e-5);
+  }
+}
+
+TEST(SimParticleCollision, SameSeedGivesBitIdenticalState) {
+  auto run = [](std::uint64_t seed) {
+    World world(WorldDef{1.0 / 240, seed, 0.05});
+    PlaneDef ground;
+    ground.material = Material(0.3, 0.4);
+    ground.material.on_hit = HitAction::split;
+    ground.material.split.min_radius = 0.009;
+    world.add_plane(ground);
+    ParticleSystemDef def;
+    def.collide_particles = true;
+    def.emitter.rate = 300;
+    def.emitter.spread_deg = {20, 10, 0, 60};
+    def.emitter.start_speed = {2, 0.5, 0};
+    def.emitter.transform.translation = Vec3(0, 0, 0.3);
+    const auto ps = world.add_particle_system(def);
+    world.advance(1.0);
+    const ParticleView v = world.particles(ps);
+    return std::vector<float>(v.position, v.position + 3 * v.count);
+  };
+  const auto a = run(5), b = run(5), c = run(6);
+  ASSERT_GT(a.size(), 300u);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+}
+
+}  // namespace
+}  // namespace simreel::sim

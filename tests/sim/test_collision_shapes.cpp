@@ -1,0 +1,431 @@
+// Collisions with spheres, cylinders and triangle meshes (Coutinho §2.2 AABB tree, §3.4 swept
+// spheres, §3.4.2 removal, §3.6.1 response with static/dynamic friction, §3.6.3 resting contact,
+// §3.7 first contact with a face, edge or vertex) and hit actions.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "bvh.hpp"
+#include "collider_impl.hpp"
+#include "narrow_phase.hpp"
+#include "sim_test_util.hpp"
+#include "simreel/sim/random.hpp"
+#include "simreel/sim/world.hpp"
+
+namespace simreel::sim {
+namespace {
+
+using test::position_of;
+using test::velocity_of;
+
+constexpr double kR = 0.01;  // particle radius (m)
+constexpr double kPi = std::numbers::pi;
+
+Material mat(double e, double mu, double mu_s = -1.0) {
+  Material m;
+  m.restitution = e;
+  m.friction = mu;
+  m.static_friction = mu_s;
+  return m;
+}
+
+/// A square of side 2 L in the local xy plane (two triangles, normal +z).
+MeshDef quad(double L, const Material& m, const Transform& t = {}) {
+  MeshDef d;
+  d.vertices = {Vec3(-L, -L, 0), Vec3(L, -L, 0), Vec3(L, L, 0), Vec3(-L, L, 0)};
+  d.triangles = {{0, 1, 2}, {0, 2, 3}};
+  d.transform = t;
+  d.material = m;
+  return d;
+}
+
+/// Closed box mesh (12 triangles, outward normals) with half extents he.
+MeshDef box_mesh(const Vec3& he, const Material& m) {
+  MeshDef d;
+  for (int k = 0; k < 8; ++k)
+    d.vertices.emplace_back((k & 1 ? 1 : -1) * he.x(), (k & 2 ? 1 : -1) * he.y(),
+                            (k & 4 ? 1 : -1) * he.z());
+  d.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                 {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  d.material = m;
+  return d;
+}
+
+/// Hemispherical bowl shell of radius R centred at the origin (open at z = 0, lowest at -R).
+MeshDef bowl(double R, int rings, int sectors, const Material& m) {
+  MeshDef d;
+  d.vertices.emplace_back(0, 0, -R);
+  for (int i = 1; i <= rings; ++i) {
+    const double th = 0.5 * kPi * i / rings;  // from the bottom
+    for (int j = 0; j < sectors; ++j) {
+      const double ph = 2 * kPi * j / sectors;
+      d.vertices.emplace_back(R * std::sin(th) * std::cos(ph), R * std::sin(th) * std::sin(ph),
+                              -R * std::cos(th));
+    }
+  }
+  auto at = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * sectors + (j % sectors)); };
+  for (int j = 0; j < sectors; ++j) d.triangles.push_back({0, at(1, j), at(1, j + 1)});
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < sectors; ++j) {
+      d.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      d.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  d.material = m;
+  return d;
+}
+
+ParticleSystemDef probes(bool gravity = true) {
+  ParticleSystemDef def = test::spawn_only_system();
+  if (!gravity) def.gravity = Vec3::Zero();
+  def.emitter.max_particles = 20000;
+  return def;
+}
+
+// ---------------------------------------------------------------------------------------------
+// AABB tree and narrow phase
+
+TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
+  Rng rng(7, 1);
+  std::vector<detail::Triangle> tris;
+  for (int t = 0; t < 400; ++t) {
+    const Vec3 c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    detail::Triangle x{c + Vec3(rng.uniform(-.1, .1), rng.uniform(-.1, .1), rng.uniform(-.1, .1)),
+                       c + Vec3(rng.uniform(-.1, .1), rng.uniform(-.1, .1), rng.uniform(-.1, .1)),
+                       c + Vec3(rng.uniform(-.1, .1), rng.uniform(-.1, .1), rng.uniform(-.1, .1)),
+                       Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  const detail::Bvh bvh(tris);
+  EXPECT_LE(bvh.depth(), 10);  // median split: ceil(log2(400 / 4)) + 1 = 8
+  int hits = 0;
+  for (int q = 0; q < 2000; ++q) {
+    const Vec3 a(rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5));
+    const Vec3 d = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) *
+                   rng.uniform(0.0, 1.0);
+    const double r = rng.uniform(0.001, 0.05);
+    detail::SweepHit brute, tree;
+    for (const auto& t : tris) detail::sweep_triangle(t, a, d, r, brute);
+    const Vec3 b = a + d, g = Vec3::Constant(r);
+    bvh.query(a.cwiseMin(b) - g, a.cwiseMax(b) + g,
+              [&](std::uint32_t t) { detail::sweep_triangle(tris[t], a, d, r, tree); });
+    ASSERT_EQ(brute.s, tree.s) << q;
+    if (std::isfinite(brute.s)) {
+      ++hits;
+      EXPECT_EQ(brute.normal, tree.normal);
+      EXPECT_EQ(brute.point, tree.point);
+    }
+  }
+  EXPECT_GT(hits, 100);  // the test exercises hits, not only misses (168 with this seed)
+}
+
+TEST(SimCollisionMesh, SweptSphereHitsFaceEdgeAndVertexWithTheirNormals) {
+  const detail::Triangle t{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3::UnitZ()};
+  const double r = 0.1;
+  {  // face, from below (two-sided): contact when the centre is r under the plane
+    detail::SweepHit h;
+    detail::sweep_triangle(t, Vec3(0.2, 0.2, -1), Vec3(0, 0, 2), r, h);
+    EXPECT_NEAR(h.s, 0.45, 1e-12);
+    EXPECT_TRUE(h.normal.isApprox(-Vec3::UnitZ()));
+  }
+  {  // edge y = 0 from -y, moving horizontally at the plane's height
+    detail::SweepHit h;
+    detail::sweep_triangle(t, Vec3(0.5, -1, 0), Vec3(0, 2, 0), r, h);
+    EXPECT_NEAR(h.s, 0.45, 1e-12);
+    EXPECT_TRUE(h.normal.isApprox(-Vec3::UnitY()));
+  }
+  {  // vertex (1, 0, 0) along +x from beyond it
+    detail::SweepHit h;
+    detail::sweep_triangle(t, Vec3(2, 0, 0), Vec3(-2, 0, 0), r, h);
+    EXPECT_NEAR(h.s, 0.45, 1e-12);
+    EXPECT_TRUE(h.normal.isApprox(Vec3::UnitX()));
+  }
+  {  // misses by more than r
+    detail::SweepHit h;
+    detail::sweep_triangle(t, Vec3(2, 2, 0.05), Vec3(0, 0, -1), r, h);
+    EXPECT_FALSE(std::isfinite(h.s));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// No tunnelling at 500 m/s (one 1/240 s step moves 2 m, 100 times the particle's diameter)
+
+TEST(SimCollisionMesh, NoTunnellingThroughTriangleWallThinMeshSphereAndCylinder) {
+  for (int kind = 0; kind < 4; ++kind) {
+    World world;
+    switch (kind) {
+      case 0: {  // a single triangle in the plane x = 0
+        MeshDef d;
+        d.vertices = {Vec3(0, -5, -5), Vec3(0, 5, -5), Vec3(0, 0, 5)};
+        d.triangles = {{0, 1, 2}};
+        d.material = mat(0.5, 0.0);
+        world.add_mesh(d);
+        break;
+      }
+      case 1: {  // a closed slab 1 mm thick
+        MeshDef d = box_mesh(Vec3(0.0005, 2, 2), mat(0.5, 0.0));
+        world.add_mesh(d);
+        break;
+      }
+      case 2: {
+        SphereDef s;
+        s.radius = 0.05;
+        s.material = mat(0.5, 0.0);
+        world.add_sphere(s);
+        break;
+      }
+      case 3: {
+        CylinderDef c;
+        c.radius = 0.02;
+        c.half_height = 1.0;
+        c.material = mat(0.5, 0.0);
+        world.add_cylinder(c);
+        break;
+      }
+    }
+    const auto ps = world.add_particle_system(probes(false));
+    for (int k = 0; k < 7; ++k)  // start offsets along the step, so contacts fall anywhere in it
+      world.spawn_particle(ps, Vec3(-3.0 - 0.29 * k, 0, 0.001 * k), Vec3(500, 0, 0), 0.01, kR, 100);
+    for (int f = 0; f < 6; ++f) world.advance(1.0 / 60);
+    const ParticleView v = world.particles(ps);
+    ASSERT_EQ(v.count, 7u) << kind;
+    for (std::size_t i = 0; i < v.count; ++i) {
+      EXPECT_LT(v.position[3 * i], -kR) << "kind " << kind << " particle " << i;
+      if (kind != 2) {
+        EXPECT_NEAR(v.velocity[3 * i], -250.0, 1e-3) << kind;  // e = 0.5
+      }
+      EXPECT_LT(v.velocity[3 * i], -200.0) << kind;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Response on meshes
+
+TEST(SimCollisionMesh, SuccessiveBounceApexesFollowRestitutionPowers) {
+  // On a mesh floor: apex n = e^{2n} h (Coutinho §3.6.1 with an immovable body).
+  const double e = 0.8, h = 1.0;
+  World world(WorldDef{1.0 / 2000, 0, 0.05});
+  world.add_mesh(quad(2.0, mat(e, 0.0)));
+  const auto ps = world.add_particle_system(probes());
+  world.spawn_particle(ps, Vec3(0.1, 0.2, h + kR), Vec3::Zero(), 0.01, kR, 100);
+  std::vector<double> apex;
+  double top = -1, prev_vz = 0;
+  for (int i = 0; i < 2000 * 4 && apex.size() < 3; ++i) {
+    world.advance(1.0 / 2000);
+    const ParticleView v = world.particles(ps);
+    ASSERT_GE(v.position[2], kR - 1e-6);
+    const double vz = v.velocity[2];
+    if (prev_vz > 0 && vz <= 0) apex.push_back(top - kR);
+    top = std::max(vz > 0 && prev_vz <= 0 ? 0.0 : top, double(v.position[2]));
+    prev_vz = vz;
+  }
+  ASSERT_EQ(apex.size(), 3u);
+  for (int n = 1; n <= 3; ++n)
+    EXPECT_NEAR(apex[std::size_t(n - 1)], std::pow(e, 2 * n) * h, 0.01 * std::pow(e, 2 * n) * h) << n;
+}
+
+TEST(SimCollisionMesh, CriticalFrictionStopsSlidingExactly) {
+  // Impact (3, 0, -4) m/s, e = 0.5: critical mu* = |v_t| / ((1 + e) |v_n|) = 0.5 (eqs. 3.56–3.57).
+  const Vec3 v(3, 0, -4), n = Vec3::UnitZ();
+  for (double mu : {0.2, 0.4, 0.5, 0.8}) {
+    const Vec3 out = detail::respond(v, Vec3::Zero(), n, mat(0.5, mu), 0.05, Vec3::Zero());
+    EXPECT_DOUBLE_EQ(out.z(), 2.0);
+    EXPECT_NEAR(out.x(), std::max(0.0, 3.0 - mu * 1.5 * 4.0), 1e-12) << mu;
+  }
+  // The same impact on a mesh in a world without gravity.
+  for (double mu : {0.25, 0.6}) {
+    World world;
+    world.add_mesh(quad(5.0, mat(0.5, mu)));
+    const auto ps = world.add_particle_system(probes(false));
+    world.spawn_particle(ps, Vec3(0, 0, kR + 0.01), v, 0.01, kR, 100);
+    world.advance(1.0 / 60);
+    const Vec3 out = velocity_of(world.particles(ps), 0);
+    EXPECT_NEAR(out.z(), 2.0, 1e-5);
+    EXPECT_NEAR(out.x(), std::max(0.0, 3.0 - mu * 6.0), 1e-5) << mu;
+  }
+}
+
+TEST(SimCollisionMesh, InclineHoldsWhenStaticMuExceedsTanThetaElseSlides) {
+  // Static mu_s = 0.5, dynamic mu_d = 0.3. At 20 deg (tan = 0.364): mu_d alone would slide, mu_s
+  // holds. At 35 deg (tan = 0.700 > mu_s): slides with a = g (sin - mu_d cos). On a tilted mesh
+  // and on a tilted plane.
+  const double g = 9.81, mu_s = 0.5, mu_d = 0.3;
+  for (int on_mesh = 0; on_mesh < 2; ++on_mesh)
+    for (double deg : {20.0, 35.0}) {
+      const double th = deg * kPi / 180;
+      const Vec3 n(-std::sin(th), 0, std::cos(th));
+      World world;
+      if (on_mesh) {
+        Transform t;
+        t.rotation = Quat(Eigen::AngleAxisd(-th, Vec3::UnitY()));  // local +z -> n
+        world.add_mesh(quad(20.0, mat(0.0, mu_d, mu_s), t));
+      } else {
+        PlaneDef p;
+        p.normal = n;
+        p.material = mat(0.0, mu_d, mu_s);
+        world.add_plane(p);
+      }
+      const auto ps = world.add_particle_system(probes());
+      world.spawn_particle(ps, kR * n, Vec3::Zero(), 0.01, kR, 100);
+      world.advance(1.0);
+      const ParticleView v = world.particles(ps);
+      const Vec3 x = position_of(v, 0);
+      EXPECT_NEAR(n.dot(x), kR, 1e-5) << deg;  // on the surface
+      const double speed = velocity_of(v, 0).norm();
+      if (std::tan(th) <= mu_s) {
+        EXPECT_EQ(speed, 0.0) << deg << " mesh " << on_mesh;
+        EXPECT_LT((x - kR * n).norm(), 1e-6);
+      } else {
+        const double a = g * (std::sin(th) - mu_d * std::cos(th));
+        EXPECT_NEAR(speed, a * 1.0, 0.01 * a) << deg << " mesh " << on_mesh;
+      }
+    }
+}
+
+TEST(SimCollisionMesh, KinematicMeshCarriesARestingParticle) {
+  World world;
+  MeshDef d = quad(1.0, mat(0.0, 0.5));
+  d.path.smooth = false;
+  d.path.keys = {Keyframe{0.0, Vec3(0, 0, 0), Quat::Identity()},
+                 Keyframe{1.0, Vec3(0, 0, 0.5), Quat::Identity()}};
+  world.add_mesh(d);
+  const auto ps = world.add_particle_system(probes());
+  world.spawn_particle(ps, Vec3(0.2, 0, kR), Vec3::Zero(), 0.01, kR, 100);
+  world.advance(1.0);
+  const Vec3 x = position_of(world.particles(ps), 0);
+  EXPECT_NEAR(x.z(), 0.5 + kR, 2e-3);  // lifted with the mesh (within one step's lag)
+  EXPECT_NEAR(x.x(), 0.2, 1e-5);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Removal (§3.4.2) and hit actions
+
+TEST(SimCollisionMesh, ParticleInsideASolidIsRemovedAndCounted) {
+  World world;
+  SphereDef s;
+  s.radius = 0.5;
+  world.add_sphere(s);
+  MeshDef cube = box_mesh(Vec3(0.3, 0.3, 0.3), Material{});
+  cube.transform.translation = Vec3(3, 0, 0);
+  world.add_mesh(cube);
+  CylinderDef c;
+  c.transform.translation = Vec3(-3, 0, 0);
+  world.add_cylinder(c);
+  const auto ps = world.add_particle_system(probes(false));
+  world.spawn_particle(ps, Vec3(0.1, 0, 0), Vec3::Zero(), 0.01, kR, 100);    // in the sphere
+  world.spawn_particle(ps, Vec3(3.1, 0.1, 0), Vec3::Zero(), 0.01, kR, 100);  // in the cube
+  world.spawn_particle(ps, Vec3(-3, 0.2, 0.1), Vec3::Zero(), 0.01, kR, 100); // in the cylinder
+  world.spawn_particle(ps, Vec3(3.5, 0, 0), Vec3::Zero(), 0.01, kR, 100);    // outside all
+  world.advance(1.0 / 60);
+  EXPECT_EQ(world.particles(ps).count, 1u);
+  EXPECT_EQ(world.removed_inside_count(ps), 3u);
+  EXPECT_NEAR(world.particles(ps).position[0], 3.5, 1e-6);
+}
+
+TEST(SimCollisionMesh, HitActionsStickKillAndSplit) {
+  for (HitAction action : {HitAction::stick, HitAction::kill, HitAction::split}) {
+    World world;
+    Material m = mat(0.9, 0.0);
+    m.on_hit = action;
+    m.split.count = 5;
+    m.split.min_radius = 0.005;
+    m.split.size_fraction = 0.25;
+    m.split.speed_fraction = 0.5;
+    world.add_mesh(quad(2.0, m));
+    const auto ps = world.add_particle_system(probes());
+    world.spawn_particle(ps, Vec3(0, 0, 0.2), Vec3(1, 0, -2), 0.01, kR, 100);
+    world.advance(0.1);  // hits at about 0.08 s
+    const ParticleView v = world.particles(ps);
+    if (action == HitAction::stick) {
+      ASSERT_EQ(v.count, 1u);
+      EXPECT_EQ(velocity_of(v, 0).norm(), 0.0);  // e = 0, unlimited friction, then resting
+      EXPECT_NEAR(v.position[2], kR, 1e-6);
+    } else if (action == HitAction::kill) {
+      EXPECT_EQ(v.count, 0u);
+    } else {
+      ASSERT_EQ(v.count, 5u);  // the parent is gone, five droplets
+      for (std::size_t i = 0; i < v.count; ++i) {
+        EXPECT_FLOAT_EQ(v.radius[i], float(0.25 * kR));
+        EXPECT_GT(v.position[3 * i + 2], 0.0);
+        EXPECT_GT(v.velocity[3 * i + 2], -2.5);  // thrown up from the surface, then falling
+      }
+      EXPECT_EQ(world.emitted_count(ps), 6u);
+      world.advance(1.0);  // droplets (radius 2.5 mm < min_radius) vanish at their next hit
+      EXPECT_EQ(world.particles(ps).count, 0u);
+    }
+  }
+}
+
+TEST(SimCollisionMesh, InvalidDefinitionsAreRejectedNamingTheField) {
+  World world;
+  SphereDef s;
+  s.radius = -1;
+  EXPECT_THROW(world.add_sphere(s), std::invalid_argument);
+  CylinderDef c;
+  c.half_height = 0;
+  EXPECT_THROW(world.add_cylinder(c), std::invalid_argument);
+  MeshDef m;
+  EXPECT_THROW(world.add_mesh(m), std::invalid_argument);
+  m = quad(1, Material{});
+  m.triangles.push_back({0, 1, 9});
+  try {
+    world.add_mesh(m);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("MeshDef.triangles[2]"), std::string::npos) << e.what();
+  }
+  m = quad(1, Material{});
+  m.material.split.size_fraction = 2.0;
+  EXPECT_THROW(world.add_mesh(m), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A pile in the bowl (the 5,000-particle, 10 s version is in bench/sim/bench_collisions.cpp)
+
+TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
+  const double R = 0.3, r = 0.01;
+  World world;
+  world.add_mesh(bowl(R, 12, 32, mat(0.3, 0.5)));
+  ParticleSystemDef def = probes();
+  def.collide_particles = true;
+  def.particle_restitution = 0.2;
+  def.particle_friction = 0.3;
+  def.emitter.rate = 400;
+  def.emitter.stop_time = 1.0;
+  def.emitter.disk_radius = 0.05;
+  def.emitter.transform.translation = Vec3(0, 0, 0.1);
+  def.emitter.transform.rotation = Quat(Eigen::AngleAxisd(kPi, Vec3::UnitX()));  // downwards
+  def.emitter.start_speed = {0.5, 0.0, 0.0};
+  def.emitter.lifetime = {100, 0, 0};
+  def.emitter.radius = {r, 0, 1e-6};
+  const auto ps = world.add_particle_system(def);
+  world.advance(3.0);
+  std::vector<Vec3> before;
+  for (std::size_t i = 0; i < world.particles(ps).count; ++i)
+    before.push_back(position_of(world.particles(ps), i));
+  world.advance(1.0);
+  const ParticleView v = world.particles(ps);
+  ASSERT_EQ(v.count, 400u);
+  double max_move = 0, mean_move = 0;
+  for (std::size_t i = 0; i < v.count; ++i) {
+    const Vec3 x = position_of(v, i);
+    // Inside the shell: the inner facets are chords of the sphere R, so a particle resting on
+    // one has |x| <= R - r; 1 mm allows the overlap the contact solver leaves in a pile.
+    EXPECT_LT(x.norm(), R - r + 1e-3) << i;
+    EXPECT_LT(x.z(), 0.0) << i;  // a pile in the bottom, none flung out
+    max_move = std::max(max_move, (x - before[i]).norm());
+    mean_move += (x - before[i]).norm() / double(v.count);
+  }
+  // Settled: the pile as a whole moves under 5 mm in the last second (it fell 0.4 m). Known
+  // limit: particles still creep (mean 2.2 mm/s, max 2.6 cm/s measured; more solver sweeps do
+  // not change it), from the overlap correction and the stored g h residual of deep stacks.
+  EXPECT_LT(mean_move, 5e-3) << "max " << max_move;
+  EXPECT_LT(max_move, 0.05);
+  EXPECT_EQ(world.removed_inside_count(ps), 0u);
+}
+
+}  // namespace
+}  // namespace simreel::sim
