@@ -88,6 +88,33 @@ double value_noise(std::uint64_t key, double tau) {
   return at(k) + (at(k + 1) - at(k)) * s;
 }
 
+/// Symmetric 3x3 block (the system matrix is block-symmetric): 6 numbers, products written out
+/// because a generic Eigen 3x3 product was not inlined in the CG loop (42 % of its time).
+struct Sym3 {
+  double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+  static Sym3 outer(const Vec3& u, double s) {  // s u uᵀ
+    return {s * u.x() * u.x(), s * u.x() * u.y(), s * u.x() * u.z(),
+            s * u.y() * u.y(), s * u.y() * u.z(), s * u.z() * u.z()};
+  }
+  Vec3 operator*(const Vec3& v) const {
+    return {xx * v.x() + xy * v.y() + xz * v.z(), xy * v.x() + yy * v.y() + yz * v.z(),
+            xz * v.x() + yz * v.y() + zz * v.z()};
+  }
+  Sym3& operator+=(const Sym3& o) {
+    xx += o.xx; xy += o.xy; xz += o.xz; yy += o.yy; yz += o.yz; zz += o.zz;
+    return *this;
+  }
+  void add_diagonal(double d) { xx += d; yy += d; zz += d; }
+  Sym3 scaled(double s) const { return {s * xx, s * xy, s * xz, s * yy, s * yz, s * zz}; }
+  Sym3 inverse() const {  // adjugate / determinant; the blocks here are positive definite
+    const double c_xx = yy * zz - yz * yz, c_xy = xz * yz - xy * zz, c_xz = xy * yz - xz * yy;
+    const double det = xx * c_xx + xy * c_xy + xz * c_xz;
+    const double id = 1.0 / det;
+    return {c_xx * id, c_xy * id, c_xz * id, (xx * zz - xz * xz) * id,
+            (xz * xy - xx * yz) * id, (xx * yy - xy * xy) * id};
+  }
+};
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -179,8 +206,11 @@ struct Cloth::State {
   std::vector<int> pin_of;           // index into def.pins or -1
   std::vector<Vec3> pin_rest;        // fixed pins: initial world position
   // Implicit Euler workspace (n or spring_count entries; allocated once).
-  std::vector<Mat3> S, K;            // per spring: h k_d nnᵀ + h² ∂f/∂x block, and ∂f_a/∂x_b
-  std::vector<Mat3> precond;         // per vertex: inverse of the diagonal 3x3 block
+  std::vector<Sym3> S;               // per spring: h k_d nnᵀ + h² ∂f/∂x block
+  std::vector<Sym3> precond;         // per vertex: inverse of the diagonal block (0 if pinned)
+  std::vector<Sym3> aero_damping;    // per vertex: -∂f_aero/∂v, lumped (implicit Euler only)
+  std::vector<std::uint32_t> pinned;  // pinned vertex indices
+  bool aero_active = false;
   std::vector<Vec3> dv, b, r, z, p, Ap;
   // Maximum-deformation pass workspace.
   std::vector<double> t, t_next;
@@ -245,7 +275,9 @@ void Cloth::State::forces(double t) {
     f[b] -= fa;
   }
   const AeroDef& ae = def.aero;
-  if (ae.air_density > 0.0 && (ae.drag_coefficient > 0.0 || ae.lift_coefficient > 0.0)) {
+  const bool jac = def.integrator == ClothIntegrator::implicit_euler;
+  if (aero_active && jac) std::fill(aero_damping.begin(), aero_damping.end(), Sym3{});
+  if (aero_active) {
     for (std::size_t k = 0; k + 2 < T.triangles.size(); k += 3) {
       const std::uint32_t i0 = T.triangles[k], i1 = T.triangles[k + 1], i2 = T.triangles[k + 2];
       const Vec3 c = (x[i0] + x[i1] + x[i2]) / 3.0;
@@ -270,6 +302,16 @@ void Cloth::State::forces(double t) {
       f[i0] += F;
       f[i1] += F;
       f[i2] += F;
+      if (jac) {
+        // The pressure term c |u| (n·u) n has ∂/∂u = c (|u| nnᵀ + cos θ n uᵀ); its symmetric
+        // bound c |u| (1 + cos θ) nnᵀ, lumped on each vertex as if it carried the triangle, keeps
+        // light cloth in a gale stable at the frame step (treated explicitly, h ρ C_d |u| A / m
+        // reaches ~3 for a 0.3 kg flag at 30 m/s: beyond forward Euler's limit of 2).
+        const Sym3 D = Sym3::outer(nrm, q * ae.drag_coefficient / speed * (1.0 + cos_t) / 3.0);
+        aero_damping[i0] += D;
+        aero_damping[i1] += D;
+        aero_damping[i2] += D;
+      }
     }
   }
 }
@@ -285,97 +327,97 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   const ClothTopology& T = *topo;
   const std::size_t ns = T.spring_count();
   const double h2 = h * h;
+  const double diag_m = vertex_mass + h * def.damping;
+  // Known Δv of the pinned vertices (from their targets); the free ones keep the previous step's
+  // Δv as the CG warm start.
+  for (std::size_t i = 0; i < n; ++i) {
+    b[i] = h * f[i];
+    precond[i] = Sym3{};
+    precond[i].add_diagonal(diag_m);
+    if (aero_active) precond[i] += aero_damping[i].scaled(h);
+  }
+  for (const std::uint32_t i : pinned) {
+    dv[i] = (pin_target(i, t1) - x[i]) / h - v[i];
+    b[i].setZero();
+  }
+  // Spring blocks, the h² ∂f/∂x v0 term and the pinned columns moved to the right-hand side.
   for (std::size_t s = 0; s < ns; ++s) {
-    const std::uint32_t a = T.spring_a[s], bb = T.spring_b[s];
-    const Vec3 d = x[bb] - x[a];
+    const std::uint32_t a = T.spring_a[s], c = T.spring_b[s];
+    const Vec3 d = x[c] - x[a];
     const double l = d.norm();
     if (!(l > 0.0)) {
-      S[s].setZero();
-      K[s].setZero();
+      S[s] = Sym3{};
       continue;
     }
     const Vec3 u = d / l;
-    const Mat3 nn = u * u.transpose();
     const double k = k_of(s);
-    const double transverse = std::max(0.0, 1.0 - T.rest_length[s] / l);
-    K[s] = k * (nn + transverse * (Mat3::Identity() - nn));
-    S[s] = h * kd_of(s) * nn + h2 * K[s];
-  }
-  // Right-hand side h f0 + h² ∂f/∂x v0, and the known Δv of pinned vertices.
-  for (std::size_t i = 0; i < n; ++i) {
-    if (free[i]) {
-      b[i] = h * f[i];  // dv[i] keeps the previous step's Δv: the CG warm start
-    } else {
-      dv[i] = (pin_target(i, t1) - x[i]) / h - v[i];
+    const double transverse = k * std::max(0.0, 1.0 - T.rest_length[s] / l);
+    Sym3 K = Sym3::outer(u, k - transverse);
+    K.add_diagonal(transverse);  // k (nnᵀ + τ (I - nnᵀ))
+    Sym3 Ss = K.scaled(h2);
+    Ss += Sym3::outer(u, h * kd_of(s));
+    S[s] = Ss;
+    const Vec3 w = h2 * (K * (v[c] - v[a]));
+    if (free[a]) {
+      b[a] += w;
+      precond[a] += Ss;
+      if (!free[c]) b[a] += Ss * dv[c];  // -A_ac Δv_c with A_ac = -S
+    }
+    if (free[c]) {
+      b[c] -= w;
+      precond[c] += Ss;
+      if (!free[a]) b[c] += Ss * dv[a];
     }
   }
-  const double diag_m = vertex_mass + h * def.damping;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!free[i]) continue;
-    Mat3 D = diag_m * Mat3::Identity();
-    Vec3 acc = Vec3::Zero();
-    for (std::uint32_t e = T.adj_start[i]; e < T.adj_start[i + 1]; ++e) {
-      const std::uint32_t s = T.adj_spring[e], j = T.adj_other[e];
-      acc += K[s] * (v[j] - v[i]);
-      D += S[s];
-      if (!free[j]) acc += S[s] * dv[j] / h;  // -A_ij Δv_j moved to the right
-    }
-    b[i] += h2 * acc;
-    precond[i] = D.inverse();
-  }
-  // A y for free rows, pinned entries of y treated as zero.
+  for (std::size_t i = 0; i < n; ++i) precond[i] = free[i] ? precond[i].inverse() : Sym3{};
+  // y -> A y over the free vertices; y and the result are zero at pinned vertices.
   auto apply = [&](const std::vector<Vec3>& y, std::vector<Vec3>& out) {
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!free[i]) {
-        out[i].setZero();
-        continue;
-      }
-      Vec3 acc = diag_m * y[i];
-      for (std::uint32_t e = T.adj_start[i]; e < T.adj_start[i + 1]; ++e) {
-        const std::uint32_t j = T.adj_other[e];
-        acc += S[T.adj_spring[e]] * (free[j] ? Vec3(y[i] - y[j]) : y[i]);
-      }
-      out[i] = acc;
+    if (aero_active)
+      for (std::size_t i = 0; i < n; ++i) out[i] = diag_m * y[i] + h * (aero_damping[i] * y[i]);
+    else
+      for (std::size_t i = 0; i < n; ++i) out[i] = diag_m * y[i];
+    for (std::size_t s = 0; s < ns; ++s) {
+      const std::uint32_t a = T.spring_a[s], c = T.spring_b[s];
+      const Vec3 w = S[s] * Vec3(y[a] - y[c]);
+      out[a] += w;
+      out[c] -= w;
     }
+    for (const std::uint32_t i : pinned) out[i].setZero();
   };
-  auto dot = [&](const std::vector<Vec3>& a, const std::vector<Vec3>& c) {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
-      if (free[i]) sum += a[i].dot(c[i]);
-    return sum;
-  };
-  // Preconditioned CG on the free vertices (the pinned Δv are kept aside in dv).
-  std::vector<Vec3>& y = p;  // reuse storage
-  for (std::size_t i = 0; i < n; ++i) y[i] = free[i] ? dv[i] : Vec3::Zero();
-  apply(y, Ap);
+  // Preconditioned CG (block Jacobi), fixed summation order.
+  std::vector<Vec3>& sol = p;
+  for (std::size_t i = 0; i < n; ++i) sol[i] = free[i] ? dv[i] : Vec3::Zero();
+  apply(sol, Ap);
+  double b2 = 0.0, rr = 0.0, rz = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     r[i] = free[i] ? Vec3(b[i] - Ap[i]) : Vec3::Zero();
-    z[i] = free[i] ? Vec3(precond[i] * r[i]) : Vec3::Zero();
+    z[i] = precond[i] * r[i];
+    b2 += b[i].squaredNorm();
+    rr += r[i].squaredNorm();
+    rz += r[i].dot(z[i]);
   }
-  std::vector<Vec3>& sol = y;
-  // b doubles as the search direction once |b| is known.
-  const double b_norm2 = dot(b, b);
-  const double tol2 = def.cg_tolerance * def.cg_tolerance * b_norm2;
-  std::vector<Vec3>& dir = b;
+  const double tol2 = def.cg_tolerance * def.cg_tolerance * b2;
+  std::vector<Vec3>& dir = b;  // b is no longer needed
   for (std::size_t i = 0; i < n; ++i) dir[i] = z[i];
-  double rz = dot(r, z);
   std::size_t it = 0;
-  while (it < def.cg_max_iterations && dot(r, r) > tol2) {
+  while (it < def.cg_max_iterations && rr > tol2) {
     apply(dir, Ap);
-    const double pAp = dot(dir, Ap);
+    double pAp = 0.0;
+    for (std::size_t i = 0; i < n; ++i) pAp += dir[i].dot(Ap[i]);
     if (!(pAp > 0.0)) break;
     const double alpha = rz / pAp;
+    double rz_new = 0.0;
+    rr = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (!free[i]) continue;
       sol[i] += alpha * dir[i];
       r[i] -= alpha * Ap[i];
       z[i] = precond[i] * r[i];
+      rz_new += r[i].dot(z[i]);
+      rr += r[i].squaredNorm();
     }
-    const double rz_new = dot(r, z);
     const double beta = rz_new / rz;
     rz = rz_new;
-    for (std::size_t i = 0; i < n; ++i)
-      if (free[i]) dir[i] = z[i] + beta * dir[i];
+    for (std::size_t i = 0; i < n; ++i) dir[i] = z[i] + beta * dir[i];
     ++it;
   }
   cg_iterations = it;
@@ -430,8 +472,13 @@ void Cloth::State::max_deformation_pass(const std::vector<detail::Collider>* col
   constexpr std::size_t kMaxPasses = 64;
   bool any_moved = false;
   for (;;) {
-    bool violated = false;
-    for (std::size_t i = 0; i < n; ++i) t_next[i] = t[i];
+    bool violated = false, changed = false;
+    // The first pass is the book's: every t_p from the positions the integrator gave, minima
+    // applied together. Repeats (if needed) update t in place, which converges faster.
+    const bool book_pass = strain_passes == 0;
+    std::vector<double>& tw = book_pass ? t_next : t;
+    if (book_pass)
+      for (std::size_t i = 0; i < n; ++i) t_next[i] = t[i];
     for (std::size_t s = 0; s < T.limited_count; ++s) {
       const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
       const double L = T.rest_length[s];
@@ -439,39 +486,37 @@ void Cloth::State::max_deformation_pass(const std::vector<detail::Collider>* col
       const double l2 = (pa - pb).squaredNorm();
       if (l2 <= stretch_max * stretch_max * L * L) continue;
       violated = true;
-      if (strain_passes >= kMaxPasses) {  // last resort: both back to the start of the step
-        t_next[a] = 0.0;
-        t_next[b] = 0.0;
-        continue;
+      double tp = 0.0;  // after kMaxPasses: both back to the start of the step (last resort)
+      if (strain_passes < kMaxPasses) {
+        const Vec3 k1 = origin[a] - origin[b];
+        const Vec3 k2 = t[a] * path[a] - t[b] * path[b];
+        const double A = k2.squaredNorm();
+        const double B = 2.0 * k1.dot(k2);
+        const double dmax = target_scale * L;
+        const double C = k1.squaredNorm() - dmax * dmax;
+        const double disc = B * B - 4.0 * A * C;
+        if (A > 0.0 && disc >= 0.0) {
+          const double sq = std::sqrt(disc);
+          const double qq = -0.5 * (B + std::copysign(sq, B));  // stable roots
+          double r1 = qq / A, r2 = qq != 0.0 ? C / qq : r1;
+          if (r1 > r2) std::swap(r1, r2);
+          if (r2 >= 0.0 && r2 <= 1.0) tp = r2;
+          else if (r1 >= 0.0 && r1 <= 1.0) tp = r1;
+          else tp = std::clamp(-B / (2.0 * A), 0.0, 1.0);  // start over the limit: closest point
+        } else if (A > 0.0) {
+          tp = std::clamp(-B / (2.0 * A), 0.0, 1.0);
+        }
       }
-      const Vec3 k1 = origin[a] - origin[b];
-      const Vec3 k2 = t[a] * path[a] - t[b] * path[b];
-      const double A = k2.squaredNorm();
-      const double B = 2.0 * k1.dot(k2);
-      const double dmax = target_scale * L;
-      const double C = k1.squaredNorm() - dmax * dmax;
-      double tp = 0.0;
-      const double disc = B * B - 4.0 * A * C;
-      if (A > 0.0 && disc >= 0.0) {
-        const double sq = std::sqrt(disc);
-        // Numerically stable roots.
-        const double qq = -0.5 * (B + std::copysign(sq, B));
-        double r1 = qq / A, r2 = qq != 0.0 ? C / qq : r1;
-        if (r1 > r2) std::swap(r1, r2);
-        if (r2 >= 0.0 && r2 <= 1.0) tp = r2;
-        else if (r1 >= 0.0 && r1 <= 1.0) tp = r1;
-        else tp = std::clamp(-B / (2.0 * A), 0.0, 1.0);  // start over the limit too: closest point
-      } else if (A > 0.0) {
-        tp = std::clamp(-B / (2.0 * A), 0.0, 1.0);
-      }
-      if (free[a]) t_next[a] = std::min(t_next[a], tp * t[a]);
-      if (free[b]) t_next[b] = std::min(t_next[b], tp * t[b]);
+      const double ta = t[a], tb = t[b];
+      if (free[a] && tp * ta < tw[a]) { tw[a] = tp * ta; changed = true; }
+      if (free[b] && tp * tb < tw[b]) { tw[b] = tp * tb; changed = true; }
     }
     if (!violated) break;
     ++strain_passes;
     any_moved = true;
-    for (std::size_t i = 0; i < n; ++i) t[i] = t_next[i];
-    if (strain_passes > kMaxPasses + 1) break;
+    if (book_pass)
+      for (std::size_t i = 0; i < n; ++i) t[i] = t_next[i];
+    if (!changed && strain_passes > kMaxPasses) break;  // only the start state itself violates
   }
   if (!any_moved) return;
   for (std::size_t i = 0; i < n; ++i) {
@@ -544,9 +589,13 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     S.pin_rest[i] = S.x[i];
     if (!def.pins[k].path.empty()) S.x[i] = def.pins[k].path.sample(0.0).translation;
   }
-  S.S.assign(ns, Mat3::Zero());
-  S.K.assign(ns, Mat3::Zero());
-  S.precond.assign(n, Mat3::Identity());
+  S.S.assign(ns, Sym3{});
+  S.precond.assign(n, Sym3{});
+  for (std::size_t i = 0; i < n; ++i)
+    if (!S.free[i]) S.pinned.push_back(std::uint32_t(i));
+  S.aero_active = def.aero.air_density > 0.0 &&
+                  (def.aero.drag_coefficient > 0.0 || def.aero.lift_coefficient > 0.0);
+  S.aero_damping.assign(S.aero_active ? n : 0, Sym3{});
   for (auto* w : {&S.dv, &S.b, &S.r, &S.z, &S.p, &S.Ap, &S.origin, &S.path, &S.nacc})
     w->assign(n, Vec3::Zero());
   S.t.assign(n, 1.0);
