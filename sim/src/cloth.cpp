@@ -263,7 +263,7 @@ Vec3 Cloth::State::wind(const Vec3& p, double t) const {
 
 void Cloth::State::forces(double t) {
   const ClothTopology& T = *topo;
-  for (std::size_t i = 0; i < n; ++i) f[i] = vertex_mass * def.gravity - def.damping * v[i];
+  for (std::size_t i = 0; i < n; ++i) f[i] = vertex_mass * (def.gravity - def.damping * v[i]);
   for (std::size_t s = 0; s < T.spring_count(); ++s) {
     const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
     const Vec3 d = x[b] - x[a];
@@ -327,7 +327,7 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   const ClothTopology& T = *topo;
   const std::size_t ns = T.spring_count();
   const double h2 = h * h;
-  const double diag_m = vertex_mass + h * def.damping;
+  const double diag_m = vertex_mass * (1.0 + h * def.damping);
   // Known Δv of the pinned vertices (from their targets); the free ones keep the previous step's
   // Δv as the CG warm start.
   for (std::size_t i = 0; i < n; ++i) {

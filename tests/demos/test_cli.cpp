@@ -140,7 +140,8 @@ TEST(Cli, BadClothValueExits2NamingPointer) {
   r = run_simreel("validate " + (d / "s.json").string() + " --set /cloths/0/pins=corners");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("/cloths/0/pins"), std::string::npos) << r.err;
-  r = run_simreel("validate " + (d / "s.json").string() + " --set /cloths/0/stretch/stifness=3");
+  write_file(d / "t.json", R"({"cloths": [{"stretch": {"stifness": 3}}]})");
+  r = run_simreel("validate " + (d / "t.json").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("did you mean \"stiffness\""), std::string::npos) << r.err;
 }

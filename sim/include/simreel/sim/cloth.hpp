@@ -91,7 +91,9 @@ struct ClothDef {
   double max_strain = 0.10;
   ClothIntegrator integrator = ClothIntegrator::implicit_euler;
   Vec3 gravity{0.0, 0.0, -9.81};  ///< (m/s²), world frame
-  double damping = 0.01;          ///< (N s/m) viscous drag -c v on every vertex, >= 0
+  /// (1/s) viscous damping rate: force -damping · m_vertex · v on every vertex (mass-proportional,
+  /// so it means the same at any grid resolution), >= 0. Air drag comes from `aero`.
+  double damping = 0.05;
   WindDef wind;
   AeroDef aero;
   double thickness = 0.005;  ///< (m) vertices keep this distance from collider surfaces, >= 0
