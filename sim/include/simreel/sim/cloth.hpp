@@ -99,7 +99,10 @@ struct ClothDef {
   double thickness = 0.005;  ///< (m) vertices keep this distance from collider surfaces, >= 0
   double friction = 0.3;     ///< Coulomb coefficient for cloth-collider contact, >= 0
   bool collide = true;       ///< collide with the world's colliders
-  double cg_tolerance = 1e-4;         ///< implicit Euler: CG stops at |r| <= tol |b| (> 0)
+  /// Implicit Euler: CG stops at |r| <= tol |b| (> 0). Loose by default: the solve only has to be
+  /// stable and plausible, and the maximum-deformation pass bounds the stretch whatever the
+  /// residual (1e-2 takes ~30 iterations on the 64 x 64 benchmark cloth, 1e-4 ~140).
+  double cg_tolerance = 1e-2;
   std::size_t cg_max_iterations = 200;  ///< implicit Euler: CG iteration cap, >= 1
 };
 
