@@ -245,7 +245,7 @@ struct Cloth::State {
   void forces(double t);
   void integrate_implicit(double h, double t1);
   void integrate_explicit(double h, double t1, bool semi);
-  void max_deformation_pass(const std::vector<detail::Collider>* colliders);
+  void max_deformation_pass();
   void refresh_views();
   Vec3 wind(const Vec3& p, double t) const;
 };
@@ -457,7 +457,7 @@ void Cloth::State::integrate_explicit(double h, double t1, bool semi) {
 /// a spring whose two vertices took different t can still be over the limit, so the pass is
 /// repeated (each repeat only shortens paths, and t = 0 everywhere is the valid start state) until
 /// no spring is over the limit: a departure from the book, counted in ClothStats::strain_passes.
-void Cloth::State::max_deformation_pass(const std::vector<detail::Collider>* colliders) {
+void Cloth::State::max_deformation_pass() {
   strain_passes = 0;
   if (!std::isfinite(def.max_strain)) return;
   const ClothTopology& T = *topo;
@@ -525,7 +525,6 @@ void Cloth::State::max_deformation_pass(const std::vector<detail::Collider>* col
     // Velocity consistent with the corrected displacement over the step.
     v[i] *= t[i];
   }
-  (void)colliders;
 }
 
 void Cloth::State::refresh_views() {
@@ -627,7 +626,7 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
                           S.def.friction, S.hit);
   }
-  S.max_deformation_pass(collide ? colliders : nullptr);
+  S.max_deformation_pass();
   bool finite = true;
   for (std::size_t i = 0; i < S.n; ++i) finite = finite && S.x[i].allFinite() && S.v[i].allFinite();
   if (!finite) return false;
