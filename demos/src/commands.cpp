@@ -106,6 +106,49 @@ void upload_particles(const Scene& scene, const SceneWorld& sw, render::Renderer
   }
 }
 
+// --- Cloth drawing hook (issue 6) -----------------------------------------------------------
+// The renderer's triangle-mesh API (add_mesh / update_mesh) is written in parallel. Until it is
+// merged, each cloth is drawn as small sprites at its vertices so cloth scenes can be looked at.
+// At merge: replace the body with one update_mesh(key, view.positions, view.normals) per cloth
+// (triangles and UVs from the view are fixed for the cloth's life; upload them once).
+struct ClothSprites {
+  std::vector<float> color, radius;
+};
+
+void upload_cloths(const Scene& scene, const SceneWorld& sw, render::Renderer& r,
+                   std::vector<ClothSprites>& sprites) {
+  sprites.resize(sw.cloths.size());
+  for (std::size_t i = 0; i < sw.cloths.size(); ++i) {
+    const sim::ClothView v = sw.world.cloth(sw.cloths[i]);
+    const sim::ClothDef& d = scene.cloths[i].def;
+    ClothSprites& s = sprites[i];
+    if (s.radius.size() != v.vertex_count) {
+      const double spacing = std::min(d.columns > 1 ? d.width / double(d.columns - 1) : d.height,
+                                      d.rows > 1 ? d.height / double(d.rows - 1) : d.width);
+      s.radius.assign(v.vertex_count, float(0.6 * spacing));
+      s.color.resize(4 * v.vertex_count);
+      const render::Vec4f c = scene.cloths[i].color;
+      for (std::size_t k = 0; k < v.vertex_count; ++k) {
+        // Shade by the checker on the UVs so folds read in the sprites.
+        float shade = 1.f;
+        if (scene.cloths[i].checker_m > 0.f) {
+          const auto cu = int(std::floor(v.uvs[2 * k] * d.width / scene.cloths[i].checker_m));
+          const auto cv = int(std::floor(v.uvs[2 * k + 1] * d.height / scene.cloths[i].checker_m));
+          shade = ((cu + cv) & 1) ? 0.6f : 1.f;
+        }
+        for (int ch = 0; ch < 3; ++ch) s.color[4 * k + std::size_t(ch)] = c[ch] * shade;
+        s.color[4 * k + 3] = 1.f;
+      }
+    }
+    render::ParticleBatch b;
+    b.count = v.vertex_count;
+    b.position = v.positions;
+    b.color = s.color.data();
+    b.radius = s.radius.data();
+    r.set_particles(sw.cloths[i].id.packed(), b);
+  }
+}
+
 std::string format_duration(double s) {
   char buf[32];
   if (s >= 3600) std::snprintf(buf, sizeof buf, "%dh%02dm", int(s / 3600), int(s / 60) % 60);
@@ -169,6 +212,7 @@ int render_command(const RenderOptions& o) {
 
   const bool progress = !o.quiet && isatty(STDERR_FILENO);
   const double dt = 1.0 / scene.fps;
+  std::vector<ClothSprites> cloth_sprites;
   const auto start = std::chrono::steady_clock::now();
   for (int frame = 0; frame < scene.frames; ++frame) {
     // Frame k shows the state at t = k / fps: frame 0 is the initial state.
@@ -184,6 +228,7 @@ int render_command(const RenderOptions& o) {
       }
     }
     upload_particles(scene, sw, renderer);
+    upload_cloths(scene, sw, renderer, cloth_sprites);
     const render::Image image = renderer.render();
     for (std::size_t s = 0; s < sinks.size();) {
       try {
@@ -263,6 +308,32 @@ int simulate_command(const RunOptions& o, const std::string& export_csv) {
         for (int k = 0; k < 3; ++k) {
           buf += ',';
           put_float(v.velocity[3 * p + k]);
+        }
+        buf += '\n';
+      }
+      if (buf.size() > (1u << 20)) {
+        ok = std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
+        buf.clear();
+      }
+    }
+    // Cloth vertices: system = cloth name, id = vertex index (row * columns + column).
+    for (std::size_t i = 0; i < sw.cloths.size(); ++i) {
+      const sim::ClothView v = sw.world.cloth(sw.cloths[i]);
+      const std::string& name = scene.cloths[i].def.name;
+      for (std::size_t p = 0; p < v.vertex_count; ++p) {
+        buf += prefix;
+        put_float(sw.world.time());
+        buf += ',';
+        buf += name;
+        buf += ',';
+        buf += std::to_string(p);
+        for (int k = 0; k < 3; ++k) {
+          buf += ',';
+          put_float(v.positions[3 * p + std::size_t(k)]);
+        }
+        for (int k = 0; k < 3; ++k) {
+          buf += ',';
+          put_float(v.velocities[3 * p + std::size_t(k)]);
         }
         buf += '\n';
       }

@@ -52,6 +52,13 @@ struct AttractorSpringScene {
   std::string system;
 };
 
+/// A cloth (Coutinho §3.9.2) and how it is drawn. README "cloths[i]".
+struct ClothScene {
+  sim::ClothDef def;
+  render::Vec4f color{0.75f, 0.12f, 0.12f, 1.f};
+  float checker_m = 0.f;  ///< (m) checker cell on the cloth's UVs; 0 = plain
+};
+
 /// A loaded, checked scene. Every value is in engine units (SI, radians) except where named.
 struct Scene {
   std::string file;  ///< path as given, used in messages
@@ -67,6 +74,7 @@ struct Scene {
   std::vector<EmitterScene> emitters;
   std::vector<ForceFieldScene> force_fields;
   std::vector<AttractorSpringScene> attractor_springs;
+  std::vector<ClothScene> cloths;
 };
 
 /// Turns a parsed document into a Scene, checking every key. @throws SceneError listing every
@@ -81,6 +89,7 @@ struct SceneWorld {
   sim::World world;
   std::vector<sim::ColliderHandle> colliders;
   std::vector<sim::ParticleSystemHandle> systems;
+  std::vector<sim::ClothHandle> cloths;
 };
 
 /// @throws SceneError if the engine rejects a definition (should not happen after checking).

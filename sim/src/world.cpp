@@ -90,6 +90,7 @@ struct World::Impl {
   void collide_system(std::size_t index, std::size_t begin, std::size_t end, double h);
   /// Particle–particle collisions of every opted-in system (internal and by group).
   void collide_particles();
+  std::vector<Cloth> cloths;  // cloth: one generation per slot, never removed yet
 
   detail::Collider& collider(ColliderHandle h) {
     if (h.id.kind != ObjectKind::collider || h.id.index >= colliders.size() ||
@@ -102,6 +103,12 @@ struct World::Impl {
         h.id.generation == 0 || systems[h.id.index].generation != h.id.generation)
       throw std::out_of_range("simreel::sim::World: stale or invalid particle-system handle");
     return systems[h.id.index];
+  }
+
+  Cloth& cloth(ClothHandle h) {
+    if (h.id.kind != ObjectKind::cloth || h.id.index >= cloths.size() || h.id.generation != 1)
+      throw std::out_of_range("simreel::sim::World: stale or invalid cloth handle");
+    return cloths[h.id.index];
   }
 
   void step(double t0, double t1);
@@ -121,6 +128,15 @@ void World::Impl::step(double t0, double t1) {
     if (c.kinematic()) c.update(t1);
   for (std::size_t s = 0; s < systems.size(); ++s) step_system(s, t0, t1);
   collide_particles();
+  // Cloth (§3.9.2) after the particle systems.
+  for (std::size_t c = 0; c < cloths.size(); ++c) {
+    if (cloths[c].step(t0, t1, &colliders)) continue;
+    std::ostringstream m;
+    m.precision(9);
+    m << "cloth '" << cloths[c].definition().name << "' (index " << c
+      << "): non-finite vertex state at internal step " << steps + 1 << ", t = " << t1 << " s";
+    throw NonFiniteState(m.str());
+  }
   ++steps;
 }
 
@@ -563,6 +579,26 @@ std::vector<ColliderHandle> World::colliders() const {
   for (std::size_t i = 0; i < impl_->colliders.size(); ++i)
     out.push_back(
         ColliderHandle{Handle{std::uint32_t(i), impl_->colliders[i].generation, ObjectKind::collider}});
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cloth
+
+ClothHandle World::add_cloth(const ClothDef& def) {
+  const std::size_t index = impl_->cloths.size();
+  impl_->cloths.emplace_back(def, impl_->def.seed, index);
+  return ClothHandle{Handle{std::uint32_t(index), 1, ObjectKind::cloth}};
+}
+
+ClothView World::cloth(ClothHandle h) const { return impl_->cloth(h).view(); }
+ClothStats World::cloth_stats(ClothHandle h) const { return impl_->cloth(h).stats(); }
+const ClothDef& World::definition(ClothHandle h) const { return impl_->cloth(h).definition(); }
+
+std::vector<ClothHandle> World::cloths() const {
+  std::vector<ClothHandle> out;
+  for (std::size_t i = 0; i < impl_->cloths.size(); ++i)
+    out.push_back(ClothHandle{Handle{std::uint32_t(i), 1, ObjectKind::cloth}});
   return out;
 }
 

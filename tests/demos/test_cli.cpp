@@ -110,6 +110,42 @@ TEST(Cli, SimulateExportsCsvWithHeaderAndSetOverrides) {
   EXPECT_EQ(count_lines(slurp(d / "b.csv")), 1);
 }
 
+// Cloth (issue 6): vertices are exported with system = the cloth's name; a bad cloth value stops
+// with exit 2 naming the file and the pointer.
+const char* kClothScene = R"({
+  "fps": 30, "frames": 5,
+  "colliders": [{"type": "plane"}],
+  "cloths": [{"name": "sheet", "rows": 4, "columns": 5, "size_m": [0.4, 0.3], "mass": 0.05,
+              "position": [0, 0, 1], "pins": "two_corners"}]
+})";
+
+TEST(Cli, SimulateExportsClothVertices) {
+  TempDir d;
+  write_file(d / "s.json", kClothScene);
+  const auto r = run_simreel("simulate " + (d / "s.json").string() + " --export " + (d / "c.csv").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string csv = slurp(d / "c.csv");
+  EXPECT_EQ(count_lines(csv), 1 + 5 * 20);  // header + 5 frames x 20 vertices
+  EXPECT_NE(csv.find("\n4,"), std::string::npos);
+  EXPECT_NE(csv.find(",sheet,19,"), std::string::npos);
+}
+
+TEST(Cli, BadClothValueExits2NamingPointer) {
+  TempDir d;
+  write_file(d / "s.json", kClothScene);
+  auto r = run_simreel("validate " + (d / "s.json").string() + " --set /cloths/0/max_strain=-1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find((d / "s.json").string() + ": /cloths/0/max_strain: expected a number"), std::string::npos)
+      << r.err;
+  r = run_simreel("validate " + (d / "s.json").string() + " --set /cloths/0/pins=corners");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("/cloths/0/pins"), std::string::npos) << r.err;
+  write_file(d / "t.json", R"({"cloths": [{"stretch": {"stifness": 3}}]})");
+  r = run_simreel("validate " + (d / "t.json").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("did you mean \"stiffness\""), std::string::npos) << r.err;
+}
+
 TEST(Cli, SameSeedSameCsvOtherSeedDiffers) {
   TempDir d;
   write_file(d / "s.json", kSmallScene);

@@ -9,7 +9,7 @@
 namespace simreel::sim {
 
 /// What kind of object a handle names. Zero is never a valid kind.
-enum class ObjectKind : std::uint8_t { none = 0, collider = 1, particle_system = 2 };
+enum class ObjectKind : std::uint8_t { none = 0, collider = 1, particle_system = 2, cloth = 3 };
 
 /// A small value naming one registered object: slot index + generation. A default-constructed
 /// handle is null (generation 0). Stale handles (the slot was reused) are rejected by World.
@@ -37,5 +37,6 @@ struct TypedHandle {
 
 using ColliderHandle = TypedHandle<ObjectKind::collider>;
 using ParticleSystemHandle = TypedHandle<ObjectKind::particle_system>;
+using ClothHandle = TypedHandle<ObjectKind::cloth>;
 
 }  // namespace simreel::sim

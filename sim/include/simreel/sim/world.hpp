@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "simreel/sim/cloth.hpp"
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/forces.hpp"
 #include "simreel/sim/handle.hpp"
@@ -109,6 +110,8 @@ class World {
   /// face with the box's normal velocity; one inside a sphere, cylinder or closed mesh is
   /// removed and counted (§3.4.2, removed_inside_count()).
   /// @throws std::invalid_argument unless sampling_time is > 0 and finite.
+  /// Cloths step after the particle systems (see add_cloth); a cloth whose state becomes
+  /// non-finite is reported as NonFiniteState naming the cloth, step and time.
   /// @throws NonFiniteState if a particle's state becomes NaN/inf; the message names the system,
   ///         the particle id, the internal step number (1-based, as step_count() would count it)
   ///         and the time. The world is then left mid-advance and should be discarded.
@@ -133,6 +136,20 @@ class World {
   [[nodiscard]] std::uint64_t removed_inside_count(ParticleSystemHandle h) const;
   [[nodiscard]] std::vector<ParticleSystemHandle> particle_systems() const;
   [[nodiscard]] std::vector<ColliderHandle> colliders() const;
+
+  // --- Cloth (Coutinho §3.9.2; see cloth.hpp) ------------------------------------------------
+  /// Registers a cloth. Each internal step of advance() steps every cloth after the particle
+  /// systems, with one cloth step per internal step (WorldDef::max_step; one implicit step per
+  /// 1/60 s frame is stable), colliding its vertices with the colliders at their end-of-step
+  /// pose. Gust noise is seeded from (WorldDef::seed, cloth index).
+  /// @throws std::invalid_argument naming the ClothDef field on a bad definition.
+  ClothHandle add_cloth(const ClothDef& def);
+  /// Current vertices, normals, UVs and triangles. Valid until the next advance().
+  /// @throws std::out_of_range if the handle is stale.
+  [[nodiscard]] ClothView cloth(ClothHandle h) const;
+  [[nodiscard]] ClothStats cloth_stats(ClothHandle h) const;
+  [[nodiscard]] const ClothDef& definition(ClothHandle h) const;
+  [[nodiscard]] std::vector<ClothHandle> cloths() const;
 
  private:
   struct Impl;

@@ -1,0 +1,338 @@
+// Mass-spring cloth (Coutinho §3.9.2): the maximum-deformation pass, implicit vs explicit
+// stability, the static sag of a hanging spring chain, energy dissipation, collisions, the
+// aerodynamic force on a plate, pins and determinism.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "simreel/sim/cloth.hpp"
+#include "simreel/sim/world.hpp"
+
+namespace {
+
+using namespace simreel::sim;
+
+constexpr double kFrame = 1.0 / 60.0;
+constexpr double kStrainEps = 1e-9;
+
+/// A square cloth lying flat (local xy = world xy) at height z.
+ClothDef flat_cloth(std::size_t nodes, double size, double mass, double z) {
+  ClothDef d;
+  d.rows = d.columns = nodes;
+  d.width = d.height = size;
+  d.mass = mass;
+  d.transform.translation = Vec3(0, 0, z);
+  return d;
+}
+
+/// Rotation taking the cloth's local +y to world +z (a hanging sheet facing -y).
+Quat upright() { return Quat(Eigen::AngleAxisd(std::numbers::pi / 2, Vec3::UnitX())); }
+
+/// A flag: columns along world x, rows down world z, left edge pinned, wind along +x.
+ClothDef gale_flag(double max_strain) {
+  ClothDef d;
+  d.name = "flag";
+  d.rows = 16;
+  d.columns = 24;
+  d.width = 1.5;
+  d.height = 1.0;
+  d.mass = 0.3;
+  d.transform.translation = Vec3(0.75, 0, 2.0);
+  d.transform.rotation = upright();
+  for (std::size_t r = 0; r < d.rows; ++r) d.pins.push_back({r, 0, {}});
+  d.wind.velocity = Vec3(30.0, 0.0, 0.0);
+  d.wind.gust_amplitude = 6.0;
+  d.wind.gust_frequency = 1.5;
+  d.max_strain = max_strain;
+  return d;
+}
+
+double max_strain_over_run(World& w, ClothHandle h, int frames) {
+  double worst = 0.0;
+  for (int f = 0; f < frames; ++f) {
+    w.advance(kFrame);
+    worst = std::max(worst, w.cloth_stats(h).max_strain);
+  }
+  return worst;
+}
+
+TEST(Cloth, TopologyCountsFollowFigure345) {
+  const ClothTopology t(5, 7, 1.2, 0.8);
+  // stretch: r(c-1) + (r-1)c; shear: 2(r-1)(c-1); bend: r(c-2) + (r-2)c.
+  EXPECT_EQ(t.limited_count, std::size_t(5 * 6 + 4 * 7 + 2 * 4 * 6));
+  EXPECT_EQ(t.spring_count(), t.limited_count + std::size_t(5 * 5 + 3 * 7));
+  EXPECT_EQ(t.triangles.size(), std::size_t(3 * 2 * 4 * 6));
+  EXPECT_NEAR(t.rest_length[0], 0.2, 1e-15);  // (0,0)-(1,0): 0.8 / 4
+  // A shear spring is the cell diagonal.
+  EXPECT_NEAR(t.rest_length[t.limited_count - 1], std::hypot(0.2, 0.2), 1e-15);
+}
+
+TEST(Cloth, InvalidDefinitionNamesTheField) {
+  ClothDef d;
+  d.rows = 0;
+  try {
+    Cloth c(d);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ClothDef.rows"), std::string::npos) << e.what();
+  }
+  d = ClothDef{};
+  d.pins.push_back({16, 0, {}});
+  EXPECT_THROW(Cloth{d}, std::invalid_argument);
+  d = ClothDef{};
+  d.max_strain = -0.1;
+  EXPECT_THROW(Cloth{d}, std::invalid_argument);
+}
+
+// §3.9.2: no stretch or shear spring ends a step above (1 + max_strain) L. The same scene without
+// the pass exceeds the limit, so the check has teeth.
+TEST(Cloth, MaxDeformationHoldsInGaleFlag) {
+  {
+    World w(WorldDef{kFrame, 7, 0.05});
+    const ClothHandle h = w.add_cloth(gale_flag(0.10));
+    EXPECT_LE(max_strain_over_run(w, h, 120), 0.10 + kStrainEps);
+  }
+  {
+    World w(WorldDef{kFrame, 7, 0.05});
+    const ClothHandle h = w.add_cloth(gale_flag(std::numeric_limits<double>::infinity()));
+    EXPECT_GT(max_strain_over_run(w, h, 120), 0.10);
+  }
+}
+
+ClothDef drop_cloth(double max_strain) {
+  ClothDef d = flat_cloth(20, 1.2, 0.3, 0.8);
+  d.max_strain = max_strain;
+  d.stretch = {300.0, 0.2};  // soft, so the pass has work to do
+  d.shear = {50.0, 0.05};
+  return d;
+}
+
+BoxDef table() {
+  BoxDef b;
+  b.transform.translation = Vec3(0.1, 0.05, 0.25);
+  b.half_extents = Vec3(0.3, 0.3, 0.25);
+  return b;
+}
+
+TEST(Cloth, MaxDeformationHoldsInDropOntoBox) {
+  double with = 0.0, without = 0.0;
+  for (double ms : {0.10, std::numeric_limits<double>::infinity()}) {
+    World w(WorldDef{kFrame, 1, 0.05});
+    w.add_plane(PlaneDef{});
+    w.add_box(table());
+    const ClothHandle h = w.add_cloth(drop_cloth(ms));
+    (std::isfinite(ms) ? with : without) = max_strain_over_run(w, h, 150);
+  }
+  EXPECT_LE(with, 0.10 + kStrainEps);
+  EXPECT_GT(without, 0.10);
+}
+
+TEST(Cloth, DrapeOverBoxLeavesNoVertexInside) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  w.add_plane(PlaneDef{});
+  const BoxDef box = table();
+  w.add_box(box);
+  const ClothDef def = drop_cloth(0.10);
+  const ClothHandle h = w.add_cloth(def);
+  std::size_t on_top = 0;
+  for (int f = 0; f < 150; ++f) {
+    w.advance(kFrame);
+    const ClothView v = w.cloth(h);
+    on_top = 0;
+    for (std::size_t i = 0; i < v.vertex_count; ++i) {
+      const Vec3 p(v.positions[3 * i], v.positions[3 * i + 1], v.positions[3 * i + 2]);
+      const Vec3 q = p - box.transform.translation;
+      // Inside the box grown by thickness (less a float-rounding hair) = a violation.
+      const Vec3 e = box.half_extents + Vec3::Constant(def.thickness - 1e-5);
+      const bool inside = std::abs(q.x()) < e.x() && std::abs(q.y()) < e.y() && std::abs(q.z()) < e.z();
+      ASSERT_FALSE(inside) << "vertex " << i << " inside the box at frame " << f;
+      ASSERT_GE(p.z(), def.thickness - 1e-5) << "vertex " << i << " below the ground";
+      if (std::abs(p.z() - (2 * box.half_extents.z() + def.thickness)) < 1e-3) ++on_top;
+    }
+  }
+  EXPECT_GT(on_top, std::size_t(50));  // the cloth really lies on the box top
+}
+
+// Dropped flat on the ground, the cloth comes to rest flat: every vertex at the thickness height
+// and no kinetic energy left.
+TEST(Cloth, DroppedClothRestsFlatOnGround) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  w.add_plane(PlaneDef{});
+  ClothDef d = flat_cloth(16, 1.0, 0.2, 0.3);
+  const ClothHandle h = w.add_cloth(d);
+  for (int f = 0; f < 180; ++f) w.advance(kFrame);
+  const ClothStats s = w.cloth_stats(h);
+  EXPECT_NEAR(s.min_z, d.thickness, 1e-6);
+  EXPECT_NEAR(s.max_z, d.thickness, 1e-6);
+  EXPECT_LT(s.kinetic_energy, 1e-8);
+}
+
+// Stiff springs at the frame step: implicit Euler stays bounded, explicit Euler blows up.
+TEST(Cloth, ImplicitStableWhereExplicitBlowsUp) {
+  auto run = [](ClothIntegrator integ) {
+    ClothDef d = flat_cloth(16, 1.0, 0.5, 1.0);
+    d.transform.rotation = upright();
+    d.stretch = {2e4, 2.0};
+    d.shear = {5e3, 1.0};
+    d.bend = {100.0, 0.1};
+    d.pins = {{0, 0, {}}, {0, 15, {}}};
+    d.max_strain = std::numeric_limits<double>::infinity();  // the integrator alone
+    d.integrator = integ;
+    Cloth c(d);
+    double extent = 0.0;
+    for (int f = 0; f < 120; ++f) {
+      if (!c.step(f * kFrame, (f + 1) * kFrame)) return std::numeric_limits<double>::infinity();
+      for (const Vec3& p : c.positions()) extent = std::max(extent, (p - Vec3(0, 0, 1)).norm());
+    }
+    return extent;
+  };
+  const double implicit = run(ClothIntegrator::implicit_euler);
+  const double explicit_ = run(ClothIntegrator::explicit_euler);
+  EXPECT_LT(implicit, 2.5);   // a 1 m sheet hanging from its top corners stays near its pins
+  EXPECT_GT(explicit_, 1e3);  // forward Euler at h = 1/60 with k h² / m ≈ 170: divergence
+}
+
+// A 1-column cloth pinned at the top is a spring chain; at rest each spring's extension is the
+// weight below it over k_s. Implicit Euler's fixed point is exactly the static equilibrium.
+TEST(Cloth, HangingChainReachesStaticSag) {
+  ClothDef d;
+  d.rows = 10;
+  d.columns = 1;
+  d.height = 0.9;  // L = 0.1 m
+  d.mass = 0.1;    // 0.01 kg per vertex
+  d.transform.translation = Vec3(0, 0, 2);
+  d.transform.rotation = upright();
+  d.pins = {{0, 0, {}}};
+  d.stretch = {50.0, 0.5};
+  d.bend = {0.0, 0.0};
+  d.damping = 0.02;
+  d.max_strain = std::numeric_limits<double>::infinity();
+  d.aero.air_density = 0.0;
+  d.cg_tolerance = 1e-12;
+  Cloth c(d);
+  for (int f = 0; f < 1200; ++f) ASSERT_TRUE(c.step(f * kFrame, (f + 1) * kFrame));
+  const std::vector<Vec3>& x = c.positions();
+  const double m = d.mass / 10, g = 9.81, k = d.stretch.stiffness;
+  for (std::size_t i = 0; i + 1 < 10; ++i) {
+    const double expected = 0.1 + double(10 - 1 - i) * m * g / k;
+    EXPECT_NEAR((x[i + 1] - x[i]).norm(), expected, 1e-9) << "spring " << i;
+    EXPECT_NEAR(x[i + 1].x(), 0.0, 1e-12);
+  }
+}
+
+// With damping and no external forces, kinetic + spring energy never increases under implicit
+// Euler; with no damping, semi-implicit Euler at a small step keeps it within 1 % (the forces are
+// the gradient of the energy the test sums).
+TEST(Cloth, EnergyDecreasesWithDampingAndIsKeptWithout) {
+  ClothDef d = flat_cloth(8, 0.7, 0.1, 0.0);
+  d.gravity = Vec3::Zero();
+  d.aero.air_density = 0.0;
+  d.max_strain = std::numeric_limits<double>::infinity();
+  d.cg_tolerance = 1e-10;
+  Cloth probe(d);
+  std::vector<Vec3> x = probe.positions(), v(x.size(), Vec3::Zero());
+  for (std::size_t i = 0; i < x.size(); ++i) {  // a deterministic stretch + ripple
+    x[i] *= 1.08;
+    x[i].z() = 0.02 * std::sin(7.0 * x[i].x() + 3.0 * x[i].y());
+  }
+  {
+    Cloth c(d);
+    c.set_state(x, v);
+    double e = c.stats().kinetic_energy + c.stats().spring_energy;
+    const double e0 = e;
+    for (int f = 0; f < 200; ++f) {
+      ASSERT_TRUE(c.step(f * kFrame, (f + 1) * kFrame));
+      const double e1 = c.stats().kinetic_energy + c.stats().spring_energy;
+      EXPECT_LE(e1, e * (1 + 1e-9)) << "step " << f;
+      e = e1;
+    }
+    EXPECT_LT(e, 0.01 * e0);
+  }
+  {
+    ClothDef u = d;
+    u.stretch.damping = u.shear.damping = u.bend.damping = 0.0;
+    u.damping = 0.0;
+    u.integrator = ClothIntegrator::semi_implicit_euler;
+    Cloth c(u);
+    c.set_state(x, v);
+    const double e0 = c.stats().kinetic_energy + c.stats().spring_energy;
+    const double h = 2e-5;
+    for (int s = 0; s < 5000; ++s) ASSERT_TRUE(c.step(s * h, (s + 1) * h));
+    const ClothStats st = c.stats();
+    EXPECT_GT(st.kinetic_energy, 0.05 * e0);  // it really oscillates
+    EXPECT_NEAR(st.kinetic_energy + st.spring_energy, e0, 0.01 * e0);
+  }
+}
+
+// A plate square to a steady wind: the pressure force is ½ ρ C_d A |u|² along the wind (cos θ = 1,
+// no lift), so one semi-implicit step gives every vertex the mean acceleration F / M.
+TEST(Cloth, AerodynamicPressureOnPlateSquareToWind) {
+  ClothDef d = flat_cloth(6, 0.5, 0.05, 1.0);
+  d.gravity = Vec3::Zero();
+  d.damping = 0.0;
+  d.wind.velocity = Vec3(0, 0, 12.0);
+  d.aero = {1.1, 0.7, 1.2};
+  d.integrator = ClothIntegrator::semi_implicit_euler;
+  Cloth c(d);
+  ASSERT_TRUE(c.step(0.0, 1e-3));
+  Vec3 p = Vec3::Zero();
+  for (const Vec3& v : c.velocities()) p += v * (d.mass / 36);
+  const double F = 0.5 * 1.2 * 1.1 * 0.25 * 144.0;
+  EXPECT_NEAR(p.z(), F * 1e-3, 1e-12);
+  EXPECT_NEAR(p.x(), 0.0, 1e-15);
+  EXPECT_NEAR(p.y(), 0.0, 1e-15);
+}
+
+TEST(Cloth, KeyframedPinFollowsItsPath) {
+  ClothDef d = flat_cloth(6, 0.5, 0.05, 1.0);
+  ClothPin pin{0, 0, {}};
+  pin.path.keys = {{0.0, Vec3(-0.25, 0.25, 1.0), Quat::Identity()},
+                   {1.0, Vec3(0.5, 0.25, 1.5), Quat::Identity()}};
+  pin.path.smooth = false;
+  d.pins = {pin, {0, 5, {}}};
+  d.max_strain = 0.5;
+  World w(WorldDef{kFrame, 0, 0.05});
+  const ClothHandle h = w.add_cloth(d);
+  for (int f = 1; f <= 30; ++f) {
+    w.advance(kFrame);
+    const ClothView v = w.cloth(h);
+    const Vec3 want = pin.path.sample(w.time()).translation;
+    EXPECT_NEAR(v.positions[0], want.x(), 1e-6);
+    EXPECT_NEAR(v.positions[2], want.z(), 1e-6);
+    EXPECT_NEAR(v.positions[3 * 5 + 0], 0.25, 1e-6);  // the fixed pin stays
+  }
+}
+
+TEST(Cloth, ViewHasUnitNormalsAndFixedTriangles) {
+  World w;
+  const ClothHandle h = w.add_cloth(flat_cloth(5, 1.0, 0.1, 1.0));
+  const ClothView v = w.cloth(h);
+  ASSERT_EQ(v.vertex_count, 25u);
+  ASSERT_EQ(v.triangle_count, 32u);
+  for (std::size_t i = 0; i < v.vertex_count; ++i)
+    EXPECT_NEAR(v.normals[3 * i + 2], 1.0f, 1e-6f);  // flat in xy, facing +z
+  EXPECT_EQ(v.uvs[2 * 24], 1.0f);
+  EXPECT_EQ(v.uvs[2 * 24 + 1], 1.0f);
+}
+
+TEST(Cloth, GustsAreDeterministicFromSeed) {
+  auto state = [](std::uint64_t seed) {
+    World w(WorldDef{kFrame, seed, 0.05});
+    const ClothHandle h = w.add_cloth(gale_flag(0.1));
+    for (int f = 0; f < 20; ++f) w.advance(kFrame);
+    const ClothView v = w.cloth(h);
+    return std::vector<float>(v.positions, v.positions + 3 * v.vertex_count);
+  };
+  const auto a = state(3), b = state(3), c = state(4);
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
+  EXPECT_NE(0, std::memcmp(a.data(), c.data(), a.size() * sizeof(float)));
+  // The gust is smooth: wind changes little over a millisecond.
+  Cloth cl(gale_flag(0.1), 5, 0);
+  EXPECT_LT((cl.wind_at(Vec3::Zero(), 1.0) - cl.wind_at(Vec3::Zero(), 1.001)).norm(), 0.1);
+}
+
+}  // namespace
