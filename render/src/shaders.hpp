@@ -53,6 +53,21 @@ float sun_visibility_fast(vec3 world) {
 }
 )";
 
+/// Hemisphere sky light: the sky's colour from above, the ground's bounce from below.
+inline constexpr char kAmbientGlsl[] = R"(
+uniform vec3 u_ambient;          // facing +z
+uniform vec3 u_ground_ambient;   // facing -z
+vec3 hemisphere(float nz) { return mix(u_ground_ambient, u_ambient, 0.5 + 0.5 * nz); }
+)";
+
+/// The opaque scene's depth (a resolved copy) for soft particles, as view distance (m).
+inline constexpr char kSceneDepthGlsl[] = R"(
+uniform sampler2D u_scene_depth;
+uniform vec2 u_depth_params;  // (A, B) of the projection: distance = B / (ndc_z + A)
+float view_distance(float window_z) { return u_depth_params.y / (window_z * 2.0 - 1.0 + u_depth_params.x); }
+float scene_distance() { return view_distance(texelFetch(u_scene_depth, ivec2(gl_FragCoord.xy), 0).r); }
+)";
+
 inline constexpr char kFullscreenVs[] = R"(
 out vec2 v_uv;
 void main() {
@@ -95,8 +110,9 @@ out vec4 o_color;
 uniform vec3 u_eye;
 uniform vec3 u_light_dir;     // direction the light travels
 uniform vec3 u_light_color;
-uniform vec3 u_ambient;
 uniform vec4 u_color;
+uniform sampler2D u_texture;
+uniform int u_has_texture;
 uniform float u_specular;
 uniform float u_checker_m;    // 0: plain colour
 uniform float u_half_size;    // 0: no edge fade (boxes)
@@ -120,6 +136,7 @@ void main() {
   vec3 l = normalize(-u_light_dir);
 
   vec3 albedo = u_color.rgb;
+  if (u_has_texture != 0) albedo *= texture(u_texture, v_uv).rgb;
   float fog = 1.0 - exp(-(dist * dist) / (u_fog_distance * u_fog_distance));
   if (u_checker_m > 0.0) {
     float footprint;
@@ -140,8 +157,7 @@ void main() {
   float sun = ndl > 0.0 ? sun_visibility(v_world, n) : 0.0;
   vec3 h = normalize(l + v);
   float spec = u_specular * pow(max(dot(n, h), 0.0), 48.0) * ndl;
-  // Hemisphere ambient (z up): faces turned to the sky get more of it than those facing down.
-  vec3 ambient = u_ambient * (0.78 + 0.22 * n.z);
+  vec3 ambient = hemisphere(n.z);
   vec3 color = albedo * (ambient + u_light_color * (ndl * sun)) + u_light_color * (spec * sun);
   color = mix(color, sky_at(gl_FragCoord.xy), max(fog, edge));
   o_color = vec4(color, 1.0);
@@ -166,6 +182,9 @@ layout(location = 2) in vec4 a_color;         // per instance: linear RGBA
 uniform mat4 u_view;
 uniform mat4 u_proj;
 uniform float u_pixels_per_unit; // projected pixels per metre at unit depth
+uniform vec3 u_to_sun;           // world frame; the sun is sampled this side of the centre
+uniform float u_sun_offset;      // radii towards the sun: a casting particle must not shadow itself
+uniform int u_opaque;            // droplets: alpha only carries sub-pixel coverage
 out vec2 v_corner;
 out vec4 v_color;
 out float v_sun;
@@ -181,8 +200,8 @@ void main() {
   v_center_view = vec4(c.xyz, r * grow);
   c.xy += a_corner * (r * grow);
   v_corner = a_corner;
-  v_color = vec4(a_color.rgb, a_color.a / (grow * grow));
-  v_sun = sun_visibility_fast(a_center_radius.xyz);
+  v_color = vec4(a_color.rgb, (u_opaque != 0 ? 1.0 : a_color.a) / (grow * grow));
+  v_sun = sun_visibility_fast(a_center_radius.xyz + u_to_sun * (u_sun_offset * r));
   gl_Position = u_proj * c;
 }
 )";
@@ -195,10 +214,21 @@ in vec4 v_color;
 in float v_sun;
 flat in vec4 v_center_view;
 uniform mat4 u_proj;
-void write_sphere_depth(float r2) {
-  vec3 p = v_center_view.xyz + v_center_view.w * vec3(v_corner, sqrt(max(1.0 - r2, 0.0)));
+uniform mat3 u_view_to_world;
+// Writes the depth of the sphere's front surface at this fragment; h is the half chord
+// sqrt(1 - r2) in radii.
+void write_sphere_depth(float h) {
+  vec3 p = v_center_view.xyz + v_center_view.w * vec3(v_corner, h);
   vec4 clip = u_proj * vec4(p, 1.0);
   gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
+}
+// Fraction of the sphere's chord through this fragment that lies in front of the opaque
+// scene: 1 in open air, falling smoothly to 0 where the sphere sinks into a surface (no hard
+// intersection line: soft particles).
+float visible_fraction(float h) {
+  float front = -(v_center_view.z + v_center_view.w * h);
+  float chord = 2.0 * v_center_view.w * h;
+  return clamp((scene_distance() - front) / max(chord, 1e-6), 0.0, 1.0);
 }
 )";
 
@@ -207,24 +237,151 @@ out vec4 o_color;
 uniform vec3 u_light_view;   // towards the sun, view frame
 uniform vec3 u_half_view;    // half vector between the sun and the viewer, view frame
 uniform vec3 u_light_color;
-uniform vec3 u_ambient;
 void main() {
   float r2 = dot(v_corner, v_corner);
   if (r2 >= 1.0) discard;
-  write_sphere_depth(r2);
+  float h = sqrt(1.0 - r2);
+  write_sphere_depth(h);
+  float visible = visible_fraction(h);
+  if (visible <= 0.0) discard;
   float r = sqrt(r2);
   float aa = fwidth(r);
-  float alpha = v_color.a * (1.0 - smoothstep(1.0 - 0.18 - aa, 1.0, r));
-  // A sphere's normal from the sprite coordinates, in the view frame.
-  vec3 n = vec3(v_corner, sqrt(max(1.0 - r2, 0.0)));
+  // Beer-Lambert through the sphere: the centre has the given opacity, thinner chords less,
+  // and only the part of the chord in front of the scene counts.
+  float a = min(v_color.a, 0.999);
+  float alpha = (1.0 - exp2(log2(1.0 - a) * h * visible)) * (1.0 - smoothstep(1.0 - aa, 1.0, r));
+  // A sphere's normal from the sprite coordinates, in the view frame: the side away from the
+  // sun is darker, which is what makes a cloud of sprites read as a volume.
+  vec3 n = vec3(v_corner, h);
   float wrap = max((dot(n, u_light_view) + 0.25) / 1.25, 0.0);
   float s8 = max(dot(n, u_half_view), 0.0);
   s8 *= s8; s8 *= s8; s8 *= s8;
   float s32 = s8 * s8; s32 *= s32;
-  float spec = 0.35 * s32 * s8;  // exponent 40 by squaring: pow() is costly on llvmpipe
-  vec3 ambient = u_ambient * (0.75 + 0.25 * n.y);
+  float spec = 0.35 * a * s32 * s8;  // exponent 40 by squaring: pow() is costly on llvmpipe
+  vec3 ambient = hemisphere((u_view_to_world * n).z);
   vec3 color = v_color.rgb * (ambient + u_light_color * (wrap * v_sun)) + u_light_color * (spec * v_sun);
   o_color = vec4(color * alpha, alpha);  // premultiplied
+}
+)";
+
+/// Small opaque spheres; sub-pixel ones and the rim reach the multisample coverage through
+/// alpha-to-coverage.
+inline constexpr char kParticleDropletFs[] = R"(
+out vec4 o_color;
+uniform vec3 u_light_view;
+uniform vec3 u_half_view;
+uniform vec3 u_light_color;
+void main() {
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  float h = sqrt(1.0 - r2);
+  write_sphere_depth(h);
+  float r = sqrt(r2);
+  float aa = fwidth(r);
+  vec3 n = vec3(v_corner, h);
+  float ndl = max(dot(n, u_light_view), 0.0);
+  float s8 = max(dot(n, u_half_view), 0.0);
+  s8 *= s8; s8 *= s8; s8 *= s8;
+  float s32 = s8 * s8; s32 *= s32;
+  float spec = 0.5 * s32 * s32;
+  vec3 ambient = hemisphere((u_view_to_world * n).z);
+  vec3 color = v_color.rgb * (ambient + u_light_color * (ndl * v_sun)) + u_light_color * (spec * v_sun);
+  o_color = vec4(color, v_color.a * (1.0 - smoothstep(1.0 - aa, 1.0, r)));
+}
+)";
+
+/// Rain: a capsule from the head back along the screen-space velocity, built in pixels so its
+/// width never drops under a pixel (thin streaks get fainter instead).
+inline constexpr char kStreakVs[] = R"(
+layout(location = 0) in vec2 a_corner;        // x: -1 head end, +1 tail end; y: across
+layout(location = 1) in vec4 a_center_radius; // head position (m), radius (m)
+layout(location = 2) in vec4 a_color;
+layout(location = 3) in vec3 a_trail;         // head to tail, world frame (m)
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform float u_pixels_per_unit;
+uniform vec2 u_viewport;
+uniform float u_near;
+uniform vec3 u_to_sun;
+uniform float u_sun_offset;
+noperspective out vec2 v_local;  // (along from the head, across), in half-widths
+flat out float v_length;         // head-to-tail length in half-widths
+out vec4 v_color;
+out float v_sun;
+out float v_distance;            // view distance (m)
+flat out float v_radius;
+void main() {
+  vec3 head = (u_view * vec4(a_center_radius.xyz, 1.0)).xyz;
+  vec3 tail = head + mat3(u_view) * a_trail;
+  float limit = -1.001 * u_near;
+  if (tail.z > limit && head.z < limit) tail = mix(head, tail, (limit - head.z) / (tail.z - head.z));
+  vec4 ch = u_proj * vec4(head, 1.0);
+  vec4 ct = u_proj * vec4(tail, 1.0);
+  vec2 half_vp = 0.5 * u_viewport;
+  vec2 d = (ct.xy / ct.w - ch.xy / ch.w) * half_vp;
+  float len = length(d);
+  vec2 u = len > 1e-3 ? d / len : vec2(1.0, 0.0);
+  vec2 w = vec2(-u.y, u.x);
+  float r = a_center_radius.w;
+  float width = r * u_pixels_per_unit / max(-head.z, 1e-4);  // half-width (pixels)
+  float hw = max(width, 0.75);
+  float s = 0.5 * a_corner.x + 0.5;
+  vec4 base = mix(ch, ct, s);
+  base.xy += (u * (a_corner.x * hw) + w * (a_corner.y * hw)) / half_vp * base.w;
+  v_local = vec2(s * len / hw + a_corner.x, a_corner.y);
+  v_length = len / hw;
+  v_color = vec4(a_color.rgb, a_color.a * min(width / hw, 1.0));
+  v_sun = sun_visibility_fast(a_center_radius.xyz + u_to_sun * (u_sun_offset * r));
+  v_distance = -mix(head.z, tail.z, s);
+  v_radius = r;
+  gl_Position = base;
+}
+)";
+
+inline constexpr char kStreakFs[] = R"(
+noperspective in vec2 v_local;
+flat in float v_length;
+in vec4 v_color;
+in float v_sun;
+in float v_distance;
+flat in float v_radius;
+out vec4 o_color;
+uniform vec3 u_light_color;
+void main() {
+  vec2 q = vec2(v_local.x - clamp(v_local.x, 0.0, v_length), v_local.y);
+  float d = length(q);
+  if (d >= 1.0) discard;
+  float fade = clamp((scene_distance() - v_distance) / (2.0 * v_radius), 0.0, 1.0);
+  float taper = 1.0 - 0.6 * clamp(v_local.x / max(v_length, 1e-3), 0.0, 1.0);
+  float alpha = v_color.a * (1.0 - smoothstep(0.35, 1.0, d)) * taper * fade;
+  vec3 color = v_color.rgb * (hemisphere(0.0) + u_light_color * (0.5 * v_sun));
+  o_color = vec4(color * alpha, alpha);
+}
+)";
+
+/// Particles in the sun's shadow map: discs facing the sun; see RenderSettings::particle_shadows.
+inline constexpr char kParticleDepthVs[] = R"(
+layout(location = 0) in vec2 a_corner;
+layout(location = 1) in vec4 a_center_radius;
+layout(location = 2) in vec4 a_color;
+uniform mat4 u_light_view_proj;
+uniform vec3 u_light_right;
+uniform vec3 u_light_up;
+uniform int u_opaque;
+out vec2 v_corner;
+void main() {
+  vec3 w = a_center_radius.xyz + (u_light_right * a_corner.x + u_light_up * a_corner.y) * a_center_radius.w;
+  v_corner = a_corner;
+  gl_Position = u_light_view_proj * vec4(w, 1.0);
+  // Mostly transparent particles cast nothing: move them outside the clip volume.
+  if (u_opaque == 0 && a_color.a < 0.5) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+}
+)";
+
+inline constexpr char kParticleDepthFs[] = R"(
+in vec2 v_corner;
+void main() {
+  if (dot(v_corner, v_corner) >= 1.0) discard;
 }
 )";
 
@@ -233,10 +390,11 @@ out vec4 o_color;
 void main() {
   float r2 = dot(v_corner, v_corner);
   if (r2 >= 1.0) discard;
-  write_sphere_depth(r2);
+  float h = sqrt(1.0 - r2);
+  write_sphere_depth(h);
   // Bright core with a long falloff; exactly zero at the rim so quads leave no edges.
   float falloff = (1.0 - r2) * (1.0 - r2);
-  float glow = falloff * (0.35 + 0.65 * exp(-6.0 * r2));
+  float glow = falloff * (0.35 + 0.65 * exp(-6.0 * r2)) * visible_fraction(h);
   o_color = vec4(v_color.rgb * (v_color.a * glow), 0.0);
 }
 )";
