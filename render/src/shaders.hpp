@@ -352,7 +352,7 @@ void main() {
   float d = length(q);
   if (d >= 1.0) discard;
   float fade = clamp((scene_distance() - v_distance) / (2.0 * v_radius), 0.0, 1.0);
-  float taper = 1.0 - 0.6 * clamp(v_local.x / max(v_length, 1e-3), 0.0, 1.0);
+  float taper = 1.0 - 0.6 * clamp(v_local.x, 0.0, v_length) / max(v_length, 1.0);
   float alpha = v_color.a * (1.0 - smoothstep(0.35, 1.0, d)) * taper * fade;
   vec3 color = v_color.rgb * (hemisphere(0.0) + u_light_color * (0.5 * v_sun));
   o_color = vec4(color * alpha, alpha);
