@@ -96,6 +96,8 @@ void upload_particles(const Scene& scene, const SceneWorld& sw, render::Renderer
     b.color = v.color;
     b.radius = v.radius;
     b.style = scene.emitters[i].style;
+    b.velocity = v.velocity;  // streaks stretch along it
+    b.streak_s = scene.emitters[i].streak_s;
     r.set_particles(sw.systems[i].id.packed(), b);
   }
 }
@@ -171,6 +173,7 @@ int render_command(const RenderOptions& o) {
         renderer.set_transform(m.handle.packed(), m.translation.cast<float>(), m.rotation.cast<float>());
     }
     upload_particles(scene, sw, renderer);
+    renderer.set_camera(render::camera_at(scene.camera_motion, frame * dt));  // camera.path / orbit
     const render::Image image = renderer.render();
     for (std::size_t s = 0; s < sinks.size();) {
       try {
