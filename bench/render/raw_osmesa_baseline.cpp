@@ -40,8 +40,11 @@ namespace {
   X(PFNGLENABLEPROC, Enable) X(PFNGLDISABLEPROC, Disable) X(PFNGLBLENDFUNCPROC, BlendFunc)       \
   X(PFNGLDEPTHMASKPROC, DepthMask) X(PFNGLFINISHPROC, Finish) X(PFNGLGETERRORPROC, GetError)     \
   X(PFNGLREADBUFFERPROC, ReadBuffer)
-#define DECLARE(type, name) type gl##name = nullptr;
+// Own names: gl.h (pulled in by osmesa.h) already declares the GL 1.x functions.
+namespace g {
+#define DECLARE(type, name) type name = nullptr;
 GL_FUNCTIONS(DECLARE)
+}  // namespace g
 
 const char* kVs = R"(#version 330 core
 layout(location = 0) in vec2 a_corner;
@@ -115,34 +118,34 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "no OSMesa context\n");
     return 1;
   }
-#define LOAD(type, name) gl##name = reinterpret_cast<type>(OSMesaGetProcAddress("gl" #name));
+#define LOAD(type, name) g::name = reinterpret_cast<type>(OSMesaGetProcAddress("gl" #name));
   GL_FUNCTIONS(LOAD)
 
   auto shader = [](GLenum type, const char* src) {
-    const GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &src, nullptr);
-    glCompileShader(s);
+    const GLuint s = g::CreateShader(type);
+    g::ShaderSource(s, 1, &src, nullptr);
+    g::CompileShader(s);
     return s;
   };
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, shader(GL_VERTEX_SHADER, kVs));
-  glAttachShader(program, shader(GL_FRAGMENT_SHADER, kFs));
-  glLinkProgram(program);
+  const GLuint program = g::CreateProgram();
+  g::AttachShader(program, shader(GL_VERTEX_SHADER, kVs));
+  g::AttachShader(program, shader(GL_FRAGMENT_SHADER, kFs));
+  g::LinkProgram(program);
 
   GLuint fbo[2], rb[3];
-  glGenFramebuffers(2, fbo);
-  glGenRenderbuffers(3, rb);
-  glBindRenderbuffer(GL_RENDERBUFFER, rb[0]);
-  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, w, h);
-  glBindRenderbuffer(GL_RENDERBUFFER, rb[1]);
-  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w, h);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
-  glBindRenderbuffer(GL_RENDERBUFFER, rb[2]);
-  glRenderbufferStorageMultisample(GL_RENDERBUFFER, 0, GL_RGBA8, w, h);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo[1]);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[2]);
+  g::GenFramebuffers(2, fbo);
+  g::GenRenderbuffers(3, rb);
+  g::BindRenderbuffer(GL_RENDERBUFFER, rb[0]);
+  g::RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, w, h);
+  g::BindRenderbuffer(GL_RENDERBUFFER, rb[1]);
+  g::RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w, h);
+  g::BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
+  g::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+  g::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+  g::BindRenderbuffer(GL_RENDERBUFFER, rb[2]);
+  g::RenderbufferStorageMultisample(GL_RENDERBUFFER, 0, GL_RGBA8, w, h);
+  g::BindFramebuffer(GL_FRAMEBUFFER, fbo[1]);
+  g::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[2]);
 
   const bench::ParticleCloud cloud = bench::make_particle_cloud(n);
   std::vector<float> instances(8 * n);
@@ -152,60 +155,60 @@ int main(int argc, char** argv) {
     std::copy_n(&cloud.color[4 * i], 4, &instances[8 * i + 4]);
   }
   GLuint vao, quad, inst;
-  glGenVertexArrays(1, &vao);
-  glBindVertexArray(vao);
+  g::GenVertexArrays(1, &vao);
+  g::BindVertexArray(vao);
   const float corners[] = {-1.f, -1.f, 1.f, -1.f, -1.f, 1.f, 1.f, 1.f};
-  glGenBuffers(1, &quad);
-  glBindBuffer(GL_ARRAY_BUFFER, quad);
-  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
-  glGenBuffers(1, &inst);
-  glBindBuffer(GL_ARRAY_BUFFER, inst);
-  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(instances.size() * sizeof(float)), nullptr, GL_STREAM_DRAW);
+  g::GenBuffers(1, &quad);
+  g::BindBuffer(GL_ARRAY_BUFFER, quad);
+  g::BufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  g::EnableVertexAttribArray(0);
+  g::VertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  g::GenBuffers(1, &inst);
+  g::BindBuffer(GL_ARRAY_BUFFER, inst);
+  g::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(instances.size() * sizeof(float)), nullptr, GL_STREAM_DRAW);
   for (GLuint a = 1; a <= 2; ++a) {
-    glEnableVertexAttribArray(a);
-    glVertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 8 * sizeof(float),
+    g::EnableVertexAttribArray(a);
+    g::VertexAttribPointer(a, 4, GL_FLOAT, GL_FALSE, 8 * sizeof(float),
                           reinterpret_cast<const void*>((a - 1) * 4 * sizeof(float)));
-    glVertexAttribDivisor(a, 1);
+    g::VertexAttribDivisor(a, 1);
   }
 
   float view[16], proj[16];
   const float eye[3] = {6.f, -6.f, 3.f}, at[3] = {0.f, 0.f, 0.5f};
   look_at(view, eye, at);
   perspective(proj, 40.f * 3.14159265f / 180.f, float(w) / float(h), 0.05f, 500.f);
-  glUseProgram(program);
-  glUniformMatrix4fv(glGetUniformLocation(program, "u_view"), 1, GL_FALSE, view);
-  glUniformMatrix4fv(glGetUniformLocation(program, "u_proj"), 1, GL_FALSE, proj);
+  g::UseProgram(program);
+  g::UniformMatrix4fv(g::GetUniformLocation(program, "u_view"), 1, GL_FALSE, view);
+  g::UniformMatrix4fv(g::GetUniformLocation(program, "u_proj"), 1, GL_FALSE, proj);
 
   std::vector<unsigned char> pixels(std::size_t(w) * h * 4);
   std::vector<double> ms;
   for (int f = 0; f < frames + 2; ++f) {
     const auto t0 = std::chrono::steady_clock::now();
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
-    glViewport(0, 0, w, h);
-    glClearColor(0.6f, 0.7f, 0.85f, 1.f);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    glEnable(GL_DEPTH_TEST);
-    glDepthMask(GL_FALSE);
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-    glBindBuffer(GL_ARRAY_BUFFER, inst);
-    glBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(instances.size() * sizeof(float)), instances.data());
-    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(n));
-    glDepthMask(GL_TRUE);
-    glDisable(GL_BLEND);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo[0]);
-    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo[1]);
-    glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo[1]);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+    g::BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
+    g::Viewport(0, 0, w, h);
+    g::ClearColor(0.6f, 0.7f, 0.85f, 1.f);
+    g::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    g::Enable(GL_DEPTH_TEST);
+    g::DepthMask(GL_FALSE);
+    g::Enable(GL_BLEND);
+    g::BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    g::BindBuffer(GL_ARRAY_BUFFER, inst);
+    g::BufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(instances.size() * sizeof(float)), instances.data());
+    g::DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(n));
+    g::DepthMask(GL_TRUE);
+    g::Disable(GL_BLEND);
+    g::BindFramebuffer(GL_READ_FRAMEBUFFER, fbo[0]);
+    g::BindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo[1]);
+    g::BlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    g::BindFramebuffer(GL_READ_FRAMEBUFFER, fbo[1]);
+    g::ReadBuffer(GL_COLOR_ATTACHMENT0);
+    g::ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
     const auto t1 = std::chrono::steady_clock::now();
     if (f >= 2) ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());  // 2 warm-up frames
   }
   std::sort(ms.begin(), ms.end());
-  const GLenum err = glGetError();
+  const GLenum err = g::GetError();
   std::printf("raw_osmesa_baseline: %zu sprites %dx%d msaa %d: median %.2f ms/frame (min %.2f, %d frames)%s\n",
               n, w, h, samples, ms[ms.size() / 2], ms.front(), frames, err ? " GL ERROR" : "");
   OSMesaDestroyContext(ctx);

@@ -322,6 +322,8 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     if (scene.light.direction.norm() < 1e-6f) s.error_at(s.pointer("direction"), "expected a non-zero direction");
     scene.light.color = to_vec3f(s.vec3("color", {l.color.x(), l.color.y(), l.color.z()}));
     scene.light.ambient = to_vec3f(s.vec3("ambient", {l.ambient.x(), l.ambient.y(), l.ambient.z()}));
+    const auto& g = l.ground_ambient;
+    scene.light.ground_ambient = to_vec3f(s.vec3("ground_ambient", {g.x(), g.y(), g.z()}));
     s.finish();
   }
   auto read_array = [&](const std::string& key, auto&& each) {

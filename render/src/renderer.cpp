@@ -660,8 +660,10 @@ void Renderer::Impl::draw_shadow_map() {
   const float texel_m = 2.f * radius / float(kShadowMapSize);
   shadow_offset = 1.5f * texel_m;
   shadow_bias = 1.5f * texel_m / far_m;
-  // A soft-edged sun: about 2 cm of penumbra at this scale, never sharper than two texels.
-  shadow_radius = std::max(2.f / float(kShadowMapSize), 0.02f / (2.f * radius));
+  // A soft-edged sun: about 2 cm of penumbra at this scale, never sharper than two texels
+  // (five with particle casters, whose stochastic texels the lookup must average away).
+  const float min_texels = settings.particle_shadows ? 5.f : 2.f;
+  shadow_radius = std::max(min_texels / float(kShadowMapSize), 0.02f / (2.f * radius));
 
   gl.BindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
   gl.Viewport(0, 0, kShadowMapSize, kShadowMapSize);

@@ -43,13 +43,19 @@ float sun_visibility(vec3 world, vec3 normal) {
   }
   return sum / 12.0;
 }
-// One bilinear comparison: enough for particles, which are small and already soft.
+// Four bilinear comparisons: enough for particles, which are small and already soft, and
+// they average the stochastic shadows of translucent particles (particle_shadows).
 float sun_visibility_fast(vec3 world) {
   if (u_shadow_enabled == 0) return 1.0;
   vec4 lp = u_light_view_proj * vec4(world, 1.0);
   vec3 p = lp.xyz / lp.w * 0.5 + 0.5;
   if (p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0) return 1.0;
-  return textureLod(u_shadow_map, vec3(p.xy, min(p.z - u_shadow_bias, 1.0)), 0.0);
+  float ref = min(p.z - u_shadow_bias, 1.0);
+  float sum = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    sum += textureLod(u_shadow_map, vec3(p.xy + k_poisson[3 * i] * (2.0 * u_shadow_radius), ref), 0.0);
+  }
+  return 0.25 * sum;
 }
 )";
 
@@ -247,9 +253,13 @@ void main() {
   float r = sqrt(r2);
   float aa = fwidth(r);
   // Beer-Lambert through the sphere: the centre has the given opacity, thinner chords less,
-  // and only the part of the chord in front of the scene counts.
+  // and only the part of the chord in front of the scene counts. Optical depth ~ h^e: e = 1
+  // for a uniform sphere (dense droplets keep a crisp rim), rising to 3 for a density that
+  // falls off as 1 - r^2 (thin smoke puffs blur into each other).
   float a = min(v_color.a, 0.999);
-  float alpha = (1.0 - exp2(log2(1.0 - a) * h * visible)) * (1.0 - smoothstep(1.0 - aa, 1.0, r));
+  float e = 3.0 - 2.0 * a;
+  float alpha = (1.0 - exp2(log2(1.0 - a) * exp2(e * log2(max(h, 1e-6))) * visible)) *
+                (1.0 - smoothstep(1.0 - aa, 1.0, r));
   // A sphere's normal from the sprite coordinates, in the view frame: the side away from the
   // sun is darker, which is what makes a cloud of sprites read as a volume.
   vec3 n = vec3(v_corner, h);
@@ -369,19 +379,34 @@ uniform vec3 u_light_right;
 uniform vec3 u_light_up;
 uniform int u_opaque;
 out vec2 v_corner;
+flat out float v_alpha;
+flat out float v_seed;
 void main() {
   vec3 w = a_center_radius.xyz + (u_light_right * a_corner.x + u_light_up * a_corner.y) * a_center_radius.w;
   v_corner = a_corner;
+  v_alpha = u_opaque != 0 ? 1.0 : min(a_color.a, 0.999);
+  v_seed = float(gl_InstanceID & 15);
   gl_Position = u_light_view_proj * vec4(w, 1.0);
-  // Mostly transparent particles cast nothing: move them outside the clip volume.
-  if (u_opaque == 0 && a_color.a < 0.5) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
 }
 )";
 
+/// Translucent casters keep a fraction of their texels equal to their opacity through the
+/// sphere (an ordered 4 x 4 Bayer dither, shifted per particle so overlapping particles keep
+/// different texels; fixed, so frames stay deterministic); the receivers' filtered lookups
+/// average each 4 x 4 block back into a partial shadow.
 inline constexpr char kParticleDepthFs[] = R"(
 in vec2 v_corner;
+flat in float v_alpha;
+flat in float v_seed;
+const float k_bayer[16] = float[](0.0, 8.0, 2.0, 10.0, 12.0, 4.0, 14.0, 6.0,
+                                  3.0, 11.0, 1.0, 9.0, 15.0, 7.0, 13.0, 5.0);
 void main() {
-  if (dot(v_corner, v_corner) >= 1.0) discard;
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  float opacity = 1.0 - exp2(log2(1.0 - v_alpha) * sqrt(1.0 - r2));
+  int seed = int(v_seed);
+  ivec2 p = (ivec2(gl_FragCoord.xy) + ivec2(seed, seed >> 2)) & 3;
+  if ((k_bayer[p.y * 4 + p.x] + 0.5) / 16.0 >= opacity) discard;
 }
 )";
 

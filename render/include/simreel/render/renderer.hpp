@@ -62,9 +62,10 @@ struct RenderSettings {
   Vec3f sky_top{0.32f, 0.50f, 0.78f};     ///< background gradient, top of the frame (linear RGB)
   Vec3f sky_bottom{0.80f, 0.86f, 0.93f};  ///< background gradient, bottom of the frame
   Vec3f background_color{0.05f, 0.05f, 0.06f};  ///< linear RGB of Background::solid
-  /// Soft, droplet and streak particles cast sun shadows (discs in the shadow map; a particle
-  /// more than half transparent casts none). Smoke then shades itself: particles behind others
-  /// as seen from the sun are darker.
+  /// Soft and droplet particles cast sun shadows: discs facing the sun in the shadow map,
+  /// translucent ones in proportion to their opacity (each keeps that fraction of its
+  /// shadow-map texels, by a fixed hash; the filtered lookups average them). Smoke then shades
+  /// itself: particles behind others as seen from the sun are darker.
   bool particle_shadows = false;
 };
 
@@ -87,8 +88,9 @@ struct BoxDesc {
 /// How particles are drawn.
 enum class ParticleStyle {
   /// Camera-facing sprites standing for translucent spheres (smoke, spray): opacity follows
-  /// Beer-Lambert through the sphere, 1 - (1 - alpha)^(chord / diameter), so the centre has
-  /// the given alpha and the rim fades to 0; lit from the sun with a sphere normal (the far
+  /// Beer-Lambert through the sphere, 1 - (1 - alpha)^(h^e) with h = chord / diameter and
+  /// e = 3 - 2 alpha, so the centre has the given alpha and the rim fades to 0 — crisply for
+  /// dense droplets (uniform sphere, e -> 1), softly for thin smoke (density 1 - r^2, e -> 3); lit from the sun with a sphere normal (the far
   /// side darker); faded where the sphere dips into opaque geometry (soft particles); alpha
   /// blended back to front over all soft batches.
   soft,
