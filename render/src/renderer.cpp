@@ -125,6 +125,7 @@ class Program {
     return *this;
   }
 
+  [[nodiscard]] bool valid() const { return id_ != 0; }
   void use() const { gl_->UseProgram(id_); }
   void set(const char* name, int v) const { gl_->Uniform1i(loc(name), v); }
   void set(const char* name, float v) const { gl_->Uniform1f(loc(name), v); }
@@ -360,8 +361,13 @@ struct Renderer::Impl {
   Mesh cube;
   ParticleStream soft, additive, droplets, streaks;
 
-  Program sky_program, lit_program, depth_program, soft_program, add_program, droplet_program,
-      streak_program, particle_depth_program, post_program;
+  Program sky_program, lit_program, depth_program, particle_depth_program, post_program;
+  // Particle programs by style and by sun taps per vertex (0: no shadow map this frame, 1, or
+  // 4 with particle casters), compiled on first use: llvmpipe runs a vertex shader's texture
+  // lookups even when a uniform branch skips them, so each variant samples only what it needs.
+  enum ParticleProgram { soft_pp, additive_pp, droplet_pp, streak_pp };
+  Program particle_programs[4][3];
+  const Program& particle_program(ParticleProgram which);
 
   std::unordered_map<ObjectKey, Drawable> drawables;
   // Keys in increasing order, so drawing (and merging particle batches) is deterministic.
@@ -407,16 +413,6 @@ void Renderer::Impl::create() {
   lit_program = Program(gl, "lit mesh", source({kLitVs}),
                         source({kSkyGlsl, kShadowGlsl, kAmbientGlsl, kLitFs}));
   depth_program = Program(gl, "shadow depth", source({kDepthVs}), source({kDepthFs}));
-  const std::string particle_vs = source({kShadowGlsl, kParticleVs});
-  soft_program = Program(gl, "soft particle", particle_vs,
-                         source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
-  add_program = Program(gl, "additive particle", particle_vs,
-                        source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
-  droplet_program =
-      Program(gl, "droplet particle", particle_vs,
-              source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
-  streak_program = Program(gl, "streak particle", source({kShadowGlsl, kStreakVs}),
-                           source({kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
   particle_depth_program = Program(gl, "particle shadow depth", source({kParticleDepthVs}),
                                    source({kParticleDepthFs}));
   post_program = Program(gl, "tone map", source({kFullscreenVs}), source({kPostFs}));
@@ -561,9 +557,11 @@ void Renderer::Impl::destroy() noexcept {
   msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = 0;
   msaa_color = msaa_depth = resolve_depth = out_color = 0;
   resolve_tex = shadow_tex = depth_tex = 0;
-  for (Program* p : {&sky_program, &lit_program, &depth_program, &soft_program, &add_program,
-                     &droplet_program, &streak_program, &particle_depth_program, &post_program}) {
+  for (Program* p : {&sky_program, &lit_program, &depth_program, &particle_depth_program, &post_program}) {
     *p = Program();
+  }
+  for (auto& by_taps : particle_programs) {
+    for (Program& p : by_taps) p = Program();
   }
 }
 
@@ -814,11 +812,42 @@ void Renderer::Impl::set_particle_uniforms(const Program& p) const {
   p.set("u_shadow_radius", shadow_radius);
 }
 
+const Program& Renderer::Impl::particle_program(ParticleProgram which) {
+  const int variant = !shadow_enabled ? 0 : settings.particle_shadows ? 2 : 1;
+  Program& p = particle_programs[which][variant];
+  if (!p.valid()) {
+    using namespace detail;
+    const char* taps = variant == 0 ? "#define SUN_TAPS 0\n" : variant == 1 ? "#define SUN_TAPS 1\n"
+                                                                         : "#define SUN_TAPS 4\n";
+    const std::string vs = which == streak_pp ? source({taps, kShadowGlsl, kStreakVs})
+                                              : source({taps, kShadowGlsl, kParticleVs});
+    switch (which) {
+      case soft_pp:
+        p = Program(gl, "soft particle", vs,
+                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
+        break;
+      case additive_pp:
+        p = Program(gl, "additive particle", vs,
+                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
+        break;
+      case droplet_pp:
+        p = Program(gl, "droplet particle", vs,
+                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
+        break;
+      case streak_pp:
+        p = Program(gl, "streak particle", vs, source({kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
+        break;
+    }
+  }
+  return p;
+}
+
 void Renderer::Impl::draw_droplets() {
   if (droplets.count == 0) return;
   // Opaque: drawn before the scene depth is copied, so soft particles fade against them too.
-  set_particle_uniforms(droplet_program);
-  droplet_program.set("u_opaque", 1);
+  const Program& program = particle_program(droplet_pp);
+  set_particle_uniforms(program);
+  program.set("u_opaque", 1);
   if (samples > 0) gl.Enable(GL_SAMPLE_ALPHA_TO_COVERAGE);
   gl.BindVertexArray(droplets.vao);
   gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(droplets.count));
@@ -846,8 +875,9 @@ void Renderer::Impl::draw_particles() {
     const Program* program;
     bool premultiplied;
   };
-  for (const Pass& pass : {Pass{&soft, &soft_program, true}, Pass{&streaks, &streak_program, true},
-                           Pass{&additive, &add_program, false}}) {
+  for (const Pass& pass : {Pass{&soft, &particle_program(soft_pp), true},
+                           Pass{&streaks, &particle_program(streak_pp), true},
+                           Pass{&additive, &particle_program(additive_pp), false}}) {
     if (pass.stream->count == 0) continue;
     set_particle_uniforms(*pass.program);
     if (pass.premultiplied) {

@@ -43,19 +43,31 @@ float sun_visibility(vec3 world, vec3 normal) {
   }
   return sum / 12.0;
 }
-// Four bilinear comparisons: enough for particles, which are small and already soft, and
-// they average the stochastic shadows of translucent particles (particle_shadows).
+// SUN_TAPS bilinear comparisons (0, 1 or 4; see the renderer's particle program variants):
+// enough for particles, which are small and already soft; four average the dithered shadows
+// of translucent particles (particle_shadows).
+#ifndef SUN_TAPS
+#define SUN_TAPS 1
+#endif
 float sun_visibility_fast(vec3 world) {
+#if SUN_TAPS == 0
+  return 1.0;
+#else
   if (u_shadow_enabled == 0) return 1.0;
   vec4 lp = u_light_view_proj * vec4(world, 1.0);
   vec3 p = lp.xyz / lp.w * 0.5 + 0.5;
   if (p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0) return 1.0;
   float ref = min(p.z - u_shadow_bias, 1.0);
+#if SUN_TAPS == 1
+  return textureLod(u_shadow_map, vec3(p.xy, ref), 0.0);
+#else
   float sum = 0.0;
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < SUN_TAPS; ++i) {
     sum += textureLod(u_shadow_map, vec3(p.xy + k_poisson[3 * i] * (2.0 * u_shadow_radius), ref), 0.0);
   }
-  return 0.25 * sum;
+  return sum / float(SUN_TAPS);
+#endif
+#endif
 }
 )";
 
