@@ -255,13 +255,14 @@ void destroy_mesh(const GlTable& gl, Mesh& m) {
   m = Mesh{};
 }
 
-/// One instanced particle stream: a shared corner quad plus a growing per-instance buffer.
+/// One particle stream: a growing vertex buffer of quads (four vertices per particle).
 struct ParticleStream {
   std::size_t floats = kInstanceFloats;  // per instance
   GLuint vao = 0;
   GLuint instances = 0;
   std::size_t capacity = 0;  // particles the GL buffer holds
-  std::vector<float> staging;
+  std::vector<float> staging;   // per particle
+  std::vector<float> expanded;  // per vertex: four copies of each particle
   std::size_t count = 0;
 };
 
@@ -357,7 +358,8 @@ struct Renderer::Impl {
   // Tone-mapped 8-bit output that is read back.
   GLuint out_fbo = 0, out_color = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
-  GLuint empty_vao = 0, quad_vbo = 0;
+  GLuint empty_vao = 0, quad_ebo = 0;
+  std::size_t quad_capacity = 0;  // particles quad_ebo indexes
   Mesh cube;
   ParticleStream soft, additive, droplets, streaks;
 
@@ -501,17 +503,15 @@ void Renderer::Impl::create() {
   unit_cube(vertices, indices);
   cube = upload_mesh(gl, vertices, indices);
 
-  const float corners[] = {-1.f, -1.f, 1.f, -1.f, -1.f, 1.f, 1.f, 1.f};
-  gl.GenBuffers(1, &quad_vbo);
-  gl.BindBuffer(GL_ARRAY_BUFFER, quad_vbo);
-  gl.BufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  // Particles are drawn as indexed quads, four vertices per particle each carrying the
+  // particle's data, not instanced: llvmpipe runs an instanced draw as one small draw per
+  // instance, several times slower for 100k sprites. The index buffer is shared.
+  gl.GenBuffers(1, &quad_ebo);
   streaks.floats = kStreakFloats;
   for (ParticleStream* stream : {&soft, &additive, &droplets, &streaks}) {
     gl.GenVertexArrays(1, &stream->vao);
     gl.BindVertexArray(stream->vao);
-    gl.BindBuffer(GL_ARRAY_BUFFER, quad_vbo);
-    gl.EnableVertexAttribArray(0);
-    gl.VertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, quad_ebo);
     gl.GenBuffers(1, &stream->instances);
     gl.BindBuffer(GL_ARRAY_BUFFER, stream->instances);
     const GLsizei stride = GLsizei(stream->floats * sizeof(float));
@@ -519,7 +519,6 @@ void Renderer::Impl::create() {
       gl.EnableVertexAttribArray(attribute);
       gl.VertexAttribPointer(attribute, 4, GL_FLOAT, GL_FALSE, stride,
                              reinterpret_cast<const void*>(4 * (attribute - 1) * sizeof(float)));
-      gl.VertexAttribDivisor(attribute, 1);
     }
   }
   gl.BindVertexArray(0);
@@ -542,7 +541,7 @@ void Renderer::Impl::destroy() noexcept {
     if (stream->instances != 0) gl.DeleteBuffers(1, &stream->instances);
     *stream = ParticleStream{};
   }
-  if (quad_vbo != 0) gl.DeleteBuffers(1, &quad_vbo);
+  if (quad_ebo != 0) gl.DeleteBuffers(1, &quad_ebo);
   if (empty_vao != 0) gl.DeleteVertexArrays(1, &empty_vao);
   for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo, &depth_fbo}) {
     if (*fbo != 0) gl.DeleteFramebuffers(1, fbo);
@@ -553,7 +552,8 @@ void Renderer::Impl::destroy() noexcept {
   for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex}) {
     if (*tex != 0) gl.DeleteTextures(1, tex);
   }
-  quad_vbo = empty_vao = 0;
+  quad_ebo = empty_vao = 0;
+  quad_capacity = 0;
   msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = 0;
   msaa_color = msaa_depth = resolve_depth = out_color = 0;
   resolve_tex = shadow_tex = depth_tex = 0;
@@ -695,7 +695,7 @@ void Renderer::Impl::draw_shadow_map() {
       if (stream->count == 0) continue;
       p.set("u_opaque", stream == &droplets ? 1 : 0);
       gl.BindVertexArray(stream->vao);
-      gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(stream->count));
+      gl.DrawElements(GL_TRIANGLES, GLsizei(6 * stream->count), GL_UNSIGNED_INT, nullptr);
     }
   }
   gl.Disable(GL_POLYGON_OFFSET_FILL);
@@ -771,14 +771,35 @@ void Renderer::Impl::draw_meshes() {
 void Renderer::Impl::upload_stream(ParticleStream& stream) {
   stream.count = stream.staging.size() / stream.floats;
   if (stream.count == 0) return;
+  if (stream.count > quad_capacity) {
+    quad_capacity = std::max(stream.count, quad_capacity + quad_capacity / 2);
+    std::vector<GLuint> indices(6 * quad_capacity);
+    for (std::size_t i = 0; i < quad_capacity; ++i) {
+      const auto base = GLuint(4 * i);
+      const GLuint quad[6] = {base, base + 1, base + 2, base + 2, base + 1, base + 3};
+      std::memcpy(&indices[6 * i], quad, sizeof quad);
+    }
+    gl.BindBuffer(GL_COPY_WRITE_BUFFER, quad_ebo);
+    gl.BufferData(GL_COPY_WRITE_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)), indices.data(),
+                  GL_STATIC_DRAW);
+  }
+  // Four copies of each particle's data, one per corner (the shader derives the corner from
+  // gl_VertexID).
+  const std::size_t f = stream.floats;
+  stream.expanded.resize(4 * stream.staging.size());
+  const float* src = stream.staging.data();
+  float* dst = stream.expanded.data();
+  for (std::size_t i = 0; i < stream.count; ++i, src += f) {
+    for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
+  }
   gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
-  const GLsizeiptr bytes = GLsizeiptr(stream.staging.size() * sizeof(float));
+  const GLsizeiptr bytes = GLsizeiptr(stream.expanded.size() * sizeof(float));
   if (stream.count > stream.capacity) {
     stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
-    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(stream.capacity * stream.floats * sizeof(float)),
-                  nullptr, GL_STREAM_DRAW);
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(4 * stream.capacity * f * sizeof(float)), nullptr,
+                  GL_STREAM_DRAW);
   }
-  gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.staging.data());
+  gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.expanded.data());
 }
 
 void Renderer::Impl::set_particle_uniforms(const Program& p) const {
@@ -850,7 +871,7 @@ void Renderer::Impl::draw_droplets() {
   program.set("u_opaque", 1);
   if (samples > 0) gl.Enable(GL_SAMPLE_ALPHA_TO_COVERAGE);
   gl.BindVertexArray(droplets.vao);
-  gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(droplets.count));
+  gl.DrawElements(GL_TRIANGLES, GLsizei(6 * droplets.count), GL_UNSIGNED_INT, nullptr);
   gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
 }
 
@@ -886,7 +907,7 @@ void Renderer::Impl::draw_particles() {
       gl.BlendFunc(GL_ONE, GL_ONE);
     }
     gl.BindVertexArray(pass.stream->vao);
-    gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(pass.stream->count));
+    gl.DrawElements(GL_TRIANGLES, GLsizei(6 * pass.stream->count), GL_UNSIGNED_INT, nullptr);
   }
   gl.DepthMask(GL_TRUE);
   gl.Disable(GL_BLEND);

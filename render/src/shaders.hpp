@@ -194,7 +194,6 @@ void main() {}
 )";
 
 inline constexpr char kParticleVs[] = R"(
-layout(location = 0) in vec2 a_corner;        // quad corner in [-1, 1]^2
 layout(location = 1) in vec4 a_center_radius; // per instance: world position (m), radius (m)
 layout(location = 2) in vec4 a_color;         // per instance: linear RGBA
 uniform mat4 u_view;
@@ -208,6 +207,9 @@ out vec4 v_color;
 out float v_sun;
 flat out vec4 v_center_view;  // sprite centre, view frame (m), and drawn radius (m)
 void main() {
+  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
+  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
+  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
   vec4 c = u_view * vec4(a_center_radius.xyz, 1.0);
   float depth = max(-c.z, 1e-4);
   // A sprite under a pixel would flicker in and out of the sample grid: draw it one pixel
@@ -315,7 +317,6 @@ void main() {
 /// Rain: a capsule from the head back along the screen-space velocity, built in pixels so its
 /// width never drops under a pixel (thin streaks get fainter instead).
 inline constexpr char kStreakVs[] = R"(
-layout(location = 0) in vec2 a_corner;        // x: -1 head end, +1 tail end; y: across
 layout(location = 1) in vec4 a_center_radius; // head position (m), radius (m)
 layout(location = 2) in vec4 a_color;
 layout(location = 3) in vec3 a_trail;         // head to tail, world frame (m)
@@ -333,6 +334,9 @@ out float v_sun;
 out float v_distance;            // view distance (m)
 flat out float v_radius;
 void main() {
+  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
+  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
+  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
   vec3 head = (u_view * vec4(a_center_radius.xyz, 1.0)).xyz;
   vec3 tail = head + mat3(u_view) * a_trail;
   float limit = -1.001 * u_near;
@@ -383,7 +387,6 @@ void main() {
 
 /// Particles in the sun's shadow map: discs facing the sun; see RenderSettings::particle_shadows.
 inline constexpr char kParticleDepthVs[] = R"(
-layout(location = 0) in vec2 a_corner;
 layout(location = 1) in vec4 a_center_radius;
 layout(location = 2) in vec4 a_color;
 uniform mat4 u_light_view_proj;
@@ -394,10 +397,13 @@ out vec2 v_corner;
 flat out float v_alpha;
 flat out float v_seed;
 void main() {
+  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
+  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
+  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
   vec3 w = a_center_radius.xyz + (u_light_right * a_corner.x + u_light_up * a_corner.y) * a_center_radius.w;
   v_corner = a_corner;
   v_alpha = u_opaque != 0 ? 1.0 : min(a_color.a, 0.999);
-  v_seed = float(gl_InstanceID & 15);
+  v_seed = float((gl_VertexID >> 2) & 15);
   gl_Position = u_light_view_proj * vec4(w, 1.0);
 }
 )";
