@@ -2,7 +2,7 @@
 // particle frame draws — 100k instanced, alpha-blended round sprites at 1280x720 with 4x MSAA,
 // instance data uploaded every frame, resolved and read back to memory every frame. No
 // simreel code. Usage: raw_osmesa_baseline [particles] [frames] [msaa]
-// Prints the median frame time; bench_render reports simreel's time as a ratio of it.
+// (optional 4th and 5th arguments: width height). Prints the median frame time; bench_render reports simreel's time as a ratio of it.
 #include <GL/glcorearb.h>  // before osmesa.h
 
 #include <GL/osmesa.h>
@@ -107,7 +107,8 @@ int main(int argc, char** argv) {
   const std::size_t n = argc > 1 ? std::size_t(std::atol(argv[1])) : 100000;
   const int frames = argc > 2 ? std::atoi(argv[2]) : 30;
   const int samples = argc > 3 ? std::atoi(argv[3]) : 4;
-  const int w = 1280, h = 720;
+  const int w = argc > 4 ? std::atoi(argv[4]) : 1280;
+  const int h = argc > 5 ? std::atoi(argv[5]) : 720;
 
   const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_PROFILE,
                          OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
