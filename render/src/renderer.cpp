@@ -810,7 +810,7 @@ void Renderer::Impl::set_particle_uniforms(const Program& p) const {
   p.use();
   p.set("u_view", view);
   p.set("u_proj", proj);
-  p.set("u_view_to_world", Mat3f(view_rotation.transpose()));
+  p.set("u_up_view", Vec3f(view_rotation * Vec3f::UnitZ()));
   p.set("u_pixels_per_unit", proj(1, 1) * 0.5f * float(settings.height));
   p.set("u_viewport", float(settings.width), float(settings.height));
   p.set("u_near", camera.near_m);

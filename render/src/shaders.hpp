@@ -233,14 +233,12 @@ in vec2 v_corner;
 in vec4 v_color;
 in float v_sun;
 flat in vec4 v_center_view;
-uniform mat4 u_proj;
-uniform mat3 u_view_to_world;
+uniform vec3 u_up_view;  // world +z in the view frame: a view-frame normal's world z is dot(n, u_up_view)
 // Writes the depth of the sphere's front surface at this fragment; h is the half chord
-// sqrt(1 - r2) in radii.
+// sqrt(1 - r2) in radii. A perspective projection's depth depends on view z alone.
 void write_sphere_depth(float h) {
-  vec3 p = v_center_view.xyz + v_center_view.w * vec3(v_corner, h);
-  vec4 clip = u_proj * vec4(p, 1.0);
-  gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
+  float z = v_center_view.z + v_center_view.w * h;
+  gl_FragDepth = clamp(0.5 * (u_depth_params.x * z + u_depth_params.y) / (-z) + 0.5, 0.0, 1.0);
 }
 // Fraction of the sphere's chord through this fragment that lies in front of the opaque
 // scene: 1 in open air, falling smoothly to 0 where the sphere sinks into a surface (no hard
@@ -282,7 +280,7 @@ void main() {
   s8 *= s8; s8 *= s8; s8 *= s8;
   float s32 = s8 * s8; s32 *= s32;
   float spec = 0.35 * a * s32 * s8;  // exponent 40 by squaring: pow() is costly on llvmpipe
-  vec3 ambient = hemisphere((u_view_to_world * n).z);
+  vec3 ambient = hemisphere(dot(n, u_up_view));
   vec3 color = v_color.rgb * (ambient + u_light_color * (wrap * v_sun)) + u_light_color * (spec * v_sun);
   o_color = vec4(color * alpha, alpha);  // premultiplied
 }
@@ -308,7 +306,7 @@ void main() {
   s8 *= s8; s8 *= s8; s8 *= s8;
   float s32 = s8 * s8; s32 *= s32;
   float spec = 0.5 * s32 * s32;
-  vec3 ambient = hemisphere((u_view_to_world * n).z);
+  vec3 ambient = hemisphere(dot(n, u_up_view));
   vec3 color = v_color.rgb * (ambient + u_light_color * (ndl * v_sun)) + u_light_color * (spec * v_sun);
   o_color = vec4(color, v_color.a * (1.0 - smoothstep(1.0 - aa, 1.0, r)));
 }
