@@ -102,6 +102,8 @@ void upload_particles(const Scene& scene, const SceneWorld& sw, render::Renderer
     b.color = v.color;
     b.radius = v.radius;
     b.style = scene.emitters[i].style;
+    b.velocity = v.velocity;  // streaks stretch along it
+    b.streak_s = scene.emitters[i].streak_s;
     r.set_particles(sw.systems[i].id.packed(), b);
   }
 }
@@ -229,6 +231,7 @@ int render_command(const RenderOptions& o) {
     }
     upload_particles(scene, sw, renderer);
     upload_cloths(scene, sw, renderer, cloth_sprites);
+    renderer.set_camera(render::camera_at(scene.camera_motion, frame * dt));  // camera.path / orbit
     const render::Image image = renderer.render();
     for (std::size_t s = 0; s < sinks.size();) {
       try {

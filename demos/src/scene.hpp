@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "simreel/assets/mesh.hpp"
+#include "simreel/render/camera_path.hpp"
 #include "simreel/render/context.hpp"
 #include "simreel/render/renderer.hpp"
 #include "simreel/sim/world.hpp"
@@ -38,6 +39,7 @@ struct ColliderScene {
 struct EmitterScene {
   sim::ParticleSystemDef system;
   render::ParticleStyle style = render::ParticleStyle::soft;
+  float streak_s = 0.02f;  ///< (s) streak length per unit speed (render_style "streak")
 };
 
 /// A force field with the names of the systems (emitters) it acts on (empty = all).
@@ -69,6 +71,7 @@ struct Scene {
   render::Backend backend = render::Backend::osmesa;
   render::RenderSettings render;
   render::Camera camera;
+  render::CameraMotion camera_motion;  ///< camera.path / camera.orbit; base == camera
   render::Light light;
   std::vector<ColliderScene> colliders;
   std::vector<EmitterScene> emitters;

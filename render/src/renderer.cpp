@@ -23,7 +23,8 @@ namespace {
 using Mat4f = Eigen::Matrix4f;
 
 constexpr int kShadowMapSize = 2048;
-constexpr std::size_t kInstanceFloats = 8;  // centre xyz, radius, colour rgba
+constexpr std::size_t kInstanceFloats = 8;   // centre xyz, radius, colour rgba
+constexpr std::size_t kStreakFloats = 12;    // the same, then head-to-tail offset xyz, padding
 
 // ---------------------------------------------------------------------------------------------
 // Matrices (column-major, OpenGL clip conventions)
@@ -124,6 +125,7 @@ class Program {
     return *this;
   }
 
+  [[nodiscard]] bool valid() const { return id_ != 0; }
   void use() const { gl_->UseProgram(id_); }
   void set(const char* name, int v) const { gl_->Uniform1i(loc(name), v); }
   void set(const char* name, float v) const { gl_->Uniform1f(loc(name), v); }
@@ -221,14 +223,13 @@ struct Mesh {
 };
 
 Mesh upload_mesh(const GlTable& gl, const std::vector<Vertex>& vertices,
-                 const std::vector<GLuint>& indices) {
+                 const std::vector<GLuint>& indices, GLenum usage = GL_STATIC_DRAW) {
   Mesh m;
   gl.GenVertexArrays(1, &m.vao);
   gl.BindVertexArray(m.vao);
   gl.GenBuffers(1, &m.vbo);
   gl.BindBuffer(GL_ARRAY_BUFFER, m.vbo);
-  gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(Vertex)), vertices.data(),
-                GL_STATIC_DRAW);
+  gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(Vertex)), vertices.data(), usage);
   gl.GenBuffers(1, &m.ebo);
   gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
   gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)),
@@ -254,12 +255,14 @@ void destroy_mesh(const GlTable& gl, Mesh& m) {
   m = Mesh{};
 }
 
-/// One instanced particle stream: a shared corner quad plus a growing per-instance buffer.
+/// One particle stream: a growing vertex buffer of quads (four vertices per particle).
 struct ParticleStream {
+  std::size_t floats = kInstanceFloats;  // per instance
   GLuint vao = 0;
   GLuint instances = 0;
   std::size_t capacity = 0;  // particles the GL buffer holds
-  std::vector<float> staging;
+  std::vector<float> staging;   // per particle
+  std::vector<float> expanded;  // per vertex: four copies of each particle
   std::size_t count = 0;
 };
 
@@ -288,7 +291,7 @@ std::string hex(unsigned v) {
 // ---------------------------------------------------------------------------------------------
 
 struct Renderer::Impl {
-  enum class Kind { plane, box, particles };
+  enum class Kind { plane, box, mesh, particles };
 
   struct Drawable {
     Kind kind = Kind::box;
@@ -297,8 +300,15 @@ struct Renderer::Impl {
     Vec4f color = Vec4f::Ones();
     Vec3f half_extents = Vec3f::Ones();  // box
     PlaneDesc plane;                     // plane
-    Mesh mesh;                           // plane (boxes share the unit cube)
-    std::vector<float> instances;        // particles, kInstanceFloats each
+    Mesh mesh;                           // plane and mesh (boxes share the unit cube)
+    // Mesh: material, texture, vertex data kept for update_mesh, local bounds for the shadow fit.
+    Material material;
+    GLuint texture = 0;
+    std::vector<Vertex> vertices;  // CPU copy for update_mesh (keeps the UVs)
+    std::vector<std::uint32_t> indices;
+    Eigen::AlignedBox3f local_bounds;
+    bool dynamic = false;
+    std::vector<float> instances;  // particles, kInstanceFloats (kStreakFloats for streaks) each
     ParticleStyle style = ParticleStyle::soft;
   };
 
@@ -318,13 +328,18 @@ struct Renderer::Impl {
 
   void create();
   void destroy() noexcept;
+  void destroy_drawable(Drawable& d) noexcept;
   void check_framebuffer(const char* what) const;
   void check_error(const char* stage) const;
   Drawable& add(ObjectKey key, Kind kind);
 
+  void gather_particles();
   void draw_shadow_map();
   void draw_meshes();
+  void draw_droplets();
+  void copy_scene_depth();
   void draw_particles();
+  void set_particle_uniforms(const Program& p) const;
   void upload_stream(ParticleStream& stream);
   Image read_back();
 
@@ -337,14 +352,24 @@ struct Renderer::Impl {
   // Scene target: multisampled half-float colour + depth, resolved into `resolve_tex`.
   GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0;
   GLuint resolve_fbo = 0, resolve_tex = 0, resolve_depth = 0;
+  // A single-sample copy of the opaque depth that soft particles read (a texture cannot be
+  // sampled while it is the depth attachment being tested against).
+  GLuint depth_fbo = 0, depth_tex = 0;
   // Tone-mapped 8-bit output that is read back.
   GLuint out_fbo = 0, out_color = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
-  GLuint empty_vao = 0, quad_vbo = 0;
+  GLuint empty_vao = 0, quad_ebo = 0;
+  std::size_t quad_capacity = 0;  // particles quad_ebo indexes
   Mesh cube;
-  ParticleStream soft, additive;
+  ParticleStream soft, additive, droplets, streaks;
 
-  Program sky_program, lit_program, depth_program, soft_program, add_program, post_program;
+  Program sky_program, lit_program, depth_program, particle_depth_program, post_program;
+  // Particle programs by style and by sun taps per vertex (0: no shadow map this frame, 1, or
+  // 4 with particle casters), compiled on first use: llvmpipe runs a vertex shader's texture
+  // lookups even when a uniform branch skips them, so each variant samples only what it needs.
+  enum ParticleProgram { soft_pp, additive_pp, droplet_pp, streak_pp };
+  Program particle_programs[4][3];
+  const Program& particle_program(ParticleProgram which);
 
   std::unordered_map<ObjectKey, Drawable> drawables;
   // Keys in increasing order, so drawing (and merging particle batches) is deterministic.
@@ -354,6 +379,7 @@ struct Renderer::Impl {
   Mat4f view = Mat4f::Identity();
   Mat4f proj = Mat4f::Identity();
   Mat4f light_view_proj = Mat4f::Identity();
+  Vec3f light_right = Vec3f::UnitX(), light_up = Vec3f::UnitY();
   bool shadow_enabled = false;
   float shadow_bias = 0.f, shadow_offset = 0.f, shadow_radius = 0.f;
   std::vector<float> gather;  // soft particles of all batches before sorting
@@ -386,12 +412,11 @@ void Renderer::Impl::create() {
 
   using namespace detail;
   sky_program = Program(gl, "sky", source({kFullscreenVs}), source({kSkyGlsl, kSkyFs}));
-  lit_program = Program(gl, "lit mesh", source({kLitVs}), source({kSkyGlsl, kShadowGlsl, kLitFs}));
+  lit_program = Program(gl, "lit mesh", source({kLitVs}),
+                        source({kSkyGlsl, kShadowGlsl, kAmbientGlsl, kLitFs}));
   depth_program = Program(gl, "shadow depth", source({kDepthVs}), source({kDepthFs}));
-  soft_program = Program(gl, "soft particle", source({kShadowGlsl, kParticleVs}),
-                         source({kSphereDepthGlsl, kParticleSoftFs}));
-  add_program = Program(gl, "additive particle", source({kShadowGlsl, kParticleVs}),
-                        source({kSphereDepthGlsl, kParticleAddFs}));
+  particle_depth_program = Program(gl, "particle shadow depth", source({kParticleDepthVs}),
+                                   source({kParticleDepthFs}));
   post_program = Program(gl, "tone map", source({kFullscreenVs}), source({kPostFs}));
 
   GLint max_samples = 0;
@@ -399,14 +424,18 @@ void Renderer::Impl::create() {
   samples = settings.msaa_samples > 1 ? std::min(settings.msaa_samples, int(max_samples)) : 0;
   if (samples < 2) samples = 0;
 
+  auto texture_2d = [&](GLuint& tex, GLint internal, GLenum format, GLenum type, GLint filter) {
+    gl.GenTextures(1, &tex);
+    gl.BindTexture(GL_TEXTURE_2D, tex);
+    gl.TexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, type, nullptr);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  };
+
   // Resolve target (also the scene target without multisampling).
-  gl.GenTextures(1, &resolve_tex);
-  gl.BindTexture(GL_TEXTURE_2D, resolve_tex);
-  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  texture_2d(resolve_tex, GL_RGBA16F, GL_RGBA, GL_FLOAT, GL_NEAREST);
   gl.GenFramebuffers(1, &resolve_fbo);
   gl.BindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
   gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, resolve_tex, 0);
@@ -417,6 +446,14 @@ void Renderer::Impl::create() {
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth);
   }
   check_framebuffer("resolve");
+
+  texture_2d(depth_tex, GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, GL_NEAREST);
+  gl.GenFramebuffers(1, &depth_fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, depth_fbo);
+  gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_tex, 0);
+  gl.DrawBuffer(GL_NONE);
+  gl.ReadBuffer(GL_NONE);
+  check_framebuffer("scene depth copy");
 
   if (samples > 0) {
     gl.GenRenderbuffers(1, &msaa_color);
@@ -466,62 +503,66 @@ void Renderer::Impl::create() {
   unit_cube(vertices, indices);
   cube = upload_mesh(gl, vertices, indices);
 
-  const float corners[] = {-1.f, -1.f, 1.f, -1.f, -1.f, 1.f, 1.f, 1.f};
-  gl.GenBuffers(1, &quad_vbo);
-  gl.BindBuffer(GL_ARRAY_BUFFER, quad_vbo);
-  gl.BufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
-  for (ParticleStream* stream : {&soft, &additive}) {
+  // Particles are drawn as indexed quads, four vertices per particle each carrying the
+  // particle's data, not instanced: llvmpipe runs an instanced draw as one small draw per
+  // instance, several times slower for 100k sprites. The index buffer is shared.
+  gl.GenBuffers(1, &quad_ebo);
+  streaks.floats = kStreakFloats;
+  for (ParticleStream* stream : {&soft, &additive, &droplets, &streaks}) {
     gl.GenVertexArrays(1, &stream->vao);
     gl.BindVertexArray(stream->vao);
-    gl.BindBuffer(GL_ARRAY_BUFFER, quad_vbo);
-    gl.EnableVertexAttribArray(0);
-    gl.VertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, quad_ebo);
     gl.GenBuffers(1, &stream->instances);
     gl.BindBuffer(GL_ARRAY_BUFFER, stream->instances);
-    const GLsizei stride = GLsizei(kInstanceFloats * sizeof(float));
-    gl.EnableVertexAttribArray(1);
-    gl.VertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, stride, nullptr);
-    gl.VertexAttribDivisor(1, 1);
-    gl.EnableVertexAttribArray(2);
-    gl.VertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, stride,
-                           reinterpret_cast<const void*>(4 * sizeof(float)));
-    gl.VertexAttribDivisor(2, 1);
+    const GLsizei stride = GLsizei(stream->floats * sizeof(float));
+    for (GLuint attribute = 1; 4 * (attribute - 1) < stream->floats; ++attribute) {
+      gl.EnableVertexAttribArray(attribute);
+      gl.VertexAttribPointer(attribute, 4, GL_FLOAT, GL_FALSE, stride,
+                             reinterpret_cast<const void*>(4 * (attribute - 1) * sizeof(float)));
+    }
   }
   gl.BindVertexArray(0);
   gl.BindBuffer(GL_ARRAY_BUFFER, 0);
   check_error("creating the renderer's framebuffers and buffers");
 }
 
+void Renderer::Impl::destroy_drawable(Drawable& d) noexcept {
+  destroy_mesh(gl, d.mesh);
+  if (d.texture != 0) gl.DeleteTextures(1, &d.texture);
+  d.texture = 0;
+}
+
 void Renderer::Impl::destroy() noexcept {
-  for (auto& [key, d] : drawables) destroy_mesh(gl, d.mesh);
+  for (auto& [key, d] : drawables) destroy_drawable(d);
   drawables.clear();
   destroy_mesh(gl, cube);
-  for (ParticleStream* stream : {&soft, &additive}) {
+  for (ParticleStream* stream : {&soft, &additive, &droplets, &streaks}) {
     if (stream->vao != 0) gl.DeleteVertexArrays(1, &stream->vao);
     if (stream->instances != 0) gl.DeleteBuffers(1, &stream->instances);
     *stream = ParticleStream{};
   }
-  if (quad_vbo != 0) gl.DeleteBuffers(1, &quad_vbo);
+  if (quad_ebo != 0) gl.DeleteBuffers(1, &quad_ebo);
   if (empty_vao != 0) gl.DeleteVertexArrays(1, &empty_vao);
-  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo}) {
+  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo, &depth_fbo}) {
     if (*fbo != 0) gl.DeleteFramebuffers(1, fbo);
   }
   for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color}) {
     if (*rb != 0) gl.DeleteRenderbuffers(1, rb);
   }
-  for (GLuint* tex : {&resolve_tex, &shadow_tex}) {
+  for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex}) {
     if (*tex != 0) gl.DeleteTextures(1, tex);
   }
-  quad_vbo = empty_vao = 0;
-  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = 0;
+  quad_ebo = empty_vao = 0;
+  quad_capacity = 0;
+  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = 0;
   msaa_color = msaa_depth = resolve_depth = out_color = 0;
-  resolve_tex = shadow_tex = 0;
-  sky_program = Program();
-  lit_program = Program();
-  depth_program = Program();
-  soft_program = Program();
-  add_program = Program();
-  post_program = Program();
+  resolve_tex = shadow_tex = depth_tex = 0;
+  for (Program* p : {&sky_program, &lit_program, &depth_program, &particle_depth_program, &post_program}) {
+    *p = Program();
+  }
+  for (auto& by_taps : particle_programs) {
+    for (Program& p : by_taps) p = Program();
+  }
 }
 
 Renderer::Impl::Drawable& Renderer::Impl::add(ObjectKey key, Kind kind) {
@@ -537,122 +578,21 @@ Renderer::Impl::Drawable& Renderer::Impl::add(ObjectKey key, Kind kind) {
 // ---------------------------------------------------------------------------------------------
 // Drawing
 
-void Renderer::Impl::draw_shadow_map() {
-  // Fit an orthographic sun view around every box (the only shadow casters).
-  Eigen::AlignedBox3f bounds;
-  for (const ObjectKey key : order) {
-    const Drawable& d = drawables.at(key);
-    if (d.kind != Kind::box) continue;
-    for (int c = 0; c < 8; ++c) {
-      const Vec3f corner((c & 1) ? 1.f : -1.f, (c & 2) ? 1.f : -1.f, (c & 4) ? 1.f : -1.f);
-      bounds.extend(d.rotation * corner.cwiseProduct(d.half_extents) + d.translation);
-    }
-  }
-  shadow_enabled = !bounds.isEmpty();
-  if (!shadow_enabled) return;
-
-  const Vec3f center = bounds.center();
-  const float radius = std::max(0.5f * bounds.diagonal().norm() * 1.05f, 1e-3f);
-  Vec3f dir = light.direction;
-  dir = dir.squaredNorm() > 0.f ? dir.normalized() : Vec3f(0.f, 0.f, -1.f);
-  const Vec3f eye = center - dir * (2.f * radius);
-  const float far_m = 4.f * radius;
-  light_view_proj = ortho(radius, radius, 0.f, far_m) * look_at(eye, center, any_perpendicular(dir));
-  const float texel_m = 2.f * radius / float(kShadowMapSize);
-  shadow_offset = 1.5f * texel_m;
-  shadow_bias = 1.5f * texel_m / far_m;
-  // A soft-edged sun: about 2 cm of penumbra at this scale, never sharper than two texels.
-  shadow_radius = std::max(2.f / float(kShadowMapSize), 0.02f / (2.f * radius));
-
-  gl.BindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
-  gl.Viewport(0, 0, kShadowMapSize, kShadowMapSize);
-  gl.Enable(GL_DEPTH_TEST);
-  gl.DepthFunc(GL_LESS);
-  gl.DepthMask(GL_TRUE);
-  gl.Clear(GL_DEPTH_BUFFER_BIT);
-  gl.Enable(GL_POLYGON_OFFSET_FILL);
-  gl.PolygonOffset(1.5f, 2.f);
-  depth_program.use();
-  depth_program.set("u_light_view_proj", light_view_proj);
-  gl.BindVertexArray(cube.vao);
-  for (const ObjectKey key : order) {
-    const Drawable& d = drawables.at(key);
-    if (d.kind != Kind::box) continue;
-    depth_program.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
-    gl.DrawElements(GL_TRIANGLES, cube.index_count, GL_UNSIGNED_INT, nullptr);
-  }
-  gl.Disable(GL_POLYGON_OFFSET_FILL);
-}
-
-void Renderer::Impl::draw_meshes() {
-  const Program& p = lit_program;
-  p.use();
-  p.set("u_view_proj", Mat4f(proj * view));
-  p.set("u_eye", camera.position);
-  p.set("u_light_dir", light.direction.squaredNorm() > 0.f ? Vec3f(light.direction.normalized())
-                                                           : Vec3f(0.f, 0.f, -1.f));
-  p.set("u_light_color", light.color);
-  p.set("u_ambient", light.ambient);
-  p.set("u_sky_top", settings.sky_top);
-  p.set("u_sky_bottom", settings.sky_bottom);
-  p.set("u_viewport", float(settings.width), float(settings.height));
-  // Fog scales with how far the camera stands from what it looks at, so it reads the same in
-  // a tabletop scene and a field.
-  p.set("u_fog_distance", std::max(5.f * (camera.target - camera.position).norm(), 1e-3f));
-  p.set("u_shadow_map", 1);
-  p.set("u_shadow_enabled", shadow_enabled ? 1 : 0);
-  p.set("u_light_view_proj", light_view_proj);
-  p.set("u_shadow_bias", shadow_bias);
-  p.set("u_shadow_offset", shadow_offset);
-  p.set("u_shadow_radius", shadow_radius);
-
-  for (const ObjectKey key : order) {
-    const Drawable& d = drawables.at(key);
-    if (d.kind == Kind::plane) {
-      p.set("u_model", affine(d.rotation, d.translation));
-      p.set("u_normal_matrix", d.rotation);
-      p.set("u_color", d.plane.color);
-      p.set("u_specular", 0.06f);
-      p.set("u_checker_m", std::max(d.plane.checker_m, 0.f));
-      p.set("u_half_size", std::max(d.plane.half_size, 1e-6f));
-      gl.BindVertexArray(d.mesh.vao);
-      gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
-    } else if (d.kind == Kind::box) {
-      p.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
-      p.set("u_normal_matrix", d.rotation);
-      p.set("u_color", d.color);
-      p.set("u_specular", 0.25f);
-      p.set("u_checker_m", 0.f);
-      p.set("u_half_size", 0.f);
-      gl.BindVertexArray(cube.vao);
-      gl.DrawElements(GL_TRIANGLES, cube.index_count, GL_UNSIGNED_INT, nullptr);
-    }
-  }
-}
-
-void Renderer::Impl::upload_stream(ParticleStream& stream) {
-  stream.count = stream.staging.size() / kInstanceFloats;
-  if (stream.count == 0) return;
-  gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
-  const GLsizeiptr bytes = GLsizeiptr(stream.staging.size() * sizeof(float));
-  if (stream.count > stream.capacity) {
-    stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
-    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(stream.capacity * kInstanceFloats * sizeof(float)),
-                  nullptr, GL_STREAM_DRAW);
-  }
-  gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.staging.data());
-}
-
-void Renderer::Impl::draw_particles() {
+void Renderer::Impl::gather_particles() {
   // Soft particles of every batch are merged and sorted back to front, so two overlapping
-  // batches blend correctly; additive ones need no order.
+  // batches blend correctly; additive ones, droplets (opaque) and thin streaks need no order.
   gather.clear();
   additive.staging.clear();
+  droplets.staging.clear();
+  streaks.staging.clear();
   for (const ObjectKey key : order) {
     const Drawable& d = drawables.at(key);
     if (d.kind != Kind::particles) continue;
-    auto& dst = d.style == ParticleStyle::soft ? gather : additive.staging;
-    dst.insert(dst.end(), d.instances.begin(), d.instances.end());
+    std::vector<float>* dst = &gather;
+    if (d.style == ParticleStyle::additive) dst = &additive.staging;
+    if (d.style == ParticleStyle::droplet) dst = &droplets.staging;
+    if (d.style == ParticleStyle::streak) dst = &streaks.staging;
+    dst->insert(dst->end(), d.instances.begin(), d.instances.end());
   }
 
   const std::size_t n = gather.size() / kInstanceFloats;
@@ -674,43 +614,300 @@ void Renderer::Impl::draw_particles() {
                   kInstanceFloats * sizeof(float));
     }
   }
-  upload_stream(soft);
-  upload_stream(additive);
-  if (soft.count == 0 && additive.count == 0) return;
+  for (ParticleStream* stream : {&soft, &additive, &droplets, &streaks}) upload_stream(*stream);
+}
 
+void Renderer::Impl::draw_shadow_map() {
+  // Fit an orthographic sun view around every caster: boxes, meshes and, if asked, particles.
+  Eigen::AlignedBox3f bounds;
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind == Kind::box) {
+      for (int c = 0; c < 8; ++c) {
+        const Vec3f corner((c & 1) ? 1.f : -1.f, (c & 2) ? 1.f : -1.f, (c & 4) ? 1.f : -1.f);
+        bounds.extend(d.rotation * corner.cwiseProduct(d.half_extents) + d.translation);
+      }
+    } else if (d.kind == Kind::mesh && !d.local_bounds.isEmpty()) {
+      for (int c = 0; c < 8; ++c) {
+        bounds.extend(d.rotation * d.local_bounds.corner(Eigen::AlignedBox3f::CornerType(c)) +
+                      d.translation);
+      }
+    } else if (d.kind == Kind::particles && settings.particle_shadows &&
+               (d.style == ParticleStyle::soft || d.style == ParticleStyle::droplet)) {
+      for (std::size_t i = 0; i < d.instances.size(); i += kInstanceFloats) {
+        const Vec3f c(d.instances[i], d.instances[i + 1], d.instances[i + 2]);
+        const float r = d.instances[i + 3];
+        bounds.extend(c - Vec3f::Constant(r));
+        bounds.extend(c + Vec3f::Constant(r));
+      }
+    }
+  }
+  shadow_enabled = !bounds.isEmpty() && bounds.diagonal().allFinite();
+  if (!shadow_enabled) return;
+
+  const Vec3f center = bounds.center();
+  const float radius = std::max(0.5f * bounds.diagonal().norm() * 1.05f, 1e-3f);
+  Vec3f dir = light.direction;
+  dir = dir.squaredNorm() > 0.f ? dir.normalized() : Vec3f(0.f, 0.f, -1.f);
+  const Vec3f eye = center - dir * (2.f * radius);
+  const float far_m = 4.f * radius;
+  const Mat4f light_view = look_at(eye, center, any_perpendicular(dir));
+  light_view_proj = ortho(radius, radius, 0.f, far_m) * light_view;
+  light_right = light_view.block<1, 3>(0, 0).transpose();
+  light_up = light_view.block<1, 3>(1, 0).transpose();
+  const float texel_m = 2.f * radius / float(kShadowMapSize);
+  shadow_offset = 1.5f * texel_m;
+  shadow_bias = 1.5f * texel_m / far_m;
+  // A soft-edged sun: about 2 cm of penumbra at this scale, never sharper than two texels
+  // (five with particle casters, whose stochastic texels the lookup must average away).
+  const float min_texels = settings.particle_shadows ? 5.f : 2.f;
+  shadow_radius = std::max(min_texels / float(kShadowMapSize), 0.02f / (2.f * radius));
+
+  gl.BindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  gl.Viewport(0, 0, kShadowMapSize, kShadowMapSize);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.DepthMask(GL_TRUE);
+  gl.Clear(GL_DEPTH_BUFFER_BIT);
+  gl.Enable(GL_POLYGON_OFFSET_FILL);
+  gl.PolygonOffset(1.5f, 2.f);
+  depth_program.use();
+  depth_program.set("u_light_view_proj", light_view_proj);
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind == Kind::box) {
+      depth_program.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
+      gl.BindVertexArray(cube.vao);
+      gl.DrawElements(GL_TRIANGLES, cube.index_count, GL_UNSIGNED_INT, nullptr);
+    } else if (d.kind == Kind::mesh) {
+      depth_program.set("u_model", affine(d.rotation, d.translation));
+      gl.BindVertexArray(d.mesh.vao);
+      gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
+    }
+  }
+  if (settings.particle_shadows) {
+    const Program& p = particle_depth_program;
+    p.use();
+    p.set("u_light_view_proj", light_view_proj);
+    p.set("u_light_right", light_right);
+    p.set("u_light_up", light_up);
+    for (const ParticleStream* stream : {&soft, &droplets}) {
+      if (stream->count == 0) continue;
+      p.set("u_opaque", stream == &droplets ? 1 : 0);
+      gl.BindVertexArray(stream->vao);
+      gl.DrawElements(GL_TRIANGLES, GLsizei(6 * stream->count), GL_UNSIGNED_INT, nullptr);
+    }
+  }
+  gl.Disable(GL_POLYGON_OFFSET_FILL);
+}
+
+void Renderer::Impl::draw_meshes() {
+  const Program& p = lit_program;
+  p.use();
+  p.set("u_view_proj", Mat4f(proj * view));
+  p.set("u_eye", camera.position);
+  p.set("u_light_dir", light.direction.squaredNorm() > 0.f ? Vec3f(light.direction.normalized())
+                                                           : Vec3f(0.f, 0.f, -1.f));
+  p.set("u_light_color", light.color);
+  p.set("u_ambient", light.ambient);
+  p.set("u_ground_ambient", light.ground_ambient);
+  const bool solid = settings.background == Background::solid;
+  p.set("u_sky_top", solid ? settings.background_color : settings.sky_top);
+  p.set("u_sky_bottom", solid ? settings.background_color : settings.sky_bottom);
+  p.set("u_viewport", float(settings.width), float(settings.height));
+  // Fog scales with how far the camera stands from what it looks at, so it reads the same in
+  // a tabletop scene and a field.
+  p.set("u_fog_distance", std::max(5.f * (camera.target - camera.position).norm(), 1e-3f));
+  p.set("u_shadow_map", 1);
+  p.set("u_texture", 2);
+  p.set("u_shadow_enabled", shadow_enabled ? 1 : 0);
+  p.set("u_light_view_proj", light_view_proj);
+  p.set("u_shadow_bias", shadow_bias);
+  p.set("u_shadow_offset", shadow_offset);
+  p.set("u_shadow_radius", shadow_radius);
+  p.set("u_has_texture", 0);
+
+  for (const ObjectKey key : order) {
+    const Drawable& d = drawables.at(key);
+    if (d.kind == Kind::plane) {
+      p.set("u_model", affine(d.rotation, d.translation));
+      p.set("u_normal_matrix", d.rotation);
+      p.set("u_color", d.plane.color);
+      p.set("u_specular", 0.06f);
+      p.set("u_checker_m", std::max(d.plane.checker_m, 0.f));
+      p.set("u_half_size", std::max(d.plane.half_size, 1e-6f));
+      gl.BindVertexArray(d.mesh.vao);
+      gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
+    } else if (d.kind == Kind::box) {
+      p.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
+      p.set("u_normal_matrix", d.rotation);
+      p.set("u_color", d.color);
+      p.set("u_specular", 0.25f);
+      p.set("u_checker_m", 0.f);
+      p.set("u_half_size", 0.f);
+      gl.BindVertexArray(cube.vao);
+      gl.DrawElements(GL_TRIANGLES, cube.index_count, GL_UNSIGNED_INT, nullptr);
+    } else if (d.kind == Kind::mesh) {
+      p.set("u_model", affine(d.rotation, d.translation));
+      p.set("u_normal_matrix", d.rotation);
+      p.set("u_color", d.material.base_color);
+      p.set("u_specular", std::clamp(d.material.specular, 0.f, 1.f));
+      p.set("u_checker_m", std::max(d.material.checker_m, 0.f));
+      p.set("u_half_size", 0.f);
+      p.set("u_has_texture", d.texture != 0 ? 1 : 0);
+      if (d.texture != 0) {
+        gl.ActiveTexture(GL_TEXTURE2);
+        gl.BindTexture(GL_TEXTURE_2D, d.texture);
+      }
+      if (!d.material.double_sided) gl.Enable(GL_CULL_FACE);
+      gl.BindVertexArray(d.mesh.vao);
+      gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
+      gl.Disable(GL_CULL_FACE);
+      p.set("u_has_texture", 0);
+    }
+  }
+}
+
+void Renderer::Impl::upload_stream(ParticleStream& stream) {
+  stream.count = stream.staging.size() / stream.floats;
+  if (stream.count == 0) return;
+  if (stream.count > quad_capacity) {
+    quad_capacity = std::max(stream.count, quad_capacity + quad_capacity / 2);
+    std::vector<GLuint> indices(6 * quad_capacity);
+    for (std::size_t i = 0; i < quad_capacity; ++i) {
+      const auto base = GLuint(4 * i);
+      const GLuint quad[6] = {base, base + 1, base + 2, base + 2, base + 1, base + 3};
+      std::memcpy(&indices[6 * i], quad, sizeof quad);
+    }
+    gl.BindBuffer(GL_COPY_WRITE_BUFFER, quad_ebo);
+    gl.BufferData(GL_COPY_WRITE_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)), indices.data(),
+                  GL_STATIC_DRAW);
+  }
+  // Four copies of each particle's data, one per corner (the shader derives the corner from
+  // gl_VertexID).
+  const std::size_t f = stream.floats;
+  stream.expanded.resize(4 * stream.staging.size());
+  const float* src = stream.staging.data();
+  float* dst = stream.expanded.data();
+  for (std::size_t i = 0; i < stream.count; ++i, src += f) {
+    for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
+  }
+  gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
+  const GLsizeiptr bytes = GLsizeiptr(stream.expanded.size() * sizeof(float));
+  if (stream.count > stream.capacity) {
+    stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(4 * stream.capacity * f * sizeof(float)), nullptr,
+                  GL_STREAM_DRAW);
+  }
+  gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.expanded.data());
+}
+
+void Renderer::Impl::set_particle_uniforms(const Program& p) const {
   const Vec3f to_sun = light.direction.squaredNorm() > 0.f ? Vec3f(-light.direction.normalized())
                                                            : Vec3f(0.f, 0.f, 1.f);
-  const Vec3f to_sun_view = view.block<3, 3>(0, 0) * to_sun;
-  const float pixels_per_unit = proj(1, 1) * 0.5f * float(settings.height);
+  const Mat3f view_rotation = view.block<3, 3>(0, 0);
+  const Vec3f to_sun_view = view_rotation * to_sun;
+  p.use();
+  p.set("u_view", view);
+  p.set("u_proj", proj);
+  p.set("u_up_view", Vec3f(view_rotation * Vec3f::UnitZ()));
+  p.set("u_pixels_per_unit", proj(1, 1) * 0.5f * float(settings.height));
+  p.set("u_viewport", float(settings.width), float(settings.height));
+  p.set("u_near", camera.near_m);
+  p.set("u_light_view", to_sun_view);
+  const Vec3f half = to_sun_view + Vec3f::UnitZ();  // zero only with the sun dead behind
+  p.set("u_half_view", half.squaredNorm() > 1e-12f ? Vec3f(half.normalized()) : Vec3f::UnitZ());
+  p.set("u_light_color", light.color);
+  p.set("u_ambient", light.ambient);
+  p.set("u_ground_ambient", light.ground_ambient);
+  p.set("u_to_sun", to_sun);
+  p.set("u_sun_offset", settings.particle_shadows ? 1.5f : 0.f);
+  p.set("u_opaque", 0);
+  p.set("u_shadow_map", 1);
+  p.set("u_scene_depth", 3);
+  p.set("u_depth_params", proj(2, 2), proj(2, 3));
+  p.set("u_shadow_enabled", shadow_enabled ? 1 : 0);
+  p.set("u_light_view_proj", light_view_proj);
+  p.set("u_shadow_bias", shadow_bias);
+  p.set("u_shadow_offset", 0.f);
+  p.set("u_shadow_radius", shadow_radius);
+}
 
+const Program& Renderer::Impl::particle_program(ParticleProgram which) {
+  const int variant = !shadow_enabled ? 0 : settings.particle_shadows ? 2 : 1;
+  Program& p = particle_programs[which][variant];
+  if (!p.valid()) {
+    using namespace detail;
+    const char* taps = variant == 0 ? "#define SUN_TAPS 0\n" : variant == 1 ? "#define SUN_TAPS 1\n"
+                                                                         : "#define SUN_TAPS 4\n";
+    const std::string vs = which == streak_pp ? source({taps, kShadowGlsl, kStreakVs})
+                                              : source({taps, kShadowGlsl, kParticleVs});
+    switch (which) {
+      case soft_pp:
+        p = Program(gl, "soft particle", vs,
+                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
+        break;
+      case additive_pp:
+        p = Program(gl, "additive particle", vs,
+                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
+        break;
+      case droplet_pp:
+        p = Program(gl, "droplet particle", vs,
+                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
+        break;
+      case streak_pp:
+        p = Program(gl, "streak particle", vs, source({kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
+        break;
+    }
+  }
+  return p;
+}
+
+void Renderer::Impl::draw_droplets() {
+  if (droplets.count == 0) return;
+  // Opaque: drawn before the scene depth is copied, so soft particles fade against them too.
+  const Program& program = particle_program(droplet_pp);
+  set_particle_uniforms(program);
+  program.set("u_opaque", 1);
+  if (samples > 0) gl.Enable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+  gl.BindVertexArray(droplets.vao);
+  gl.DrawElements(GL_TRIANGLES, GLsizei(6 * droplets.count), GL_UNSIGNED_INT, nullptr);
+  gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+}
+
+void Renderer::Impl::copy_scene_depth() {
+  const GLuint scene_fbo = samples > 0 ? msaa_fbo : resolve_fbo;
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo);
+  gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depth_fbo);
+  gl.BlitFramebuffer(0, 0, settings.width, settings.height, 0, 0, settings.width, settings.height,
+                     GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, scene_fbo);
+  gl.ActiveTexture(GL_TEXTURE3);
+  gl.BindTexture(GL_TEXTURE_2D, depth_tex);
+}
+
+void Renderer::Impl::draw_particles() {
+  if (soft.count == 0 && additive.count == 0 && streaks.count == 0) return;
+  copy_scene_depth();
   gl.Enable(GL_BLEND);
   gl.DepthMask(GL_FALSE);
-  for (const bool is_soft : {true, false}) {
-    const ParticleStream& stream = is_soft ? soft : additive;
-    if (stream.count == 0) continue;
-    const Program& p = is_soft ? soft_program : add_program;
-    p.use();
-    p.set("u_view", view);
-    p.set("u_proj", proj);
-    p.set("u_pixels_per_unit", pixels_per_unit);
-    p.set("u_light_view", to_sun_view);
-    const Vec3f half = to_sun_view + Vec3f::UnitZ();  // zero only with the sun dead behind
-    p.set("u_half_view", half.squaredNorm() > 1e-12f ? Vec3f(half.normalized()) : Vec3f::UnitZ());
-    p.set("u_light_color", light.color);
-    p.set("u_ambient", light.ambient);
-    p.set("u_shadow_map", 1);
-    p.set("u_shadow_enabled", shadow_enabled ? 1 : 0);
-    p.set("u_light_view_proj", light_view_proj);
-    p.set("u_shadow_bias", shadow_bias);
-    p.set("u_shadow_offset", 0.f);
-    p.set("u_shadow_radius", shadow_radius);
-    if (is_soft) {
-      gl.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);  // premultiplied alpha
+  struct Pass {
+    const ParticleStream* stream;
+    const Program* program;
+    bool premultiplied;
+  };
+  for (const Pass& pass : {Pass{&soft, &particle_program(soft_pp), true},
+                           Pass{&streaks, &particle_program(streak_pp), true},
+                           Pass{&additive, &particle_program(additive_pp), false}}) {
+    if (pass.stream->count == 0) continue;
+    set_particle_uniforms(*pass.program);
+    if (pass.premultiplied) {
+      gl.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     } else {
       gl.BlendFunc(GL_ONE, GL_ONE);
     }
-    gl.BindVertexArray(stream.vao);
-    gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(stream.count));
+    gl.BindVertexArray(pass.stream->vao);
+    gl.DrawElements(GL_TRIANGLES, GLsizei(6 * pass.stream->count), GL_UNSIGNED_INT, nullptr);
   }
   gl.DepthMask(GL_TRUE);
   gl.Disable(GL_BLEND);
@@ -785,6 +982,139 @@ void Renderer::add_box(ObjectKey key, const BoxDesc& desc) {
   d.color = desc.color;
 }
 
+namespace {
+
+/// Checks a texture before any GL object is made, and returns it as RGBA8 rows bottom to top
+/// (GL's order: uv (0, 0) is the image's bottom-left corner).
+std::vector<std::uint8_t> texture_rows(const Material& m, int& width, int& height) {
+  Image image;
+  if (!m.texture_rgba.empty()) {
+    if (m.texture_width < 1 || m.texture_height < 1 ||
+        m.texture_rgba.size() != std::size_t(m.texture_width) * std::size_t(m.texture_height) * 4) {
+      throw std::invalid_argument("mesh texture_rgba must hold texture_width x texture_height x 4 bytes");
+    }
+    image.width = m.texture_width;
+    image.height = m.texture_height;
+    image.rgba = m.texture_rgba;
+  } else if (!m.texture_path.empty()) {
+    image = read_image(m.texture_path);  // IoError names the file
+  } else {
+    return {};
+  }
+  width = image.width;
+  height = image.height;
+  const std::size_t row = std::size_t(width) * 4;
+  std::vector<std::uint8_t> rows(image.rgba.size());
+  for (int y = 0; y < height; ++y) {
+    std::memcpy(&rows[std::size_t(height - 1 - y) * row], &image.rgba[std::size_t(y) * row], row);
+  }
+  return rows;
+}
+
+void fill_vertices(std::vector<Vertex>& out, std::span<const float> positions,
+                   std::span<const float> normals) {
+  const std::size_t n = positions.size() / 3;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::memcpy(out[i].p, &positions[3 * i], 3 * sizeof(float));
+    std::memcpy(out[i].n, &normals[3 * i], 3 * sizeof(float));
+  }
+}
+
+}  // namespace
+
+void Renderer::add_mesh(ObjectKey key, const MeshDesc& desc) {
+  const std::size_t n = desc.positions.size() / 3;
+  if (n == 0 || desc.positions.size() % 3 != 0) {
+    throw std::invalid_argument("mesh positions must be n x 3 floats with n >= 1");
+  }
+  if (!desc.normals.empty() && desc.normals.size() != desc.positions.size()) {
+    throw std::invalid_argument("mesh normals must be empty or n x 3 floats like the positions");
+  }
+  if (!desc.uvs.empty() && desc.uvs.size() != 2 * n) {
+    throw std::invalid_argument("mesh uvs must be empty or n x 2 floats");
+  }
+  if (desc.indices.empty() || desc.indices.size() % 3 != 0) {
+    throw std::invalid_argument("mesh indices must be m x 3 with m >= 1");
+  }
+  for (const std::uint32_t i : desc.indices) {
+    if (i >= n) {
+      throw std::invalid_argument("mesh index " + std::to_string(i) + " >= vertex count " +
+                                  std::to_string(n));
+    }
+  }
+  if (impl_->drawables.count(key) != 0) {
+    throw std::invalid_argument("renderer: key " + std::to_string(key) + " is already used");
+  }
+  int tex_w = 0, tex_h = 0;
+  const std::vector<std::uint8_t> tex = texture_rows(desc.material, tex_w, tex_h);
+
+  std::vector<float> normals = desc.normals;
+  if (normals.empty()) {
+    normals.resize(desc.positions.size());
+    compute_vertex_normals(desc.positions, desc.indices, normals);
+  }
+  const GlTable& gl = impl_->gl;
+  Impl::Drawable& d = impl_->add(key, Impl::Kind::mesh);
+  d.material = desc.material;
+  d.material.texture_rgba.clear();  // uploaded below; no second copy kept
+  d.dynamic = desc.dynamic;
+  d.vertices.assign(n, Vertex{});
+  fill_vertices(d.vertices, desc.positions, normals);
+  for (std::size_t i = 0; i < n && !desc.uvs.empty(); ++i) {
+    d.vertices[i].uv[0] = desc.uvs[2 * i];
+    d.vertices[i].uv[1] = desc.uvs[2 * i + 1];
+  }
+  for (const Vertex& v : d.vertices) d.local_bounds.extend(Vec3f(v.p[0], v.p[1], v.p[2]));
+  d.indices = desc.indices;
+  d.mesh = upload_mesh(gl, d.vertices, d.indices, desc.dynamic ? GL_DYNAMIC_DRAW : GL_STATIC_DRAW);
+  if (!tex.empty()) {
+    gl.GenTextures(1, &d.texture);
+    gl.BindTexture(GL_TEXTURE_2D, d.texture);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    // sRGB storage: the sampler returns linear colours, as the shading expects.
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, tex_w, tex_h, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                  tex.data());
+    gl.GenerateMipmap(GL_TEXTURE_2D);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  }
+  impl_->check_error("adding a mesh");
+}
+
+void Renderer::update_mesh(ObjectKey key, std::span<const float> positions,
+                           std::span<const float> normals) {
+  auto it = impl_->drawables.find(key);
+  if (it == impl_->drawables.end()) {
+    throw std::out_of_range("renderer: no drawable under key " + std::to_string(key));
+  }
+  Impl::Drawable& d = it->second;
+  if (d.kind != Impl::Kind::mesh) {
+    throw std::invalid_argument("renderer: key " + std::to_string(key) + " is not a mesh");
+  }
+  const std::size_t count = d.vertices.size();
+  if (positions.size() != 3 * count) {
+    throw std::invalid_argument("update_mesh: expected " + std::to_string(count) +
+                                " x 3 positions, got " + std::to_string(positions.size()) + " floats");
+  }
+  if (!normals.empty() && normals.size() != positions.size()) {
+    throw std::invalid_argument("update_mesh: normals must be empty or as many as the positions");
+  }
+  std::vector<float> computed;
+  if (normals.empty()) {
+    computed.resize(positions.size());
+    compute_vertex_normals(positions, d.indices, computed);
+    normals = computed;
+  }
+  fill_vertices(d.vertices, positions, normals);
+  d.local_bounds.setEmpty();
+  for (const Vertex& v : d.vertices) d.local_bounds.extend(Vec3f(v.p[0], v.p[1], v.p[2]));
+  const GlTable& gl = impl_->gl;
+  gl.BindBuffer(GL_ARRAY_BUFFER, d.mesh.vbo);
+  gl.BufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(count * sizeof(Vertex)), d.vertices.data());
+}
+
 void Renderer::set_transform(ObjectKey key, const Vec3f& translation, const Mat3f& rotation) {
   auto it = impl_->drawables.find(key);
   if (it == impl_->drawables.end()) {
@@ -803,6 +1133,9 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
       (batch.position == nullptr || batch.color == nullptr || batch.radius == nullptr)) {
     throw std::invalid_argument("renderer: particle batch with count > 0 has a null array");
   }
+  if (!(batch.streak_s >= 0.f)) {
+    throw std::invalid_argument("renderer: particle batch streak_s must be >= 0 s");
+  }
   auto it = impl_->drawables.find(key);
   Impl::Drawable* d = nullptr;
   if (it == impl_->drawables.end()) {
@@ -813,19 +1146,28 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
     d = &it->second;
   }
   d->style = batch.style;
-  d->instances.resize(batch.count * kInstanceFloats);  // keeps its capacity when shrinking
+  const bool streak = batch.style == ParticleStyle::streak;
+  const std::size_t floats = streak ? kStreakFloats : kInstanceFloats;
+  d->instances.resize(batch.count * floats);  // keeps its capacity when shrinking
   float* out = d->instances.data();
-  for (std::size_t i = 0; i < batch.count; ++i, out += kInstanceFloats) {
+  for (std::size_t i = 0; i < batch.count; ++i, out += floats) {
     std::memcpy(out, batch.position + 3 * i, 3 * sizeof(float));
     out[3] = batch.radius[i];
     std::memcpy(out + 4, batch.color + 4 * i, 4 * sizeof(float));
+    if (streak) {
+      // The tail trails behind the head, against the velocity.
+      for (int k = 0; k < 3; ++k) {
+        out[8 + k] = batch.velocity != nullptr ? -batch.velocity[3 * i + k] * batch.streak_s : 0.f;
+      }
+      out[11] = 0.f;
+    }
   }
 }
 
 void Renderer::remove(ObjectKey key) {
   auto it = impl_->drawables.find(key);
   if (it == impl_->drawables.end()) return;
-  destroy_mesh(impl_->gl, it->second.mesh);
+  impl_->destroy_drawable(it->second);
   impl_->drawables.erase(it);
   auto& order = impl_->order;
   order.erase(std::lower_bound(order.begin(), order.end(), key));
@@ -845,6 +1187,8 @@ Image Renderer::render() {
 
   gl.Disable(GL_BLEND);
   gl.Disable(GL_CULL_FACE);
+  gl.CullFace(GL_BACK);
+  r.gather_particles();
   r.draw_shadow_map();
 
   gl.BindFramebuffer(GL_FRAMEBUFFER, r.samples > 0 ? r.msaa_fbo : r.resolve_fbo);
@@ -852,9 +1196,10 @@ Image Renderer::render() {
   gl.DepthMask(GL_TRUE);
   gl.Clear(GL_DEPTH_BUFFER_BIT);
   gl.Disable(GL_DEPTH_TEST);
+  const bool solid = r.settings.background == Background::solid;
   r.sky_program.use();
-  r.sky_program.set("u_sky_top", r.settings.sky_top);
-  r.sky_program.set("u_sky_bottom", r.settings.sky_bottom);
+  r.sky_program.set("u_sky_top", solid ? r.settings.background_color : r.settings.sky_top);
+  r.sky_program.set("u_sky_bottom", solid ? r.settings.background_color : r.settings.sky_bottom);
   r.sky_program.set("u_viewport", float(w), float(h));
   gl.BindVertexArray(r.empty_vao);
   gl.DrawArrays(GL_TRIANGLES, 0, 3);
@@ -863,7 +1208,12 @@ Image Renderer::render() {
   gl.DepthFunc(GL_LESS);
   gl.ActiveTexture(GL_TEXTURE1);
   gl.BindTexture(GL_TEXTURE_2D, r.shadow_tex);
+  // Unit 3 holds the scene depth for soft particles; until it is copied, bind the copy anyway
+  // (a sampler must not see the depth buffer being written).
+  gl.ActiveTexture(GL_TEXTURE3);
+  gl.BindTexture(GL_TEXTURE_2D, r.depth_tex);
   r.draw_meshes();
+  r.draw_droplets();
   r.draw_particles();
 
   if (r.samples > 0) {

@@ -132,3 +132,34 @@ TEST(SceneLoad, SphereCylinderAndMeshColliders) {
   EXPECT_EQ(ok.colliders[0].sphere.material.on_hit, simreel::sim::HitAction::split);
   EXPECT_EQ(ok.colliders[0].sphere.material.split.count, 7);
 }
+
+// --- camera path / orbit and render background (renderer-quality half of issue 7) ---
+
+TEST(SceneCamera, PathKeysAndOrbitAreRead) {
+  const auto s = scene_from_json(json::parse(R"({"camera":{"position":[5,-5,2],"target":[0,0,1],
+      "path":[{"time":0,"position":[4,-4,2]},{"time":2,"position":[0,-6,3],"target":[0,0,0.5],"fov_deg":30}]},
+      "render":{"background":[0.1,0.1,0.1],"particle_shadows":true},
+      "emitters":[{"render_style":"streak","streak_s":0.05}]})"), "s.json");
+  ASSERT_EQ(s.camera_motion.keys.size(), 2u);
+  EXPECT_FLOAT_EQ(s.camera_motion.keys[0].target.z(), 1.f);  // defaults to the camera's target
+  EXPECT_FLOAT_EQ(s.camera_motion.keys[1].fov_deg, 30.f);
+  EXPECT_EQ(s.render.background, simreel::render::Background::solid);
+  EXPECT_TRUE(s.render.particle_shadows);
+  EXPECT_EQ(s.emitters[0].style, simreel::render::ParticleStyle::streak);
+  EXPECT_FLOAT_EQ(s.emitters[0].streak_s, 0.05f);
+  const auto o = scene_from_json(json::parse(R"({"camera":{"orbit":{"center":[0,0,1],"radius":5,"period_s":8}}})"), "s.json");
+  ASSERT_TRUE(o.camera_motion.orbit.has_value());
+  EXPECT_FLOAT_EQ(o.camera_motion.orbit->radius, 5.f);
+}
+
+TEST(SceneCamera, BadPathAndOrbitValuesNamePointers) {
+  std::string e = errors_of(json::parse(R"({"camera":{"path":[{"time":1},{"time":1}]}})"));
+  EXPECT_NE(e.find("s.json: /camera/path/1/time: expected times strictly increasing"), std::string::npos) << e;
+  e = errors_of(json::parse(R"({"camera":{"orbit":{"radius":0}}})"));
+  EXPECT_NE(e.find("s.json: /camera/orbit/radius: expected a number > 0"), std::string::npos) << e;
+  e = errors_of(json::parse(R"({"camera":{"path":[{"position":[1,2,3]}], "orbit":{}}})"));
+  EXPECT_NE(e.find("not both"), std::string::npos) << e;
+  EXPECT_NE(e.find("/camera/path/0: expected a \"time\""), std::string::npos) << e;
+  e = errors_of(json::parse(R"({"render":{"background":"night"}})"));
+  EXPECT_NE(e.find("s.json: /render/background: expected \"sky\" or a colour"), std::string::npos) << e;
+}

@@ -56,7 +56,8 @@ struct GlTable {
   X(PFNGLTEXIMAGE2DPROC, TexImage2D) X(PFNGLTEXPARAMETERIPROC, TexParameteri)                  \
   X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)                                       \
   X(PFNGLDRAWBUFFERPROC, DrawBuffer) X(PFNGLREADBUFFERPROC, ReadBuffer)                        \
-  X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)
+  X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)                                                     \
+  X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)
 #define SIMREEL_GL_MEMBER(type, name) type name = nullptr;
   SIMREEL_GL_FUNCTIONS(SIMREEL_GL_MEMBER)
 #undef SIMREEL_GL_MEMBER

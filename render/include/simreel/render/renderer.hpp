@@ -7,11 +7,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 
 #include <Eigen/Core>
 
 #include "simreel/render/context.hpp"
 #include "simreel/render/image.hpp"
+#include "simreel/render/mesh.hpp"
 
 namespace simreel::render {
 
@@ -30,12 +32,23 @@ struct Camera {
   float far_m = 500.f;             ///< far clip distance (m)
 };
 
-/// Directional sun plus constant ambient. Boxes cast soft sun shadows (a shadow map fitted
-/// to them each frame) on planes, boxes and particles.
+/// Directional sun plus hemisphere sky light. Boxes and meshes (and particles, if
+/// RenderSettings::particle_shadows) cast soft sun shadows through a shadow map fitted to the
+/// casters each frame, onto everything.
 struct Light {
   Vec3f direction{-0.4f, 0.3f, -1.f};  ///< direction the light travels (from the sun), world frame
   Vec3f color{1.f, 0.97f, 0.92f};      ///< linear RGB intensity
-  Vec3f ambient{0.30f, 0.33f, 0.38f};  ///< linear RGB added everywhere
+  /// Sky light: linear RGB reaching a surface facing straight up (+z). A surface facing
+  /// straight down gets `ground_ambient` (light bounced off the ground); in between the two
+  /// mix with (1 + n_z) / 2 (hemisphere lighting).
+  Vec3f ambient{0.30f, 0.33f, 0.38f};
+  Vec3f ground_ambient{0.17f, 0.17f, 0.17f};  ///< linear RGB from below (ground bounce)
+};
+
+/// What is drawn behind everything; meshes fog towards it with distance.
+enum class Background {
+  sky_gradient,  ///< RenderSettings::sky_bottom at the bottom of the frame to sky_top at the top
+  solid,         ///< RenderSettings::background_color everywhere
 };
 
 /// Output size and background. All colours in the renderer's inputs are linear RGB; shading
@@ -45,8 +58,15 @@ struct RenderSettings {
   int width = 1280;        ///< (pixels) >= 1
   int height = 720;        ///< (pixels) >= 1
   int msaa_samples = 4;    ///< 0 or 1 disables multisampling
+  Background background = Background::sky_gradient;
   Vec3f sky_top{0.32f, 0.50f, 0.78f};     ///< background gradient, top of the frame (linear RGB)
   Vec3f sky_bottom{0.80f, 0.86f, 0.93f};  ///< background gradient, bottom of the frame
+  Vec3f background_color{0.05f, 0.05f, 0.06f};  ///< linear RGB of Background::solid
+  /// Soft and droplet particles cast sun shadows: discs facing the sun in the shadow map,
+  /// translucent ones in proportion to their opacity (each keeps that fraction of its
+  /// shadow-map texels, by a fixed hash; the filtered lookups average them). Smoke then shades
+  /// itself: particles behind others as seen from the sun are darker.
+  bool particle_shadows = false;
 };
 
 /// A finite, drawn piece of an infinite ground plane, centred on the plane's origin. Its
@@ -67,8 +87,20 @@ struct BoxDesc {
 
 /// How particles are drawn.
 enum class ParticleStyle {
-  soft,      ///< camera-facing round sprites with a soft edge and sphere-like shading, alpha blended
-  additive,  ///< soft glow added to the frame (fire, sparks)
+  /// Camera-facing sprites standing for translucent spheres (smoke, spray): opacity follows
+  /// Beer-Lambert through the sphere, 1 - (1 - alpha)^(h^e) with h = chord / diameter and
+  /// e = 3 - 2 alpha, so the centre has the given alpha and the rim fades to 0 — crisply for
+  /// dense droplets (uniform sphere, e -> 1), softly for thin smoke (density 1 - r^2, e -> 3); lit from the sun with a sphere normal (the far
+  /// side darker); faded where the sphere dips into opaque geometry (soft particles); alpha
+  /// blended back to front over all soft batches.
+  soft,
+  additive,  ///< soft glow added to the frame (fire, sparks); also depth-faded
+  /// Velocity-stretched capsules (rain): from the particle's position back along its screen
+  /// velocity, length |velocity| x streak_s, width 2 x radius; head brighter than the tail.
+  streak,
+  /// Small lit opaque spheres (droplets of a sprinkler or jet): sun, shadow, highlight; drawn
+  /// with the opaque geometry, so they need no sorting. Alpha is ignored.
+  droplet,
 };
 
 /// A batch of particles, structure-of-arrays; copied during set_particles().
@@ -78,6 +110,9 @@ struct ParticleBatch {
   const float* color = nullptr;     ///< (count x 4) linear RGBA in [0, 1]
   const float* radius = nullptr;    ///< (count) (m): the sprite's world-space radius
   ParticleStyle style = ParticleStyle::soft;
+  /// (count x 3) world frame (m/s); optional, read by `streak` only (null: round sprites).
+  const float* velocity = nullptr;
+  float streak_s = 0.02f;  ///< (s) streak length per unit speed: a streak covers velocity x streak_s
 };
 
 class Renderer {
@@ -99,13 +134,25 @@ class Renderer {
   /// key is already used, half_size <= 0, the normal is zero, or a half extent is <= 0.
   void add_plane(ObjectKey key, const PlaneDesc& desc);
   void add_box(ObjectKey key, const BoxDesc& desc);
-  /// Moves a mesh drawable (box or plane): x_world = rotation * x_local + translation, where a
-  /// plane's local frame is the world frame its PlaneDesc was given in.
+  /// Adds a triangle mesh (static, or dynamic for cloth) with its material; loads the texture.
+  /// @throws std::invalid_argument if the key is used, positions are not n x 3 with n >= 1,
+  ///         normals or uvs have the wrong size, indices are not m x 3 or reach >= n, or the
+  ///         in-memory texture's size does not match; render::IoError if texture_path cannot be
+  ///         read.
+  void add_mesh(ObjectKey key, const MeshDesc& desc);
+  /// Replaces the vertex positions (n x 3, local frame, m) of a mesh, and its normals (n x 3);
+  /// empty normals are recomputed with compute_vertex_normals. n must stay the same.
+  /// @throws std::out_of_range if the key is unknown; std::invalid_argument if it is not a mesh
+  ///         or a size differs.
+  void update_mesh(ObjectKey key, std::span<const float> positions, std::span<const float> normals = {});
+  /// Moves a mesh drawable (box, plane or mesh): x_world = rotation * x_local + translation,
+  /// where a plane's local frame is the world frame its PlaneDesc was given in.
   /// @throws std::out_of_range if the key is unknown; std::invalid_argument if it holds particles.
   void set_transform(ObjectKey key, const Vec3f& translation, const Mat3f& rotation);
   /// Replaces the particles drawn under `key` (creates the drawable on first use). The arrays
   /// are copied. Soft particles of all keys are sorted back to front together every frame.
-  /// @throws std::invalid_argument if count > 0 and an array is null, or the key holds a mesh.
+  /// @throws std::invalid_argument if count > 0 and an array is null, streak_s < 0, or the key
+  ///         holds a mesh.
   void set_particles(ObjectKey key, const ParticleBatch& batch);
   void remove(ObjectKey key);  ///< unknown keys are ignored
 

@@ -1,0 +1,102 @@
+// simreel's renderer on the particle frame of raw_osmesa_baseline (100k soft sprites,
+// 1280x720, 4x MSAA, read back every frame), as a ratio of the baseline's frame time, plus
+// variants that show where the time goes. Usage: bench_render [particles] [frames]
+// Runs ./raw_osmesa_baseline from its own directory for the reference figure.
+#include <algorithm>
+#include <ctime>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bench_particle_cloud.hpp"
+#include "simreel/render/context.hpp"
+#include "simreel/render/renderer.hpp"
+
+namespace {
+
+using namespace simreel::render;
+
+// Process CPU time (all threads, llvmpipe's included) per frame: on a machine shared with
+// other jobs it varies much less than wall time. Median of `frames` after 2 warm-up frames.
+double median_ms(int frames, const std::function<void()>& frame) {
+  std::vector<double> ms;
+  for (int f = 0; f < frames + 2; ++f) {
+    const std::clock_t t0 = std::clock();
+    frame();
+    const std::clock_t t1 = std::clock();
+    if (f >= 2) ms.push_back(1000.0 * double(t1 - t0) / CLOCKS_PER_SEC);
+  }
+  std::sort(ms.begin(), ms.end());
+  return ms[ms.size() / 2];
+}
+
+struct Case {
+  const char* name;
+  int msaa;
+  ParticleStyle style;
+  std::size_t particles;
+  bool particle_shadows;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::size_t n = argc > 1 ? std::size_t(std::atol(argv[1])) : 100000;
+  const int frames = argc > 2 ? std::atoi(argv[2]) : 20;
+  const bench::ParticleCloud cloud = bench::make_particle_cloud(n);
+  const auto context = create_context(Backend::osmesa);
+
+  double full = 0.0;
+  for (const Case& c : {Case{"soft, msaa 4 (the baseline's frame)", 4, ParticleStyle::soft, n, false},
+                        Case{"soft, msaa 0", 0, ParticleStyle::soft, n, false},
+                        Case{"additive (no sort), msaa 4", 4, ParticleStyle::additive, n, false},
+                        Case{"droplet (opaque), msaa 4", 4, ParticleStyle::droplet, n, false},
+                        Case{"soft + particle shadows, msaa 4", 4, ParticleStyle::soft, n, true},
+                        Case{"empty frame (sky, tone map, read back), msaa 4", 4, ParticleStyle::soft, 0, false}}) {
+    RenderSettings s;
+    s.width = 1280;
+    s.height = 720;
+    s.msaa_samples = c.msaa;
+    s.particle_shadows = c.particle_shadows;
+    Renderer r(*context, s);
+    const ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
+    const double ms = median_ms(frames, [&] {
+      r.set_particles(1, batch);  // new data every frame, as from a simulation
+      (void)r.render();
+    });
+    if (full == 0.0) full = ms;
+    std::printf("simreel %-48s %8.2f ms CPU/frame\n", c.name, ms);
+  }
+  {
+    RenderSettings s;
+    s.width = 64;
+    s.height = 36;
+    Renderer r(*context, s);
+    const ParticleBatch batch{n, cloud.position.data(), cloud.color.data(), cloud.radius.data(), ParticleStyle::soft};
+    const double copy = median_ms(frames, [&] { r.set_particles(1, batch); });
+    const double tiny = median_ms(frames, [&] {
+      r.set_particles(1, batch);
+      (void)r.render();
+    });
+    std::printf("simreel %-48s %8.2f ms CPU/frame\n", "set_particles copy only", copy);
+    std::printf("simreel %-48s %8.2f ms CPU/frame\n", "soft at 64x36 (CPU sort + upload + vertices)", tiny);
+  }
+
+  const std::filesystem::path self = std::filesystem::absolute(argv[0]).parent_path();
+  const std::string cmd = (self / "raw_osmesa_baseline").string() + " " + std::to_string(n) + " " +
+                          std::to_string(frames) + " 4";
+  std::FILE* p = popen(cmd.c_str(), "r");
+  char line[512] = {};
+  double base = 0.0;
+  if (p != nullptr && std::fgets(line, sizeof line, p) != nullptr) {
+    std::fputs(line, stdout);
+    if (const char* m = std::strstr(line, "median ")) base = std::atof(m + 7);
+  }
+  if (p != nullptr) pclose(p);
+  if (base > 0.0) std::printf("ratio simreel / raw baseline: %.2f\n", full / base);
+  return 0;
+}
