@@ -38,4 +38,13 @@ void write_png(const std::filesystem::path& path, const Image& image, int compre
 /// Reads PNG/JPEG/BMP/TGA into RGBA8. @throws IoError naming the path and stb's reason.
 Image read_image(const std::filesystem::path& path);
 
+/// Area-average (box filter) resample to width x height, exact in integer arithmetic, so the
+/// same input always gives the same bytes; for thumbnails (contact sheets, golden frames).
+/// @throws std::invalid_argument for an empty image or a target size below 1x1.
+Image resize_box(const Image& image, int width, int height);
+
+/// Copies `src` into `dst` with its top-left corner at (x0, y0) in dst pixels; parts falling
+/// outside `dst` are clipped.
+void blit(Image& dst, const Image& src, int x0, int y0);
+
 }  // namespace simreel::render
