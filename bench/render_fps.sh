@@ -1,24 +1,37 @@
 #!/usr/bin/env bash
 # Frames per second of the whole `simreel render` command (simulate + render + read back +
-# PNG + MP4) on a scene, at a size. Usage: bench/render_fps.sh [SCENE] [WxH] [FRAMES]
+# PNG + MP4) for every demo scene at 1280x720 and 640x360, with the writer threads (default)
+# and with --sync-writes (everything on the render thread), plus the PNG compression level.
+# Usage: bench/render_fps.sh [FRAMES] [SCENE...]   (default 60 frames, demos/scenes/*.json)
+# Wall-clock numbers: run it on an otherwise idle machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scene=${1:-demos/scenes/fountain.json}
-size=${2:-1280x720}
-frames=${3:-150}
+frames=${1:-60}
+shift || true
+scenes=("$@")
+[ ${#scenes[@]} -gt 0 ] || scenes=(demos/scenes/*.json)
 bin=build/demos/simreel
 [ -x "$bin" ] || cmake --build build -j2 --target simreel >/dev/null
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 run() {
-  local label=$1; shift
+  local label=$1 scene=$2 size=$3; shift 3
   local t0 t1
+  rm -rf "$tmp"/*
   t0=$(date +%s.%N)
   "$bin" render "$scene" -q --frames "$frames" --size "$size" "$@" >/dev/null
   t1=$(date +%s.%N)
   awk -v l="$label" -v n="$frames" -v a="$t0" -v b="$t1" \
-    'BEGIN { printf "%-22s %4d frames in %6.2f s = %6.2f frames/s\n", l, n, b - a, n / (b - a) }'
+    'BEGIN { printf "  %-34s %4d frames in %6.2f s = %6.2f frames/s\n", l, n, b - a, n / (b - a) }'
 }
-echo "$scene at $size"
-run "PNG + MP4" -o "$tmp/png" -o "$tmp/v.mp4"
-run "MP4 only" -o "$tmp/v2.mp4"
+for scene in "${scenes[@]}"; do
+  for size in 1280x720 640x360; do
+    echo "$scene at $size"
+    run "render only (contact sheet 1x1)" "$scene" "$size" --contact-sheet "$tmp/s.png" --sheet 1x1
+    run "PNG + MP4, writer threads" "$scene" "$size" -o "$tmp/png" -o "$tmp/v.mp4"
+    run "PNG + MP4, --sync-writes" "$scene" "$size" -o "$tmp/png" -o "$tmp/v.mp4" --sync-writes
+    run "PNG level 8 + MP4, writer threads" "$scene" "$size" -o "$tmp/png" -o "$tmp/v.mp4" --png-compression 8
+    run "PNG level 8 + MP4, --sync-writes" "$scene" "$size" -o "$tmp/png" -o "$tmp/v.mp4" --png-compression 8 --sync-writes
+    run "MP4 only, writer threads" "$scene" "$size" -o "$tmp/v.mp4"
+  done
+done
