@@ -313,13 +313,23 @@ struct Recorded {
   fs::path golden;
 };
 
-/// Records hashes of frames 0, 4, 8 of the small scene at 96x72 and their reference frames.
+// A jet of big orange particles seen from close by: the effect fills a good part of the frame.
+const char* kGoldenScene = R"({
+  "seed": 3, "fps": 30, "frames": 20,
+  "camera": {"position": [1.5, -2.5, 0.9], "target": [0, 0, 0.6]},
+  "colliders": [{"type": "plane", "restitution": 0.5}],
+  "emitters": [{"name": "jet", "rate": 1500, "start_speed": {"mean": 4, "deviation": 0.3},
+                "spread_deg": {"mean": 0, "deviation": 6}, "lifetime": 2, "position": [0, 0, 0.1],
+                "particle_radius": 0.03,
+                "color_over_lifetime": [{"t": 0, "color": [1, 0.5, 0.1, 1]}, {"t": 1, "color": [1, 0.3, 0.1, 1]}]}]
+})";
+
+/// Records hashes of frames 0, 4, 8, 12 at 96x72 and their reference frames.
 void record(Recorded& r) {
-  write_file(r.d / "s.json", kSmallScene);
+  write_file(r.d / "s.json", kGoldenScene);
   r.golden = r.d / "g.json";
-  const auto rec = run_simreel("render " + (r.d / "s.json").string() + " -q --size 96x72 --frames 0:9 --hash-every 4 "
-                               "--set /camera/position=[2,-3,1.5] --set /camera/target=[0,0,1] --hash " +
-                               r.golden.string());
+  const auto rec = run_simreel("render " + (r.d / "s.json").string() + " -q --size 96x72 --frames 0:13 --hash-every 4 "
+                               "--set /seed=4 --hash " + r.golden.string());
   ASSERT_EQ(rec.code, 0) << rec.err;
   const auto up = run_simreel("check " + r.golden.string() + " --update");
   ASSERT_EQ(up.code, 0) << up.err;
@@ -328,34 +338,38 @@ void record(Recorded& r) {
 TEST(Check, HashRecordDescribesTheRunAndMatchesItself) {
   Recorded r;
   record(r);
+  if (HasFatalFailure()) return;
   const auto j = nlohmann::json::parse(slurp(r.golden));
   EXPECT_EQ(j.at("simreel_hashes"), 1);
   EXPECT_EQ(j.at("size"), "96x72");
-  EXPECT_EQ(j.at("frames"), "0:9");
-  EXPECT_EQ(j.at("seed"), 3);
-  EXPECT_EQ(j.at("set").size(), 2u);
+  EXPECT_EQ(j.at("frames"), "0:13");
+  EXPECT_EQ(j.at("seed"), 4) << "the seed after --set";
+  EXPECT_EQ(j.at("set"), nlohmann::json::array({"/seed=4"}));
   EXPECT_FALSE(j.at("gl_renderer").get<std::string>().empty());
   EXPECT_FALSE(j.at("simreel_version").get<std::string>().empty());
-  ASSERT_EQ(j.at("hashes").size(), 3u);
+  ASSERT_EQ(j.at("hashes").size(), 4u);
   EXPECT_EQ(j.at("hashes")[2].at("frame"), 8);
   EXPECT_EQ(j.at("hashes")[2].at("chash").get<std::string>().size(), 16u);
-  for (const char* f : {"00000.png", "00004.png", "00008.png"}) EXPECT_TRUE(fs::exists(r.d / "g.frames" / f)) << f;
+  for (const char* f : {"00000.png", "00004.png", "00008.png", "00012.png"}) EXPECT_TRUE(fs::exists(r.d / "g.frames" / f)) << f;
   const auto c = run_simreel("check " + r.golden.string());
   EXPECT_EQ(c.code, 0) << c.out << c.err;
-  EXPECT_NE(c.out.find("3 frames match"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("4 frames match"), std::string::npos) << c.out;
 }
 
 TEST(Check, ChangedEffectFailsNamesWorstFramesAndWritesComparisons) {
   Recorded r;
   record(r);
+  if (HasFatalFailure()) return;
   auto j = nlohmann::json::parse(slurp(r.golden));
   j["set"].push_back("/emitters/0/rate=0");  // the jet is gone
   write_file(r.golden, j.dump(2));
   const auto c = run_simreel("check " + r.golden.string() + " --out " + (r.d / "diff").string());
   EXPECT_EQ(c.code, 1) << c.out << c.err;
   EXPECT_NE(c.out.find("MISMATCH"), std::string::npos) << c.out;
-  EXPECT_NE(c.out.find("worst: frame 8"), std::string::npos) << c.out;
-  ASSERT_TRUE(fs::exists(r.d / "diff" / "frame_00008.png"));
+  EXPECT_NE(c.out.find("worst: frame 12"), std::string::npos) << c.out;
+  ASSERT_TRUE(fs::exists(r.d / "diff" / "frame_00012.png"));
+  const auto comparison = simreel::render::read_image(r.d / "diff" / "frame_00012.png");
+  EXPECT_EQ(comparison.width, 3 * 96 + 8) << "expected | actual | difference";
   EXPECT_FALSE(fs::exists(r.d / "diff" / "frame_00000.png")) << "frame 0 has no particles yet, so it matches";
   // A generous tolerance accepts it.
   EXPECT_EQ(run_simreel("check " + r.golden.string() + " --tolerance 64").code, 0);
