@@ -257,6 +257,8 @@ int render_command(const RenderOptions& o) {
   if (!o.bitrate.empty() && o.bitrate.find_first_not_of("0123456789.kKM") != std::string::npos)
     throw SceneError("--bitrate " + o.bitrate + ": expected a number with an optional k or M suffix, e.g. 4M");
 
+  // From here on Ctrl-C stops between frames and closes what was opened.
+  const StopSignals stop;
   ScenePlayer player(scene);
 
   // Outputs that get the frames as shown (overlay included)...
@@ -336,7 +338,6 @@ int render_command(const RenderOptions& o) {
     for (const auto& f : hash_writer.take_failures()) throw render::IoError(f.message);
   };
 
-  const StopSignals stop;
   const bool progress = !o.quiet && isatty(STDERR_FILENO);
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
