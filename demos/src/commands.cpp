@@ -250,6 +250,10 @@ int render_command(const RenderOptions& o) {
     if (p.has_extension() && !is_video_path(p) && !fs::is_directory(p))
       throw SceneError("-o " + out + ": expected a directory (PNG frames) or a .mp4, .webm or .gif file");
   }
+  for (const auto& out : outputs) {
+    if (o.crf > 51 && lower(fs::path(out).extension().string()) == ".mp4")
+      throw SceneError("--crf " + std::to_string(o.crf) + ": expected 0..51 for H.264 (" + out + ")");
+  }
   if (!o.contact_sheet.empty() && lower(fs::path(o.contact_sheet).extension().string()) != ".png")
     throw SceneError("--contact-sheet " + o.contact_sheet + ": expected a .png file");
   const auto [sheet_cols, sheet_rows] = parse_grid(o.sheet_grid);

@@ -266,6 +266,9 @@ TEST(Cli, BadOutputOptionsExit2) {
   r = run_simreel(base + "-o " + (d / "v.mp4").string() + " --bitrate fast");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--bitrate fast"), std::string::npos) << r.err;
+  r = run_simreel(base + "-o " + (d / "v.mp4").string() + " --crf 60");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--crf 60: expected 0..51 for H.264"), std::string::npos) << r.err;
   r = run_simreel(base + "-o " + (d / "v.avi").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_FALSE(fs::exists(d / "v.mp4"));
