@@ -283,8 +283,10 @@ TEST(RenderFrameWriter, QueueIsBoundedWhileASinkIsSlow) {
     }
   });
   // The sink holds its first frame: at most depth frames are queued behind it, so the
-  // producer stops after 3 writes (or 4 if the writer took one off the queue).
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // producer stops after 3 writes (or 4 if the writer took one off the queue). Wait for the
+  // first 3 (no deadline that load could break), then give it time to overrun the bound.
+  for (int i = 0; i < 2000 && queued.load() < 3; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_LE(queued.load(), 4);
   EXPECT_GE(queued.load(), 3);
   {
