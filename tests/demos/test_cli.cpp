@@ -398,3 +398,34 @@ TEST(Golden, EveryDemoSceneHasAGolden) {
     EXPECT_TRUE(fs::exists(golden)) << "record one: see README \"Image-hash regression testing\"; missing " << golden;
   }
 }
+
+// The project's fountain golden must be able to fail: without the jet (luminance hashes), and
+// with the jet's colour ramp turned from blue to red at about the same brightness, which only
+// the colour hash sees.
+TEST(Golden, FountainGoldenCatchesARemovedJetAndARecolouredRamp) {
+  const auto golden = nlohmann::json::parse(slurp(fs::path(SIMREEL_SOURCE_DIR) / "tests/golden/fountain.json"));
+  TempDir d;
+  auto variant = [&](const std::string& set) {
+    auto j = golden;
+    j["set"].push_back(set);
+    write_file(d / "g.json", j.dump(2));
+    return run_simreel("check " + (d / "g.json").string());
+  };
+  const auto no_jet = variant("/emitters/0/rate=0");
+  EXPECT_EQ(no_jet.code, 1) << no_jet.out << no_jet.err;
+  const auto red = variant(R"(/emitters/0/color_over_lifetime=[{"t":0,"color":[1.0,0.55,0.45,0.95]},{"t":1,"color":[1.0,0.6,0.5,0.0]}])");
+  EXPECT_EQ(red.code, 1) << red.out << red.err;
+  // Every failing frame fails on chash alone: pHash and dHash stay within their tolerance.
+  std::istringstream lines(red.out);
+  int failing = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("MISMATCH") == std::string::npos) continue;
+    ++failing;
+    int frame = 0, p = 0, dh = 0, c = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "frame %d: phash %d  dhash %d  chash %d", &frame, &p, &dh, &c), 4) << line;
+    EXPECT_LE(p, golden["tolerance"]["phash"].get<int>()) << line;
+    EXPECT_LE(dh, golden["tolerance"]["dhash"].get<int>()) << line;
+    EXPECT_GT(c, golden["tolerance"]["chash"].get<int>()) << line;
+  }
+  EXPECT_GE(failing, 1) << red.out;
+}
