@@ -2,7 +2,7 @@
 # Installs simreel's build and run-time dependencies from Debian's packages.
 # Idempotent: installs only what is missing; prints the exact apt line when not root.
 set -euo pipefail
-PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev
+PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev libpng-dev
       libassimp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg)
 missing=()
 for p in "${PKGS[@]}"; do

@@ -13,7 +13,9 @@ namespace simreel::app {
 struct RunOptions {
   std::string scene;
   std::vector<std::string> overrides;  ///< --set POINTER=VALUE, applied in order
-  std::optional<int> frames;
+  /// --frames: "N" renders frames 0..N-1; "A:B" simulates from frame 0 but renders and writes
+  /// only frames A..B-1 (frame numbers in file names stay absolute).
+  std::optional<std::string> frames;
   std::optional<double> fps;
   std::optional<std::string> size;     ///< "WxH"
   std::optional<long long> seed;
@@ -21,15 +23,36 @@ struct RunOptions {
 };
 
 struct RenderOptions : RunOptions {
-  std::vector<std::string> outputs;  ///< directories (PNG) or .mp4/.gif files; default out/<stem>/ + out/<stem>.mp4
-  int png_compression = 4;
+  std::vector<std::string> outputs;  ///< directories (PNG) or .mp4/.webm/.gif files; default out/<stem>/ + out/<stem>.mp4
+  int png_compression = 1;  ///< zlib level; 1 keeps PNG writing well below render time
   int crf = 18;
+  std::string bitrate;               ///< e.g. "4M"; replaces --crf
+  std::string contact_sheet;         ///< PNG of thumbnails, "" = none
+  std::string sheet_grid = "4x4";    ///< COLSxROWS of the contact sheet
+  std::string hash_file;             ///< --hash FILE.json, "" = none
+  int hash_every = 1;
+  bool overlay = false;              ///< frame number and time drawn onto written frames
+  bool sync_writes = false;          ///< write outputs on the render thread (for measurements)
   bool quiet = false;
 };
 
+struct CheckOptions {
+  std::string golden;
+  std::optional<int> tolerance;  ///< overrides every kind's tolerance
+  bool update = false;
+  std::string out_dir;           ///< where comparison images go on mismatch ("" = nowhere)
+  std::optional<std::string> backend;
+};
+
+/// Exit codes: 0, 1, 2 as above; 130 (128 + SIGINT) or 143 (SIGTERM) when interrupted, after
+/// finishing the frame being made and closing every output so that it plays.
 int render_command(const RenderOptions& options);
+/// Re-renders what a golden hash record describes and compares hashes frame by frame.
+/// 0 all within tolerance (or updated), 1 mismatch, 2 bad golden file or scene.
+int check_command(const CheckOptions& options);
 int simulate_command(const RunOptions& options, const std::string& export_csv);
 int validate_command(const std::string& scene, const std::vector<std::string>& overrides);
+/// algorithm: "phash", "dhash", "chash" or "all" (the three on one line).
 int hash_command(const std::vector<std::string>& images, const std::string& algorithm);
 
 }  // namespace simreel::app

@@ -13,7 +13,9 @@ namespace {
 
 void add_run_options(CLI::App* cmd, simreel::app::RunOptions& o) {
   cmd->add_option("scene", o.scene, "Scene file (JSON)")->required();
-  cmd->add_option("--frames", o.frames, "Number of frames (overrides the scene's \"frames\")");
+  cmd->add_option("--frames", o.frames,
+                  "N: frames 0..N-1 (overrides the scene's \"frames\"); A:B: simulate from frame 0 but output "
+                  "only frames A..B-1");
   cmd->add_option("--fps", o.fps, "Frames per second; the sampling time is 1/fps");
   cmd->add_option("--seed", o.seed, "Random seed (overrides the scene's \"seed\")");
   cmd->add_option("--set", o.overrides,
@@ -34,13 +36,27 @@ int main(int argc, char** argv) {
   auto* render = app.add_subcommand("render", "Simulate a scene and render its frames to PNG and/or video");
   add_run_options(render, render_opts);
   render->add_option("-o,--output", render_opts.outputs,
-                     "Output: a directory (PNG frames frame_00000.png...) or a .mp4/.gif file; repeatable "
+                     "Output: a directory (PNG frames frame_00000.png...) or a .mp4/.webm/.gif file; repeatable "
                      "(default: out/<scene>/ and out/<scene>.mp4)");
   render->add_option("--size", render_opts.size, "Frame size WIDTHxHEIGHT, e.g. 1280x720");
   render->add_option("--backend", render_opts.backend, "OpenGL context: osmesa (default) or egl");
-  render->add_option("--png-compression", render_opts.png_compression, "zlib level for PNG frames (0-9)")
+  render->add_option("--png-compression", render_opts.png_compression,
+                     "zlib level for PNG frames (0-9, default 1: fastest useful; 6-9 halve the files at 4-20x the time)")
       ->check(CLI::Range(0, 9));
-  render->add_option("--crf", render_opts.crf, "H.264 quality for MP4 (0-51, lower is better)")->check(CLI::Range(0, 51));
+  render->add_option("--crf", render_opts.crf, "Constant quality for MP4 (H.264, 0-51) and WebM (VP9, 0-63); lower is better")
+      ->check(CLI::Range(0, 63));
+  render->add_option("--bitrate", render_opts.bitrate, "Target video bit rate instead of --crf, e.g. 4M or 800k");
+  render->add_option("--contact-sheet", render_opts.contact_sheet,
+                     "Also write one PNG of thumbnails sampled evenly from the rendered frames, labelled with frame numbers");
+  render->add_option("--sheet", render_opts.sheet_grid, "Contact sheet grid COLSxROWS (default 4x4)");
+  render->add_option("--hash", render_opts.hash_file,
+                     "Write the phash/dhash/chash of the rendered frames and how they were made to FILE.json (a golden "
+                     "for `simreel check`)");
+  render->add_option("--hash-every", render_opts.hash_every, "Hash every K-th frame of the range (default 1)")
+      ->check(CLI::PositiveNumber);
+  render->add_flag("--overlay", render_opts.overlay, "Draw the frame number and time onto PNG/video/sheet frames");
+  render->add_flag("--sync-writes", render_opts.sync_writes,
+                   "Write outputs on the render thread instead of writer threads (for measurements)");
   render->add_flag("-q,--quiet", render_opts.quiet, "No progress line");
 
   simreel::app::RunOptions sim_opts;
@@ -60,8 +76,18 @@ int main(int argc, char** argv) {
   std::string algorithm = "phash";
   auto* hash = app.add_subcommand("hash", "Print a 64-bit perceptual hash (16 hex digits) of each image");
   hash->add_option("images", images, "PNG/JPEG images")->required();
-  hash->add_option("--algorithm", algorithm, "phash (DCT, default) or dhash")
-      ->check(CLI::IsMember({"phash", "dhash"}));
+  hash->add_option("--algorithm", algorithm, "phash (DCT, default), dhash, chash (colour layout) or all")
+      ->check(CLI::IsMember({"phash", "dhash", "chash", "all"}));
+
+  simreel::app::CheckOptions check_opts;
+  auto* check = app.add_subcommand("check", "Re-render what a golden hash file describes and compare frame hashes");
+  check->add_option("golden", check_opts.golden, "Golden file written by `render --hash` or `check --update`")->required();
+  check->add_option("--tolerance", check_opts.tolerance, "Largest Hamming distance accepted for every hash kind")
+      ->check(CLI::Range(0, 64));
+  check->add_flag("--update", check_opts.update,
+                  "Rewrite the golden's hashes and its reference frames (GOLDEN.frames/NNNNN.png) from this run");
+  check->add_option("--out", check_opts.out_dir, "On mismatch write expected | actual | difference images here");
+  check->add_option("--backend", check_opts.backend, "OpenGL context (default: the golden's)");
 
   try {
     app.parse(argc, argv);
@@ -81,6 +107,7 @@ int main(int argc, char** argv) {
     if (simulate->parsed()) return simreel::app::simulate_command(sim_opts, export_csv);
     if (validate->parsed()) return simreel::app::validate_command(validate_scene, validate_overrides);
     if (hash->parsed()) return simreel::app::hash_command(images, algorithm);
+    if (check->parsed()) return simreel::app::check_command(check_opts);
   } catch (const simreel::app::SceneError& e) {
     for (const auto& m : e.messages()) std::cerr << "simreel: error: " << m << "\n";
     return 2;

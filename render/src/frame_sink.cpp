@@ -117,19 +117,50 @@ std::string lower_extension(const fs::path& path) {
   return ext;
 }
 
+/// "4M", "800k", "1500000", "2.5M": digits with at most one point, then an optional k or M.
+bool valid_bitrate(const std::string& text) {
+  std::size_t i = 0;
+  bool digit = false;
+  bool point = false;
+  for (; i < text.size(); ++i) {
+    const char c = text[i];
+    if (std::isdigit(static_cast<unsigned char>(c)) != 0) {
+      digit = true;
+    } else if (c == '.' && !point) {
+      point = true;
+    } else {
+      break;
+    }
+  }
+  if (!digit) return false;
+  if (i == text.size()) return true;
+  return i + 1 == text.size() && (text[i] == 'k' || text[i] == 'K' || text[i] == 'M');
+}
+
 class VideoSink final : public FrameSink {
  public:
   VideoSink(const fs::path& path, int width, int height, const VideoOptions& options)
       : path_(path), width_(width), height_(height) {
     const std::string ext = lower_extension(path);
-    if (ext != ".mp4" && ext != ".gif") {
-      fail("unsupported extension \"" + path.extension().string() + "\" (expected .mp4 or .gif)");
+    if (ext != ".mp4" && ext != ".gif" && ext != ".webm") {
+      fail("unsupported extension \"" + path.extension().string() +
+           "\" (expected .mp4, .webm or .gif)");
     }
     if (width < 1 || height < 1) fail("frame size must be at least 1x1");
     if (!(options.fps > 0.0) || !std::isfinite(options.fps)) fail("fps must be positive");
-    if (options.crf < 0 || options.crf > 51) fail("crf must be in 0..51");
+    const int max_crf = ext == ".webm" ? 63 : 51;
+    if (options.crf < 0 || options.crf > max_crf) {
+      fail("crf must be in 0.." + std::to_string(max_crf));
+    }
+    if (!options.bitrate.empty() && !valid_bitrate(options.bitrate)) {
+      fail("bitrate \"" + options.bitrate + "\" is not a number with an optional k or M suffix");
+    }
     const fs::path ffmpeg = find_on_path("ffmpeg");
     if (ffmpeg.empty()) fail("ffmpeg not found on PATH");
+    if (ext == ".webm" && !ffmpeg_has_encoder("libvpx-vp9")) {
+      fail("this ffmpeg has no VP9 encoder (libvpx-vp9 is not listed by `ffmpeg -encoders`); "
+           "write .mp4 instead");
+    }
 
     const fs::path dir = path.parent_path();
     if (!dir.empty()) {
@@ -147,10 +178,21 @@ class VideoSink final : public FrameSink {
                                      "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgba", "-s",
                                      std::to_string(width) + "x" + std::to_string(height), "-r",
                                      format_fps(options.fps), "-i", "-"};
+    // A target bit rate replaces constant quality; VP9 needs -b:v 0 for pure constant quality.
+    std::vector<std::string> rate = {"-crf", std::to_string(options.crf)};
+    if (!options.bitrate.empty()) rate = {"-b:v", options.bitrate};
     if (ext == ".mp4") {
       args.insert(args.end(), {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264",
-                               "-preset", "veryfast", "-crf", std::to_string(options.crf),
-                               "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"});
+                               "-preset", "veryfast"});
+      args.insert(args.end(), rate.begin(), rate.end());
+      args.insert(args.end(), {"-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"});
+    } else if (ext == ".webm") {
+      if (options.bitrate.empty()) rate.insert(rate.end(), {"-b:v", "0"});
+      // yuv420p needs even sizes for the widest player support, as for MP4.
+      args.insert(args.end(), {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libvpx-vp9",
+                               "-deadline", "good", "-cpu-used", "5", "-row-mt", "1"});
+      args.insert(args.end(), rate.begin(), rate.end());
+      args.insert(args.end(), {"-pix_fmt", "yuv420p", "-f", "webm"});
     } else {
       args.insert(args.end(),
                   {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-f", "gif"});
@@ -265,7 +307,11 @@ class VideoSink final : public FrameSink {
     sigemptyset(&empty);
     posix_spawnattr_setsigdefault(&attr, &defaults);
     posix_spawnattr_setsigmask(&attr, &empty);
-    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+    // Own process group: Ctrl-C at the terminal signals the foreground group, and ffmpeg
+    // stopping on its own would cut the video short; simreel closes its input instead.
+    posix_spawnattr_setpgroup(&attr, 0);
+    posix_spawnattr_setflags(&attr,
+                             POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETPGROUP);
 
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -372,5 +418,51 @@ std::unique_ptr<FrameSink> make_video(const fs::path& path, int width, int heigh
 }
 
 bool ffmpeg_available() { return !find_on_path("ffmpeg").empty(); }
+
+bool ffmpeg_has_encoder(const std::string& name) {
+  const fs::path ffmpeg = find_on_path("ffmpeg");
+  if (ffmpeg.empty()) return false;
+  // The list is read through a pipe with no shell in between.
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) return false;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  const std::string program = ffmpeg.string();
+  std::vector<std::string> args = {program, "-hide_banner", "-encoders"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = ::posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[1]);
+  std::string text;
+  if (rc == 0) {
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::read(fds[0], buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      text.append(buf, std::size_t(n));
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+  }
+  ::close(fds[0]);
+  // Lines look like " V....D libvpx-vp9           libvpx VP9 (codec vp9)".
+  std::size_t pos = 0;
+  while ((pos = text.find(name, pos)) != std::string::npos) {
+    const bool starts = pos > 0 && text[pos - 1] == ' ';
+    const std::size_t end = pos + name.size();
+    const bool ends = end < text.size() && std::isspace(static_cast<unsigned char>(text[end])) != 0;
+    if (starts && ends) return true;
+    pos = end;
+  }
+  return false;
+}
 
 }  // namespace simreel::render

@@ -132,6 +132,42 @@ std::uint64_t dhash(const Image& image) {
   return h;
 }
 
+std::uint64_t chash(const Image& image) {
+  if (image.width < 1 || image.height < 1 ||
+      image.rgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4) {
+    throw std::invalid_argument("cannot hash an empty or malformed image");
+  }
+  // Opponent channels of the 8-bit values, kept as exact integers: rg = R - G in [-255, 255],
+  // yb = R + G - 2B in [-510, 510] (twice the yellow-blue axis, so both share one scale).
+  const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
+  std::vector<std::int64_t> rg(n);
+  std::vector<std::int64_t> yb(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* p = &image.rgba[i * 4];
+    rg[i] = 2 * (std::int64_t(p[0]) - std::int64_t(p[1]));
+    yb[i] = std::int64_t(p[0]) + std::int64_t(p[1]) - 2 * std::int64_t(p[2]);
+  }
+  constexpr int kGrid = 4;
+  const std::vector<std::int64_t> mean_rg = box_resample(rg, image.width, image.height, kGrid, kGrid);
+  const std::vector<std::int64_t> mean_yb = box_resample(yb, image.width, image.height, kGrid, kGrid);
+  // Each sum is the cell mean times width*height, on a scale where 510 is full saturation.
+  // Levels: below -T, within +-T (grey-ish), above +T, thermometer-coded in two bits so that
+  // the Hamming distance counts level steps; T = 24/510 (about 5% of the axis).
+  const std::int64_t area = std::int64_t(image.width) * std::int64_t(image.height);
+  const std::int64_t threshold = 24 * area;
+  std::uint64_t h = 0;
+  int bit = 63;
+  for (const auto* plane : {&mean_rg, &mean_yb}) {
+    for (const std::int64_t v : *plane) {
+      if (v > -threshold) h |= std::uint64_t{1} << bit;
+      --bit;
+      if (v > threshold) h |= std::uint64_t{1} << bit;
+      --bit;
+    }
+  }
+  return h;
+}
+
 int hamming(std::uint64_t a, std::uint64_t b) { return std::popcount(a ^ b); }
 
 std::string hash_to_hex(std::uint64_t h) {

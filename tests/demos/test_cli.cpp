@@ -1,9 +1,18 @@
 // The program as a user runs it: exit codes, messages, outputs, determinism, the golden frame.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <thread>
+
 #include <nlohmann/json.hpp>
 
 #include "cli_util.hpp"
+#include "simreel/render/image.hpp"
 
 using simreel::test::run_simreel;
 using simreel::test::slurp;
@@ -205,40 +214,256 @@ TEST(Cli, HashPrintsSixteenHexDigitsPerImage) {
   EXPECT_NE(bad.err.find("missing.png"), std::string::npos);
 }
 
-// One frame of the default demo, compared with a perceptual hash recorded after looking at it
-// (tests/golden/README.md says how to re-record).
-TEST(Golden, FountainFrameMatchesRecordedHash) {
-  const auto golden = nlohmann::json::parse(slurp(fs::path(SIMREEL_SOURCE_DIR) / "tests/golden/fountain.json"));
-  const int frame = golden.at("frame").get<int>();
-  TempDir d;
-  const auto r = run_simreel("render " + golden.at("scene").get<std::string>() + " -q --frames " +
-                             std::to_string(frame + 1) + " --size " + golden.at("size").get<std::string>() +
-                             " --seed " + std::to_string(golden.at("seed").get<int>()) + " -o " + d.path.string());
-  ASSERT_EQ(r.code, 0) << r.err;
+std::string frame_name(int i) {
   char name[32];
-  std::snprintf(name, sizeof name, "frame_%05d.png", frame);
-  for (const char* algorithm : {"phash", "dhash"}) {
-    const auto h = run_simreel(std::string("hash --algorithm ") + algorithm + " " + (d / name).string());
-    ASSERT_EQ(h.code, 0) << h.err;
-    const std::uint64_t got = std::stoull(h.out.substr(0, 16), nullptr, 16);
-    const std::uint64_t want = std::stoull(golden.at(algorithm).get<std::string>(), nullptr, 16);
-    const int distance = __builtin_popcountll(got ^ want);
-    EXPECT_LE(distance, golden.at("tolerance").get<int>())
-        << algorithm << " " << h.out.substr(0, 16) << " vs golden " << golden.at(algorithm)
-        << " recorded on " << golden.at("gl_renderer") << " / " << golden.at("gl_version") << "; this run: " << r.out;
+  std::snprintf(name, sizeof name, "frame_%05d.png", i);
+  return name;
+}
+
+std::string probe(const fs::path& video, const std::string& entries) {
+  std::string out;
+  const std::string cmd = "ffprobe -v error -count_frames -show_entries " + entries + " -of csv=p=0 '" +
+                          video.string() + "' 2>/dev/null";
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return out;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) out += buf;
+  ::pclose(pipe);
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
+TEST(Cli, FrameRangeSimulatesFromZeroAndWritesOnlyTheRange) {
+  TempDir d;
+  write_file(d / "s.json", kSmallScene);
+  const std::string base = "render " + (d / "s.json").string() + " -q --size 64x48 -o ";
+  ASSERT_EQ(run_simreel(base + (d / "all").string() + " --frames 8").code, 0);
+  const auto r = run_simreel(base + (d / "part").string() + " --frames 5:8");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(fs::exists(d / "part" / frame_name(i)), i >= 5) << i;
+  // Frame 6 of the range is frame 6 of the whole run, byte for byte: the jet is in the air.
+  EXPECT_EQ(slurp(d / "part" / frame_name(6)), slurp(d / "all" / frame_name(6)));
+  EXPECT_NE(slurp(d / "all" / frame_name(5)), slurp(d / "all" / frame_name(6)));
+  for (const char* bad : {"0", "5:5", "7:3", "a:b", "3:", "-2"}) {
+    const auto e = run_simreel(base + (d / "bad").string() + " --frames " + bad);
+    EXPECT_EQ(e.code, 2) << bad;
+    EXPECT_NE(e.err.find("--frames"), std::string::npos) << e.err;
   }
-  // The golden must be able to fail: the same frame without the fountain is out of tolerance
-  // for dHash (pHash's low frequencies barely see a thin spray at this size).
-  TempDir e;
-  ASSERT_EQ(run_simreel("render " + golden.at("scene").get<std::string>() + " -q --frames " + std::to_string(frame + 1) +
-                        " --size " + golden.at("size").get<std::string>() + " --seed " +
-                        std::to_string(golden.at("seed").get<int>()) + " --set /emitters/0/rate=0 -o " + e.path.string())
-                .code,
+  EXPECT_FALSE(fs::exists(d / "bad"));
+}
+
+TEST(Cli, OutputsDoNotDependOnWriterThreads) {
+  TempDir d;
+  write_file(d / "s.json", kSmallScene);
+  const std::string base = "render " + (d / "s.json").string() + " -q --size 80x60 --frames 6 -o ";
+  ASSERT_EQ(run_simreel(base + (d / "a").string() + " -o " + (d / "a.gif").string()).code, 0);
+  ASSERT_EQ(run_simreel(base + (d / "b").string() + " -o " + (d / "b.gif").string() + " --sync-writes").code, 0);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(slurp(d / "a" / frame_name(i)), slurp(d / "b" / frame_name(i))) << i;
+  EXPECT_EQ(slurp(d / "a.gif"), slurp(d / "b.gif"));
+}
+
+TEST(Cli, WebmGifContactSheetAndOverlay) {
+  TempDir d;
+  write_file(d / "s.json", kSmallScene);
+  const auto r = run_simreel("render " + (d / "s.json").string() + " -q --size 96x54 --frames 10 -o " +
+                             (d / "p").string() + " -o " + (d / "v.gif").string() + " -o " + (d / "v.webm").string() +
+                             " --overlay --contact-sheet " + (d / "sheet.png").string() + " --sheet 3x2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(probe(d / "v.gif", "stream=codec_name,nb_read_frames"), "gif,10");
+  EXPECT_EQ(probe(d / "v.webm", "stream=codec_name,width,height,nb_read_frames"), "vp9,96,54,10");
+  EXPECT_EQ(slurp(d / "sheet.png").substr(1, 3), "PNG");
+  // --overlay writes the label into the top-left corner and leaves the rest of the frame alone.
+  const auto shown = simreel::render::read_image(d / "p" / frame_name(10 - 1));
+  ASSERT_EQ(run_simreel("render " + (d / "s.json").string() + " -q --size 96x54 --frames 9:10 -o " +
+                        (d / "clean").string()).code,
             0);
-  const auto h = run_simreel("hash --algorithm dhash " + (e / name).string());
-  const std::uint64_t got = std::stoull(h.out.substr(0, 16), nullptr, 16);
-  const std::uint64_t want = std::stoull(golden.at("dhash").get<std::string>(), nullptr, 16);
-  EXPECT_GT(__builtin_popcountll(got ^ want), golden.at("tolerance").get<int>());
+  const auto clean = simreel::render::read_image(d / "clean" / frame_name(9));
+  int label = 0, elsewhere = 0;
+  for (int y = 0; y < clean.height; ++y) {
+    for (int x = 0; x < clean.width; ++x) {
+      if (std::memcmp(shown.pixel(x, y), clean.pixel(x, y), 4) == 0) continue;
+      (y < 14 ? label : elsewhere) += 1;
+    }
+  }
+  EXPECT_GT(label, 100) << "the label is drawn";
+  EXPECT_EQ(elsewhere, 0) << "nothing else changes";
+}
+
+TEST(Cli, BadOutputOptionsExit2) {
+  TempDir d;
+  write_file(d / "s.json", kSmallScene);
+  const std::string base = "render " + (d / "s.json").string() + " -q --frames 2 --size 32x32 ";
+  auto r = run_simreel(base + "--contact-sheet " + (d / "s.jpg").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--contact-sheet"), std::string::npos) << r.err;
+  r = run_simreel(base + "--contact-sheet " + (d / "s.png").string() + " --sheet 0x3");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--sheet 0x3"), std::string::npos) << r.err;
+  r = run_simreel(base + "-o " + (d / "v.mp4").string() + " --bitrate fast");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--bitrate fast"), std::string::npos) << r.err;
+  r = run_simreel(base + "-o " + (d / "v.mp4").string() + " --crf 60");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--crf 60: expected 0..51 for H.264"), std::string::npos) << r.err;
+  r = run_simreel(base + "-o " + (d / "v.avi").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(fs::exists(d / "v.mp4"));
+}
+
+// Ctrl-C: the frame being made is finished, the video closed so it plays, exit 130.
+TEST(Cli, InterruptClosesTheVideoAndExits130) {
+  TempDir d;
+  write_file(d / "s.json", kSmallScene);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string out = (d / "err.txt").string();
+    freopen("/dev/null", "w", stdout);
+    freopen(out.c_str(), "w", stderr);
+    const std::string scene = (d / "s.json").string(), png = (d / "png").string(), mp4 = (d / "v.mp4").string();
+    execl(SIMREEL_BIN, SIMREEL_BIN, "render", scene.c_str(), "-q", "--frames", "100000", "--size", "96x54", "-o",
+          png.c_str(), "-o", mp4.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait (bounded) until a few frames exist, then interrupt.
+  for (int i = 0; i < 600 && !fs::exists(d / "png" / frame_name(3)); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(fs::exists(d / "png" / frame_name(3)));
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed instead of exiting";
+  EXPECT_EQ(WEXITSTATUS(status), 130) << slurp(d / "err.txt");
+  EXPECT_NE(slurp(d / "err.txt").find("interrupted"), std::string::npos);
+  ASSERT_TRUE(fs::exists(d / "v.mp4"));
+  int pngs = 0;
+  for (const auto& e : fs::directory_iterator(d / "png")) pngs += e.path().extension() == ".png" ? 1 : 0;
+  // Every frame handed to the writers is in the video too.
+  EXPECT_EQ(probe(d / "v.mp4", "stream=codec_name,nb_read_frames"), "h264," + std::to_string(pngs));
+  for (const auto& e : fs::recursive_directory_iterator(d.path))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hash records and `simreel check`
+
+struct Recorded {
+  TempDir d;
+  fs::path golden;
+};
+
+// A jet of big orange particles seen from close by: the effect fills a good part of the frame.
+const char* kGoldenScene = R"({
+  "seed": 3, "fps": 30, "frames": 20,
+  "camera": {"position": [1.5, -2.5, 0.9], "target": [0, 0, 0.6]},
+  "colliders": [{"type": "plane", "restitution": 0.5}],
+  "emitters": [{"name": "jet", "rate": 1500, "start_speed": {"mean": 4, "deviation": 0.3},
+                "spread_deg": {"mean": 0, "deviation": 6}, "lifetime": 2, "position": [0, 0, 0.1],
+                "particle_radius": 0.03,
+                "color_over_lifetime": [{"t": 0, "color": [1, 0.5, 0.1, 1]}, {"t": 1, "color": [1, 0.3, 0.1, 1]}]}]
+})";
+
+/// Records hashes of frames 0, 4, 8, 12 at 96x72 and their reference frames.
+void record(Recorded& r) {
+  write_file(r.d / "s.json", kGoldenScene);
+  r.golden = r.d / "g.json";
+  const auto rec = run_simreel("render " + (r.d / "s.json").string() + " -q --size 96x72 --frames 0:13 --hash-every 4 "
+                               "--set /seed=4 --hash " + r.golden.string());
+  ASSERT_EQ(rec.code, 0) << rec.err;
+  const auto up = run_simreel("check " + r.golden.string() + " --update");
+  ASSERT_EQ(up.code, 0) << up.err;
+}
+
+TEST(Check, HashRecordDescribesTheRunAndMatchesItself) {
+  Recorded r;
+  record(r);
+  if (HasFatalFailure()) return;
+  const auto j = nlohmann::json::parse(slurp(r.golden));
+  EXPECT_EQ(j.at("simreel_hashes"), 1);
+  EXPECT_EQ(j.at("size"), "96x72");
+  EXPECT_EQ(j.at("frames"), "0:13");
+  EXPECT_EQ(j.at("seed"), 4) << "the seed after --set";
+  EXPECT_EQ(j.at("set"), nlohmann::json::array({"/seed=4"}));
+  EXPECT_FALSE(j.at("gl_renderer").get<std::string>().empty());
+  EXPECT_FALSE(j.at("simreel_version").get<std::string>().empty());
+  ASSERT_EQ(j.at("hashes").size(), 4u);
+  EXPECT_EQ(j.at("hashes")[2].at("frame"), 8);
+  EXPECT_EQ(j.at("hashes")[2].at("chash").get<std::string>().size(), 16u);
+  for (const char* f : {"00000.png", "00004.png", "00008.png", "00012.png"}) EXPECT_TRUE(fs::exists(r.d / "g.frames" / f)) << f;
+  const auto c = run_simreel("check " + r.golden.string());
+  EXPECT_EQ(c.code, 0) << c.out << c.err;
+  EXPECT_NE(c.out.find("4 frames match"), std::string::npos) << c.out;
+}
+
+TEST(Check, ChangedEffectFailsNamesWorstFramesAndWritesComparisons) {
+  Recorded r;
+  record(r);
+  if (HasFatalFailure()) return;
+  auto j = nlohmann::json::parse(slurp(r.golden));
+  j["set"].push_back("/emitters/0/rate=0");  // the jet is gone
+  write_file(r.golden, j.dump(2));
+  const auto c = run_simreel("check " + r.golden.string() + " --out " + (r.d / "diff").string());
+  EXPECT_EQ(c.code, 1) << c.out << c.err;
+  EXPECT_NE(c.out.find("MISMATCH"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("worst: frame 12"), std::string::npos) << c.out;
+  ASSERT_TRUE(fs::exists(r.d / "diff" / "frame_00012.png"));
+  const auto comparison = simreel::render::read_image(r.d / "diff" / "frame_00012.png");
+  EXPECT_EQ(comparison.width, 3 * 96 + 8) << "expected | actual | difference";
+  EXPECT_FALSE(fs::exists(r.d / "diff" / "frame_00000.png")) << "frame 0 has no particles yet, so it matches";
+  // A generous tolerance accepts it.
+  EXPECT_EQ(run_simreel("check " + r.golden.string() + " --tolerance 64").code, 0);
+}
+
+TEST(Check, BadGoldenExits2WithPointer) {
+  TempDir d;
+  write_file(d / "g.json", R"({"simreel_hashes": 1, "scene": "demos/scenes/fountain.json", "size": "96x72",
+    "frames": "0:9", "hash_every": 4, "hashes": [{"frame": 3, "phash": "zz", "dhash": "0000000000000000",
+    "chash": "0000000000000000"}], "tolerence": 3})");
+  const auto c = run_simreel("check " + (d / "g.json").string());
+  EXPECT_EQ(c.code, 2);
+  EXPECT_NE(c.err.find("/hashes/0/frame"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("/hashes/0/phash: expected 16 hex digits"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("did you mean \"tolerance\""), std::string::npos) << c.err;
+  EXPECT_EQ(run_simreel("check " + (d / "missing.json").string()).code, 2);
+}
+
+TEST(Golden, EveryDemoSceneHasAGolden) {
+  for (const auto& entry : fs::directory_iterator(fs::path(SIMREEL_SOURCE_DIR) / "demos/scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    const fs::path golden = fs::path(SIMREEL_SOURCE_DIR) / "tests/golden" / entry.path().filename();
+    EXPECT_TRUE(fs::exists(golden)) << "record one: see README \"Image-hash regression testing\"; missing " << golden;
+  }
+}
+
+// The project's fountain golden must be able to fail: without the jet (luminance hashes), and
+// with the jet's colour ramp turned from blue to red at about the same brightness, which only
+// the colour hash sees.
+TEST(Golden, FountainGoldenCatchesARemovedJetAndARecolouredRamp) {
+  const auto golden = nlohmann::json::parse(slurp(fs::path(SIMREEL_SOURCE_DIR) / "tests/golden/fountain.json"));
+  TempDir d;
+  auto variant = [&](const std::string& set) {
+    auto j = golden;
+    j["set"].push_back(set);
+    write_file(d / "g.json", j.dump(2));
+    return run_simreel("check " + (d / "g.json").string());
+  };
+  const auto no_jet = variant("/emitters/0/rate=0");
+  EXPECT_EQ(no_jet.code, 1) << no_jet.out << no_jet.err;
+  const auto red = variant(R"(/emitters/0/color_over_lifetime=[{"t":0,"color":[1.0,0.55,0.45,0.95]},{"t":1,"color":[1.0,0.6,0.5,0.0]}])");
+  EXPECT_EQ(red.code, 1) << red.out << red.err;
+  // Every failing frame fails on chash alone: pHash and dHash stay within their tolerance.
+  std::istringstream lines(red.out);
+  int failing = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("MISMATCH") == std::string::npos) continue;
+    ++failing;
+    int frame = 0, p = 0, dh = 0, c = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "frame %d: phash %d  dhash %d  chash %d", &frame, &p, &dh, &c), 4) << line;
+    EXPECT_LE(p, golden["tolerance"]["phash"].get<int>()) << line;
+    EXPECT_LE(dh, golden["tolerance"]["dhash"].get<int>()) << line;
+    EXPECT_GT(c, golden["tolerance"]["chash"].get<int>()) << line;
+  }
+  EXPECT_GE(failing, 1) << red.out;
 }
 
 TEST(Cli, BrokenMeshFileExits2NamingSceneFilePointerAndMesh) {

@@ -10,9 +10,16 @@
 
 #include <sys/stat.h>
 
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
 #include "render_test_util.hpp"
 #include "simreel/render/frame_sink.hpp"
 #include "simreel/render/image.hpp"
+#include "simreel/render/text_overlay.hpp"
 
 namespace simreel::render {
 namespace {
@@ -81,7 +88,7 @@ TEST(RenderVideo, Mp4AtAnOddSizeIsPaddedToEvenYuv420p) {
   ASSERT_TRUE(ffmpeg_available());
   const test::TempDir dir("mp4");
   const fs::path path = dir.path() / "clip.mp4";
-  auto sink = make_video(path, 161, 121, VideoOptions{10.0, 23});
+  auto sink = make_video(path, 161, 121, VideoOptions{10.0, 23, ""});
   EXPECT_EQ(sink->describe(), path.string());
   for (int i = 0; i < 10; ++i) sink->write(frame(161, 121, i), i);
   EXPECT_FALSE(fs::exists(path));  // only under a temporary name until finished
@@ -168,6 +175,260 @@ TEST(RenderVideo, FfmpegFailureCarriesItsMessageAndLeavesNoFile) {
   EXPECT_NE(message.find("fake failure: no encoder here"), std::string::npos) << message;
   EXPECT_NE(message.find("x.mp4"), std::string::npos) << message;
   EXPECT_EQ(dir.entries(), 0);
+}
+
+TEST(RenderVideo, WebmIsVp9WhenTheEncoderExists) {
+  ASSERT_TRUE(ffmpeg_available());
+  const test::TempDir dir("webm");
+  const fs::path path = dir.path() / "clip.webm";
+  if (!ffmpeg_has_encoder("libvpx-vp9")) {
+    EXPECT_THROW((void)make_video(path, 32, 32, VideoOptions{}), IoError);
+    GTEST_SKIP() << "ffmpeg without libvpx-vp9: the clear error is what is checked";
+  }
+  auto sink = make_video(path, 63, 35, VideoOptions{10.0, 30, ""});
+  for (int i = 0; i < 5; ++i) sink->write(frame(63, 35, i), i);
+  sink->finish();
+  EXPECT_EQ(run("ffprobe -v error -show_entries stream=codec_name,width,height,pix_fmt -of csv=p=0 '" +
+                path.string() + "'"),
+            "vp9,64,36,yuv420p");
+  EXPECT_FALSE(ffmpeg_has_encoder("no-such-encoder"));
+}
+
+TEST(RenderVideo, BitrateReplacesCrfAndIsChecked) {
+  ASSERT_TRUE(ffmpeg_available());
+  const test::TempDir dir("rate");
+  // A tiny bit rate gives a much smaller file than the best constant quality.
+  auto encode = [&](const std::string& name, VideoOptions options) {
+    auto sink = make_video(dir.path() / name, 160, 120, options);
+    for (int i = 0; i < 30; ++i) sink->write(frame(160, 120, i % 13), i);
+    sink->finish();
+    return fs::file_size(dir.path() / name);
+  };
+  const auto small = encode("low.mp4", VideoOptions{30.0, 0, "20k"});
+  const auto large = encode("crf0.mp4", VideoOptions{30.0, 0, ""});
+  EXPECT_LT(small * 3, large);
+  EXPECT_THROW((void)make_video(dir.path() / "x.mp4", 16, 16, VideoOptions{30.0, 18, "fast"}), IoError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// FrameWriter
+
+/// Records what it is given; can be told to block in write() or to fail at a frame.
+class ProbeSink final : public FrameSink {
+ public:
+  struct Log {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::vector<int> indices;
+    std::vector<std::uint8_t> first_bytes;
+    bool finished = false;
+    bool aborted = false;
+    bool hold = false;  ///< write() waits while true
+  };
+  ProbeSink(std::shared_ptr<Log> log, int fail_at = -1) : log_(std::move(log)), fail_at_(fail_at) {}
+  void write(const Image& image, int index) override {
+    std::unique_lock lock(log_->mutex);
+    log_->changed.wait(lock, [&] { return !log_->hold; });
+    if (index == fail_at_) throw IoError("probe: disk full at frame " + std::to_string(index));
+    log_->indices.push_back(index);
+    log_->first_bytes.push_back(image.rgba[2]);
+  }
+  void finish() override {
+    const std::lock_guard lock(log_->mutex);
+    log_->finished = true;
+  }
+  void abort() noexcept override {
+    const std::lock_guard lock(log_->mutex);
+    log_->aborted = true;
+  }
+  [[nodiscard]] std::string describe() const override { return "probe"; }
+
+ private:
+  std::shared_ptr<Log> log_;
+  int fail_at_;
+};
+
+TEST(RenderFrameWriter, EverySinkSeesEveryFrameInOrder) {
+  for (const std::size_t depth : {std::size_t{0}, std::size_t{1}, std::size_t{4}}) {
+    auto a = std::make_shared<ProbeSink::Log>();
+    auto b = std::make_shared<ProbeSink::Log>();
+    std::vector<std::unique_ptr<FrameSink>> sinks;
+    sinks.push_back(std::make_unique<ProbeSink>(a));
+    sinks.push_back(std::make_unique<ProbeSink>(b));
+    FrameWriter writer(std::move(sinks), depth);
+    for (int i = 0; i < 12; ++i) writer.write(frame(8, 8, i), 100 + i);
+    const auto done = writer.finish();
+    EXPECT_EQ(done.size(), 2u);
+    std::vector<int> expected;
+    for (int i = 0; i < 12; ++i) expected.push_back(100 + i);
+    EXPECT_EQ(a->indices, expected) << depth;
+    EXPECT_EQ(b->indices, expected) << depth;
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(a->first_bytes[std::size_t(i)], std::uint8_t(i * 20));
+    EXPECT_TRUE(a->finished && b->finished);
+    EXPECT_TRUE(writer.take_failures().empty());
+  }
+}
+
+TEST(RenderFrameWriter, QueueIsBoundedWhileASinkIsSlow) {
+  auto log = std::make_shared<ProbeSink::Log>();
+  log->hold = true;
+  std::vector<std::unique_ptr<FrameSink>> sinks;
+  sinks.push_back(std::make_unique<ProbeSink>(log));
+  FrameWriter writer(std::move(sinks), 3);
+  std::atomic<int> queued{0};
+  std::thread producer([&] {
+    for (int i = 0; i < 10; ++i) {
+      writer.write(frame(8, 8, i), i);
+      ++queued;
+    }
+  });
+  // The sink holds its first frame: at most depth frames are queued behind it, so the
+  // producer stops after 3 writes (or 4 if the writer took one off the queue). Wait for the
+  // first 3 (no deadline that load could break), then give it time to overrun the bound.
+  for (int i = 0; i < 2000 && queued.load() < 3; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_LE(queued.load(), 4);
+  EXPECT_GE(queued.load(), 3);
+  {
+    const std::lock_guard lock(log->mutex);
+    log->hold = false;
+  }
+  log->changed.notify_all();
+  producer.join();
+  writer.finish();
+  EXPECT_EQ(log->indices.size(), 10u);
+}
+
+TEST(RenderFrameWriter, AFailingSinkIsAbortedAndReportedOthersContinue) {
+  auto bad = std::make_shared<ProbeSink::Log>();
+  auto good = std::make_shared<ProbeSink::Log>();
+  std::vector<std::unique_ptr<FrameSink>> sinks;
+  sinks.push_back(std::make_unique<ProbeSink>(bad, 3));
+  sinks.push_back(std::make_unique<ProbeSink>(good));
+  FrameWriter writer(std::move(sinks), 2);
+  for (int i = 0; i < 8; ++i) writer.write(frame(8, 8, i), i);
+  const auto done = writer.finish();
+  ASSERT_EQ(done.size(), 1u);
+  const auto failures = writer.take_failures();
+  ASSERT_EQ(failures.size(), 1u);
+  EXPECT_EQ(failures[0].message, "probe: disk full at frame 3");
+  EXPECT_TRUE(bad->aborted);
+  EXPECT_FALSE(bad->finished);
+  EXPECT_EQ(bad->indices, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(good->indices.size(), 8u);
+  EXPECT_TRUE(writer.take_failures().empty()) << "each failure is reported once";
+}
+
+TEST(RenderFrameWriter, DestroyedUnfinishedAbortsEverySink) {
+  auto log = std::make_shared<ProbeSink::Log>();
+  {
+    std::vector<std::unique_ptr<FrameSink>> sinks;
+    sinks.push_back(std::make_unique<ProbeSink>(log));
+    FrameWriter writer(std::move(sinks), 4);
+    writer.write(frame(8, 8, 0), 0);
+  }
+  EXPECT_TRUE(log->aborted);
+  EXPECT_FALSE(log->finished);
+}
+
+TEST(RenderFrameWriter, PngBytesDoNotDependOnThreads) {
+  const test::TempDir dir("det");
+  for (const std::size_t depth : {std::size_t{0}, std::size_t{4}}) {
+    std::vector<std::unique_ptr<FrameSink>> sinks;
+    sinks.push_back(make_png_sequence(dir.path() / std::to_string(depth), 1));
+    sinks.push_back(make_png_sequence(dir.path() / (std::to_string(depth) + "b"), 9));
+    FrameWriter writer(std::move(sinks), depth);
+    for (int i = 0; i < 6; ++i) writer.write(frame(64, 40, i), i);
+    writer.finish();
+  }
+  for (const char* name : {"frame_00000.png", "frame_00005.png"}) {
+    const auto bytes = [&](const std::string& sub) {
+      std::ifstream in(dir.path() / sub / name, std::ios::binary);
+      return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(bytes("0"), bytes("4")) << name;
+    EXPECT_EQ(bytes("0b"), bytes("4b")) << name;
+    EXPECT_NE(bytes("0"), bytes("0b")) << "compression levels 1 and 9 differ";
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contact sheet and text
+
+TEST(RenderContactSheet, FramesAreSampledEvenlyWithBothEnds) {
+  EXPECT_EQ(contact_sheet_frames(0, 10, 4), (std::vector<int>{0, 3, 6, 9}));
+  EXPECT_EQ(contact_sheet_frames(30, 31, 4), (std::vector<int>{30, 40, 50, 60}));
+  EXPECT_EQ(contact_sheet_frames(5, 3, 16), (std::vector<int>{5, 6, 7}));
+  EXPECT_EQ(contact_sheet_frames(0, 100, 1), (std::vector<int>{0}));
+  EXPECT_THROW((void)contact_sheet_frames(0, 0, 4), std::invalid_argument);
+}
+
+TEST(RenderContactSheet, ThumbnailsLandInTheirCells) {
+  const test::TempDir dir("sheet");
+  const fs::path path = dir.path() / "s.png";
+  ContactSheetLayout layout;
+  layout.columns = 3;
+  layout.rows = 2;
+  layout.thumb_width = 40;
+  layout.gap = 2;
+  auto sink = make_contact_sheet(path, 80, 40, {0, 2, 4, 6, 8}, layout);
+  for (int i = 0; i < 10; ++i) {
+    Image f(80, 40);
+    for (std::size_t k = 0; k < f.rgba.size(); k += 4) {
+      f.rgba[k] = std::uint8_t(i * 25);
+      f.rgba[k + 3] = 255;
+    }
+    sink->write(f, i);
+  }
+  EXPECT_FALSE(fs::exists(path));
+  sink->finish();
+  const Image sheet = read_image(path);
+  EXPECT_EQ(sheet.width, 3 * 42 + 2);
+  EXPECT_EQ(sheet.height, 2 * 22 + 2);
+  // Bottom-right pixel of each thumbnail (away from the label): red = 25 x frame number.
+  const int frames[] = {0, 2, 4, 6, 8};
+  for (int cell = 0; cell < 5; ++cell) {
+    const int x = 2 + (cell % 3) * 42 + 39;
+    const int y = 2 + (cell / 3) * 22 + 19;
+    EXPECT_EQ(sheet.pixel(x, y)[0], std::uint8_t(frames[cell] * 25)) << cell;
+  }
+  // The sixth cell never got a frame: it stays the dark background.
+  EXPECT_EQ(sheet.pixel(2 + 2 * 42 + 39, 2 + 22 + 19)[0], 24);
+}
+
+TEST(RenderText, DrawsInsideItsExtentOnly) {
+  Image img(120, 40);
+  std::fill(img.rgba.begin(), img.rgba.end(), std::uint8_t(100));
+  TextStyle style;
+  style.scale = 2;
+  style.background = {0, 0, 0, 255};
+  const TextExtent e = measure_text("F 12", style);
+  EXPECT_EQ(e.width, (4 * 6 + 1) * 2);
+  EXPECT_EQ(e.height, (8 + 1) * 2);
+  draw_text(img, 3, 4, "F 12", style);
+  int white = 0;
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      const bool inside = x >= 3 && x < 3 + e.width && y >= 4 && y < 4 + e.height;
+      const std::uint8_t v = img.pixel(x, y)[0];
+      if (!inside) {
+        EXPECT_EQ(v, 100) << x << "," << y;
+      } else {
+        EXPECT_TRUE(v == 0 || v == 255) << x << "," << y;
+      }
+      white += v == 255 ? 1 : 0;
+    }
+  }
+  // 'F' has 5+1+3+1+1+1+1 = 13 lit font pixels, each 2x2 image pixels; the glyphs differ.
+  EXPECT_GT(white, 13 * 4);
+  Image a(60, 20), b(60, 20);
+  draw_text(a, 0, 0, "0", style);
+  draw_text(b, 0, 0, "8", style);
+  EXPECT_NE(a.rgba, b.rgba);
+  Image lower(60, 20), upper(60, 20);
+  draw_text(lower, 0, 0, "abc", style);
+  draw_text(upper, 0, 0, "ABC", style);
+  EXPECT_EQ(lower.rgba, upper.rgba);
 }
 
 }  // namespace

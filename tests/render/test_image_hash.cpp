@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
+#include <vector>
 
 #include "simreel/render/image_hash.hpp"
 
@@ -78,11 +81,146 @@ Image mirrored(const Image& img) {
   return out;
 }
 
+/// JPEG's lossy steps without the entropy coding: YCbCr (JFIF), chroma averaged over 2x2
+/// (4:2:0), 8x8 block DCT of every plane quantised with the JPEG Annex K tables at quality 75.
+Image jpeg_like(const Image& img) {
+  static constexpr std::array<int, 64> kLuma = {16, 11, 10, 16, 24,  40,  51,  61,  12, 12, 14, 19, 26,  58,  60,  55,
+                                                14, 13, 16, 24, 40,  57,  69,  56,  14, 17, 22, 29, 51,  87,  80,  62,
+                                                18, 22, 37, 56, 68,  109, 103, 77,  24, 35, 55, 64, 81,  104, 113, 92,
+                                                49, 64, 78, 87, 103, 121, 120, 101, 72, 92, 95, 98, 112, 100, 103, 99};
+  static constexpr std::array<int, 64> kChroma = {17, 18, 24, 47, 99, 99, 99, 99, 18, 21, 26, 66, 99, 99, 99, 99,
+                                                  24, 26, 56, 99, 99, 99, 99, 99, 47, 66, 99, 99, 99, 99, 99, 99,
+                                                  99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
+                                                  99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99};
+  const double q75 = 0.5;  // libjpeg scaling: quality 75 -> tables x 50%
+  const int w = img.width, h = img.height;
+  std::vector<double> plane[3];
+  for (auto& p : plane) p.assign(std::size_t(w) * h, 0.0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      // Chroma from the 2x2 block mean (4:2:0), luma per pixel.
+      double cb = 0, cr = 0;
+      int n = 0;
+      for (int dy = 0; dy < 2; ++dy) {
+        for (int dx = 0; dx < 2; ++dx) {
+          const int xx = std::min(w - 1, (x & ~1) + dx), yy = std::min(h - 1, (y & ~1) + dy);
+          const std::uint8_t* q = img.pixel(xx, yy);
+          cb += -0.168736 * q[0] - 0.331264 * q[1] + 0.5 * q[2];
+          cr += 0.5 * q[0] - 0.418688 * q[1] - 0.081312 * q[2];
+          ++n;
+        }
+      }
+      const std::uint8_t* p = img.pixel(x, y);
+      plane[0][std::size_t(y) * w + x] = 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2] - 128;
+      plane[1][std::size_t(y) * w + x] = cb / n;
+      plane[2][std::size_t(y) * w + x] = cr / n;
+    }
+  }
+  auto c = [](int k) { return k == 0 ? std::sqrt(0.125) : 0.5; };
+  for (int ch = 0; ch < 3; ++ch) {
+    const auto& table = ch == 0 ? kLuma : kChroma;
+    for (int by = 0; by + 8 <= h; by += 8) {
+      for (int bx = 0; bx + 8 <= w; bx += 8) {
+        double coef[64];
+        for (int v = 0; v < 8; ++v) {
+          for (int u = 0; u < 8; ++u) {
+            double sum = 0;
+            for (int y = 0; y < 8; ++y)
+              for (int x = 0; x < 8; ++x)
+                sum += plane[ch][std::size_t(by + y) * w + bx + x] *
+                       std::cos((2 * x + 1) * u * std::numbers::pi / 16) * std::cos((2 * y + 1) * v * std::numbers::pi / 16);
+            const double step = std::max(1.0, table[std::size_t(v * 8 + u)] * q75);
+            coef[v * 8 + u] = std::round(c(u) * c(v) * sum / step) * step;
+          }
+        }
+        for (int y = 0; y < 8; ++y) {
+          for (int x = 0; x < 8; ++x) {
+            double sum = 0;
+            for (int v = 0; v < 8; ++v)
+              for (int u = 0; u < 8; ++u)
+                sum += c(u) * c(v) * coef[v * 8 + u] * std::cos((2 * x + 1) * u * std::numbers::pi / 16) *
+                       std::cos((2 * y + 1) * v * std::numbers::pi / 16);
+            plane[ch][std::size_t(by + y) * w + bx + x] = sum;
+          }
+        }
+      }
+    }
+  }
+  Image out(w, h);
+  for (int i = 0; i < w * h; ++i) {
+    const double Y = plane[0][std::size_t(i)] + 128, cb = plane[1][std::size_t(i)], cr = plane[2][std::size_t(i)];
+    std::uint8_t* p = &out.rgba[std::size_t(i) * 4];
+    p[0] = clamp8(Y + 1.402 * cr);
+    p[1] = clamp8(Y - 0.344136 * cb - 0.714136 * cr);
+    p[2] = clamp8(Y + 1.772 * cb);
+    p[3] = 255;
+  }
+  return out;
+}
+
+/// A colour ramp from left to right over the luminance of scene() (grey, with its blobs: a
+/// smooth gradient alone leaves pHash's AC terms near zero and their bits to rounding), each
+/// pixel's Rec. 709 luma kept equal whatever `hue_sign`: the chroma added,
+/// s * (0.7152, -0.2126 + 0.0722, -0.7152), has zero luma. hue_sign +1 gives a red/yellow
+/// ramp, -1 a cyan/blue one.
+Image iso_luminant_ramp(int hue_sign, int w = 160, int h = 120) {
+  const Image base = scene(w, h);
+  Image img(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t* b = base.pixel(x, y);
+      const double grey = 20 + 0.8 * (0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2]);
+      const double s = hue_sign * 80.0 * x / w;  // the ramp: saturation grows left to right
+      std::uint8_t* p = img.pixel(x, y);
+      p[0] = clamp8(grey + s * 0.7152);
+      p[1] = clamp8(grey - s * 0.2126 + s * 0.0722);
+      p[2] = clamp8(grey - s * 0.7152);
+      p[3] = 255;
+    }
+  }
+  return img;
+}
+
+/// scene() with its bright blob moved by (dx, dy) of the image size.
+Image moved_blob(double dx, double dy, int w = 160, int h = 120) {
+  Image img = scene(w, h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double u = double(x) / w, v = double(y) / h;
+      const double old_blob = std::exp(-(std::pow(u - 0.3, 2) + std::pow(v - 0.6, 2)) / 0.01);
+      const double new_blob = std::exp(-(std::pow(u - 0.3 - dx, 2) + std::pow(v - 0.6 - dy, 2)) / 0.01);
+      std::uint8_t* p = img.pixel(x, y);
+      p[0] = clamp8(p[0] + 150 * (new_blob - old_blob));
+      p[1] = clamp8(p[1] + 60 * (new_blob - old_blob));
+      p[2] = clamp8(p[2] - 120 * (new_blob - old_blob));
+    }
+  }
+  return img;
+}
+
 TEST(RenderHash, IdenticalImagesHashEqual) {
   const Image a = scene();
   const Image b = scene();
   EXPECT_EQ(hamming(phash(a), phash(b)), 0);
   EXPECT_EQ(hamming(dhash(a), dhash(b)), 0);
+  EXPECT_EQ(hamming(chash(a), chash(b)), 0);
+}
+
+TEST(RenderHash, ColourHashKnownValues) {
+  Image grey(40, 30);
+  std::fill(grey.rgba.begin(), grey.rgba.end(), std::uint8_t(128));
+  // Every cell of both channels within +-T: thermometer code 10 in all 32 places.
+  EXPECT_EQ(chash(grey), 0xaaaaaaaaaaaaaaaaull);
+  Image blue(40, 30);
+  for (int i = 0; i < 40 * 30; ++i) {
+    blue.rgba[std::size_t(i) * 4 + 0] = 20;
+    blue.rgba[std::size_t(i) * 4 + 1] = 20;
+    blue.rgba[std::size_t(i) * 4 + 2] = 220;
+    blue.rgba[std::size_t(i) * 4 + 3] = 255;
+  }
+  // R = G: red-green neutral (10...); strongly blue: yellow-blue below -T (00...).
+  EXPECT_EQ(chash(blue), 0xaaaaaaaa00000000ull);
+  EXPECT_THROW((void)chash(Image{}), std::invalid_argument);
 }
 
 TEST(RenderHash, KnownValues) {
@@ -113,6 +251,37 @@ TEST(RenderHash, SmallNoiseAndOnePixelShiftStayClose) {
   }
   EXPECT_LE(hamming(phash(a), phash(shifted)), 6);
   EXPECT_LE(hamming(dhash(a), dhash(shifted)), 6);
+  EXPECT_LE(hamming(chash(a), chash(with_noise(a, 4, 1))), 2);
+  EXPECT_LE(hamming(chash(a), chash(shifted)), 2);
+}
+
+TEST(RenderHash, JpegLikeQuantisationStaysClose) {
+  const Image a = scene();
+  const Image j = jpeg_like(a);
+  int changed = 0;
+  for (std::size_t i = 0; i < a.rgba.size(); ++i) changed += a.rgba[i] != j.rgba[i] ? 1 : 0;
+  ASSERT_GT(changed, int(a.rgba.size() / 8)) << "the quantisation must actually change the image";
+  EXPECT_LE(hamming(phash(a), phash(j)), 6);
+  EXPECT_LE(hamming(dhash(a), dhash(j)), 6);
+  EXPECT_LE(hamming(chash(a), chash(j)), 2);
+}
+
+TEST(RenderHash, MovedObjectIsFarApart) {
+  const Image a = scene();
+  const Image moved = moved_blob(0.35, -0.3);
+  EXPECT_GE(hamming(phash(a), phash(moved)), 12);
+  // dHash bits compare neighbouring cells, so only those the blob leaves and enters change.
+  EXPECT_GE(hamming(dhash(a), dhash(moved)), 8);
+}
+
+TEST(RenderHash, ChangedColourRampAtEqualLuminanceIsSeenOnlyByTheColourHash) {
+  const Image warm = iso_luminant_ramp(+1);
+  const Image cold = iso_luminant_ramp(-1);
+  // Same luminance up to 8-bit rounding: the luminance hashes cannot tell them apart...
+  EXPECT_LE(hamming(phash(warm), phash(cold)), 2);
+  EXPECT_LE(hamming(dhash(warm), dhash(cold)), 2);
+  // ...the colour hash sees the ramp reversed in both opponent channels.
+  EXPECT_GE(hamming(chash(warm), chash(cold)), 20);
 }
 
 TEST(RenderHash, DifferentImagesAreFarApart) {
@@ -121,6 +290,7 @@ TEST(RenderHash, DifferentImagesAreFarApart) {
   EXPECT_GE(hamming(dhash(a), dhash(checkerboard())), 20);
   EXPECT_GE(hamming(phash(a), phash(mirrored(a))), 20);
   EXPECT_GE(hamming(dhash(a), dhash(mirrored(a))), 20);
+  EXPECT_GE(hamming(chash(a), chash(checkerboard())), 16);
 }
 
 TEST(RenderHash, WorksForImagesSmallerThanTheGrid) {
