@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "effect_scene.hpp"
 #include "json_reader.hpp"
 #include "simreel/render/context.hpp"
 #include "simreel/render/image.hpp"
@@ -80,6 +81,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"phash", "dhash", "chash", "all"}));
 
   simreel::app::CheckOptions check_opts;
+  std::string preset_name;
+  bool preset_json = false;
+  auto* presets = app.add_subcommand("presets", "List the effect presets (Coutinho §3.9.1) and their knobs with defaults");
+  presets->add_option("effect", preset_name, "Only this effect");
+  presets->add_flag("--json", preset_json, "Print an emitter object with every knob at its default, ready to paste");
+
   auto* check = app.add_subcommand("check", "Re-render what a golden hash file describes and compare frame hashes");
   check->add_option("golden", check_opts.golden, "Golden file written by `render --hash` or `check --update`")->required();
   check->add_option("--tolerance", check_opts.tolerance, "Largest Hamming distance accepted for every hash kind")
@@ -108,6 +115,7 @@ int main(int argc, char** argv) {
     if (validate->parsed()) return simreel::app::validate_command(validate_scene, validate_overrides);
     if (hash->parsed()) return simreel::app::hash_command(images, algorithm);
     if (check->parsed()) return simreel::app::check_command(check_opts);
+    if (presets->parsed()) return simreel::app::presets_command(preset_name, preset_json);
   } catch (const simreel::app::SceneError& e) {
     for (const auto& m : e.messages()) std::cerr << "simreel: error: " << m << "\n";
     return 2;

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <utility>
 
+#include "effect_scene.hpp"
 #include "json_reader.hpp"
 #include "simreel/assets/mesh.hpp"
 
@@ -117,20 +118,15 @@ sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key) {
   return path;
 }
 
-/// Collider response keys (Coutinho §3.6.1, §3.6.3), read from the collider object itself or
-/// from its "collider" sub-object.
-sim::Material material(ObjectReader& r) {
-  sim::Material m;
-  m.restitution = r.number("restitution", m.restitution, 0.0, 1.0);
-  m.friction = r.number("friction", m.friction, 0.0, kInf);
-  if (r.has("static_friction")) m.static_friction = r.number("static_friction", 0.0, 0.0, kInf);
+/// "on_hit" (bounce | stick | kill | split) and the droplets of a split hit under `split_key`.
+void hit_action(ObjectReader& r, const std::string& split_key, sim::Material& m) {
   const std::string on_hit = r.choice("on_hit", "bounce", {"bounce", "stick", "kill", "split"});
   m.on_hit = on_hit == "stick" ? sim::HitAction::stick
              : on_hit == "kill" ? sim::HitAction::kill
              : on_hit == "split" ? sim::HitAction::split
                                  : sim::HitAction::bounce;
-  if (const json* sp = object_member(r, "split")) {
-    ObjectReader o(*sp, r.pointer("split"), r.file(), r.errors());
+  if (const json* sp = object_member(r, split_key)) {
+    ObjectReader o(*sp, r.pointer(split_key), r.file(), r.errors());
     sim::SplitOnHit& x = m.split;
     x.count = int(o.integer("count", x.count, 0, 64));
     x.speed_fraction = o.number("speed_fraction", x.speed_fraction, 0.0, kInf);
@@ -140,6 +136,24 @@ sim::Material material(ObjectReader& r) {
     x.min_radius = o.number("min_radius", x.min_radius, 0.0, kInf);
     o.finish();
   }
+}
+
+/// Collider response keys (Coutinho §3.6.1, §3.6.3), read from the collider object itself or
+/// from its "collider" sub-object.
+sim::Material material(ObjectReader& r) {
+  sim::Material m;
+  m.restitution = r.number("restitution", m.restitution, 0.0, 1.0);
+  m.friction = r.number("friction", m.friction, 0.0, kInf);
+  if (r.has("static_friction")) m.static_friction = r.number("static_friction", 0.0, 0.0, kInf);
+  hit_action(r, "split", m);
+  return m;
+}
+
+/// An emitter's own "on_hit" and its droplets "on_hit_split" (the emitter's "split" key is the
+/// §3.9.1 particle split).
+sim::Material material_hit(ObjectReader& r) {
+  sim::Material m;
+  hit_action(r, "on_hit_split", m);
   return m;
 }
 
@@ -625,6 +639,14 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   s.collision_group = r.string("collision_group", "");
   s.particle_restitution = r.number("particle_restitution", s.particle_restitution, 0.0, 1.0);
   s.particle_friction = r.number("particle_friction", s.particle_friction, 0.0, kInf);
+  // The system's own hit action on every collider (rain that splashes wherever it lands).
+  if (r.has("on_hit")) {
+    const sim::Material m = material_hit(r);
+    s.on_hit = m.on_hit;
+    s.on_hit_split = m.split;
+  } else if (r.has("on_hit_split")) {
+    r.error_at(r.pointer("on_hit_split"), "expected \"on_hit_split\" only with \"on_hit\": \"split\"");
+  }
   const std::string style = r.choice("render_style", "soft", {"soft", "additive", "streak", "droplet"});
   e.style = style == "additive" ? render::ParticleStyle::additive
             : style == "streak" ? render::ParticleStyle::streak
@@ -839,9 +861,34 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   read_array("colliders", [&](const json& j, const std::string& p, std::size_t i) {
     scene.colliders.push_back(collider(j, p, file, errors, i));
   });
+  // Emitters, directly or as an effect preset (effects/presets/*.json) expanded into emitters and
+  // force fields; names must be unique because fields and springs select systems by name.
+  std::vector<std::string> emitter_pointers;
+  std::vector<std::pair<json, std::string>> effect_fields;  // derived force field, its effect's pointer
   read_array("emitters", [&](const json& j, const std::string& p, std::size_t i) {
+    if (j.contains("effect")) {
+      EffectExpansion x = expand_effect(j, p, file, errors, gravity.z());
+      for (const ExpandedEmitter& e : x.emitters) {
+        scene.emitters.push_back(emitter(e.object, e.pointer, file, errors, i, gravity));
+        emitter_pointers.push_back(p);
+      }
+      for (const json& f : x.force_fields) effect_fields.emplace_back(f, p);
+      return;
+    }
     scene.emitters.push_back(emitter(j, p, file, errors, i, gravity));
+    emitter_pointers.push_back(p);
   });
+  for (std::size_t a = 0; a < scene.emitters.size(); ++a)
+    for (std::size_t b = 0; b < a; ++b)
+      if (scene.emitters[a].system.name == scene.emitters[b].system.name) {
+        errors.push_back(file + ": " + emitter_pointers[a] + "/name: expected a name not used by another emitter (" +
+                         emitter_pointers[b] + "), found \"" + scene.emitters[a].system.name + "\"");
+        break;
+      }
+  for (const auto& [f, p] : effect_fields) {
+    scene.force_fields.push_back(force_field(f, p, file, errors));
+    for (const auto& name : scene.force_fields.back().systems) check_system_name(scene, name, p, errors);
+  }
   // Force fields and attractor springs name the systems (emitters) they act on.
   read_array("force_fields", [&](const json& j, const std::string& p, std::size_t) {
     scene.force_fields.push_back(force_field(j, p, file, errors));

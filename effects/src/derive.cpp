@@ -34,7 +34,12 @@ json dist(double mean, double deviation) { return {{"mean", mean}, {"deviation",
 json dist(double mean, double deviation, double min, double max) {
   return {{"mean", mean}, {"deviation", deviation}, {"min", min}, {"max", max}};
 }
-json rgba(double r, double g, double b, double a) { return json::array({r, g, b, a}); }
+/// Scene colours are in [0, 1]; recipes write brighter-than-white emission (fire, sparks) as
+/// values above 1 and let additive blending build the glow, so they are clamped here.
+json rgba(double r, double g, double b, double a) {
+  auto c = [](double x) { return std::clamp(x, 0.0, 1.0); };
+  return json::array({c(r), c(g), c(b), c(a)});
+}
 json key(double t, const json& color) { return {{"t", t}, {"color", color}}; }
 json vec(const std::array<double, 3>& v) { return json::array({v[0], v[1], v[2]}); }
 
@@ -49,9 +54,10 @@ void add_air(Derived& d, const std::string& system, double drag, const std::arra
                             {"systems", json::array({system})}});
   if (turbulence > 0.0)
     d.force_fields.push_back({{"type", "curl_noise"},
-                              {"amplitude_m_s", turbulence},
-                              {"frequency_per_m", frequency},
-                              {"scroll_m_s", 0.25},
+                              {"amplitude", turbulence},
+                              {"frequency", frequency},
+                              // The swirl pattern drifts up with the smoke, so eddies travel.
+                              {"scroll", json::array({0.0, 0.0, 0.5 * air_velocity[2]})},
                               {"drag", drag},
                               {"systems", json::array({system})}});
 }
@@ -75,7 +81,7 @@ json smoke_emitter(const json& k, const std::string& name, double rise, double l
       {"disk_radius", source_radius},
       {"position", vec(vec3(k, "position"))},
       {"direction", json::array({0, 0, 1})},
-      {"rate", 140.0 * density},
+      {"rate", 220.0 * density},
       {"lifetime", dist(lifetime, 0.15 * lifetime, 0.3 * lifetime, 2.0 * lifetime)},
       {"start_speed", dist(rise, 0.15 * rise, 0.0, 3.0 * rise)},
       {"spread_deg", dist(0.0, 6.0)},
@@ -92,7 +98,7 @@ json smoke_emitter(const json& k, const std::string& name, double rise, double l
       {"split", {{"enabled", true},
                  {"children", 2},
                  {"age", 0.12 * lifetime},
-                 {"delay_steps", 0},
+                 {"delay_steps", 1},
                  {"depth", 1},
                  {"velocity_fraction", 0.9},
                  {"direction_deviation_deg", 14.0},
@@ -214,18 +220,26 @@ Derived rain(const json& k, const std::string& name, double g) {
             {"start_speed", dist(speed, 0.03 * speed, 0.0, 2.0 * speed)},
             {"spread_deg", dist(0.0, 0.5)},
             {"mass", dist(m, 0.0)},
-            // Drawn radius: a real 2 mm drop is invisible at video sizes; the streak carries it.
-            {"particle_radius", dist(0.5 * dmm * 1e-3 * 2.5, 0.0)},
+            // Drawn radius: a real 2 mm drop is under a pixel at video sizes; the streak (motion
+            // blur over streak_s seconds, about a camera shutter) carries it.
+            {"particle_radius", dist(0.5 * dmm * 1e-3 * 3.0, 0.0)},
             {"drag", kd},
-            {"color", json::array({0.62, 0.7, 0.82, 0.55})},
+            {"color", json::array({0.80, 0.85, 0.95, 0.75})},
             {"render_style", "streak"},
+            {"streak_s", 0.045},
             {"max_particles", std::size_t(std::min(2e6, rate * (1.5 * fall_time + 0.5) + 1000))}};
-  if (flag(k, "splash"))
-    e["on_hit"] = {{"action", "split"},
-                   {"children", 4},
-                   {"speed_fraction", 0.25},
-                   {"size_fraction", 0.5},
-                   {"lifetime", 0.35}};
+  if (flag(k, "splash")) {
+    // Each drop that lands throws a few small droplets up and out (the §3.9.1 rain splash).
+    e["on_hit"] = "split";
+    e["on_hit_split"] = {{"count", 3},
+                         {"speed_fraction", 0.22},
+                         {"size_fraction", 0.45},
+                         {"lifetime", 0.3},
+                         {"spread_deg", 55.0},
+                         {"min_radius", 0.5 * dmm * 1e-3 * 2.5 * 0.9}};
+  } else {
+    e["on_hit"] = "kill";  // drops soak in
+  }
   d.emitters.push_back(e);
   // Wind: a uniform force k_d w makes the terminal velocity w + m g / k_d (drag relative to air).
   if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0)
@@ -339,7 +353,7 @@ Derived explosion(const json& k, const std::string& name) {
   sparks["start_speed"] = dist(1.4 * speed, 0.35 * speed, 0.1 * speed, 3.0 * speed);
   sparks["spread_deg"] = dist(0.0, sphere ? 25.0 : 55.0);
   sparks["mass"] = dist(2e-4, 5e-5, 5e-5, 1e-3);
-  sparks["particle_radius"] = dist(0.025, 0.008, 0.008, 0.06);
+  sparks["particle_radius"] = dist(0.05, 0.015, 0.02, 0.1);
   sparks["drag"] = 2e-4;
   sparks["color_over_lifetime"] = json::array({key(0.0, rgba(2.0, 1.6, 0.7, 1.0)), key(0.4, rgba(1.6, 0.7, 0.15, 0.9)),
                                                key(1.0, rgba(0.6, 0.1, 0.02, 0.0))});
@@ -357,14 +371,14 @@ Derived explosion(const json& k, const std::string& name) {
   // Heavy drag stops the cloud within a metre or two: it billows rather than flies.
   smoke["drag"] = 2e-4 / 0.18;
   smoke["color_over_lifetime"] =
-      json::array({key(0.0, rgba(1.4, 0.8, 0.3, 0.9)), key(0.08, rgba(0.35, 0.3, 0.27, 0.8)),
-                   key(0.6, rgba(0.22, 0.21, 0.2, 0.5)), key(1.0, rgba(0.2, 0.2, 0.2, 0.0))});
+      json::array({key(0.0, rgba(1.0, 0.75, 0.35, 0.5)), key(0.06, rgba(0.42, 0.36, 0.31, 0.4)),
+                   key(0.5, rgba(0.3, 0.29, 0.28, 0.25)), key(1.0, rgba(0.28, 0.28, 0.28, 0.0))});
   smoke["size_over_lifetime"] = json::array({{{"t", 0.0}, {"size", 0.5}}, {{"t", 1.0}, {"size", 2.5}}});
   if (children > 0)
     smoke["split"] = {{"enabled", true},
                       {"children", children},
                       {"age", 0.05},
-                      {"delay_steps", 0},
+                      {"delay_steps", 1},
                       {"depth", 2},
                       {"velocity_fraction", 0.7},
                       {"direction_deviation_deg", 35.0},
@@ -405,7 +419,7 @@ Derived fireworks(const json& k, const std::string& name, double g) {
   for (long long s = 0; s < shells; ++s) {
     const std::array<double, 3> p{launch[0] + spacing * (double(s) - 0.5 * double(shells - 1)), launch[1],
                                   launch[2]};
-    const double t_launch = interval * double(s);
+    const double t_launch = 0.2 + interval * double(s);
     const std::string sn = name + "/shell" + std::to_string(s);
     // The rising shell: one bright particle on a ballistic path, dying at the apex.
     d.emitters.push_back({{"name", sn},
@@ -418,8 +432,8 @@ Derived fireworks(const json& k, const std::string& name, double g) {
                           {"lifetime", dist(t_apex, 0.0)},
                           {"start_speed", dist(v0, 0.0)},
                           {"mass", dist(0.05, 0.0)},
-                          {"particle_radius", dist(0.06, 0.0)},
-                          {"color", json::array({1.8, 1.3, 0.6, 1.0})},
+                          {"particle_radius", dist(0.14, 0.0)},
+                          {"color", rgba(1.8, 1.3, 0.6, 1.0)},
                           {"render_style", "additive"},
                           {"collide", false},
                           {"max_particles", 4}});
@@ -436,7 +450,7 @@ Derived fireworks(const json& k, const std::string& name, double g) {
               {"start_speed", dist(burst, num(k, "speed_deviation") * burst, 0.1 * burst, 2.0 * burst)},
               {"spread_deg", dist(0.0, 6.0)},
               {"mass", dist(2e-3, 2e-4, 1e-3, 4e-3)},
-              {"particle_radius", dist(0.09, 0.015, 0.04, 0.15)},
+              {"particle_radius", dist(0.2, 0.04, 0.1, 0.3)},
               // Drag relaxes the burst in ~1 s so the shell hangs, then droops under gravity.
               {"drag", 2e-3 / 1.2},
               {"collide", false},
@@ -445,17 +459,19 @@ Derived fireworks(const json& k, const std::string& name, double g) {
                                                     key(0.75, rgba(0.6 * c[0], 0.6 * c[1], 0.6 * c[2], 0.7)),
                                                     key(1.0, rgba(0.2 * c[0], 0.2 * c[1], 0.2 * c[2], 0.0))})},
               {"render_style", "additive"},
-              {"max_particles", stars * 40 + 10}};
+              {"max_particles", stars * 33 + 10}};
+    // Trails: each star sheds a slow spark every 0.1 s (split, §3.9.1); the sparks inherit the
+    // star's age (± a little) so they fade with it, and split again: 2^5 = 32 points per star.
     if (flag(k, "trails"))
       e["split"] = {{"enabled", true},
                     {"children", 1},
-                    {"age", 0.05},
-                    {"delay_steps", 3},
-                    {"depth", 200},
-                    {"velocity_fraction", 0.1},
-                    {"direction_deviation_deg", 30.0},
-                    {"size_fraction", 0.55},
-                    {"lifetime_deviation", 0.1}};
+                    {"age", 0.08},
+                    {"delay_steps", 24},
+                    {"depth", 5},
+                    {"velocity_fraction", 0.25},
+                    {"direction_deviation_deg", 40.0},
+                    {"size_fraction", 0.7},
+                    {"lifetime_deviation", 0.25}};
     d.emitters.push_back(e);
   }
   return d;

@@ -526,7 +526,11 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
     Hit hit;
     for (const Collider& c : colliders) sweep(c, a, b, r, contact == 0, hit);
     if (hit.collider == nullptr) break;
-    const Material& mat = hit.collider->material;
+    Material mat = hit.collider->material;
+    if (ctx.on_hit != nullptr) {
+      mat.on_hit = *ctx.on_hit;
+      mat.split = *ctx.on_hit_split;
+    }
     const Vec3 vc = hit.collider->point_velocity(hit.point);
     if (mat.on_hit == HitAction::kill || mat.on_hit == HitAction::split) {
       if (mat.on_hit == HitAction::split)

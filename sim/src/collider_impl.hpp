@@ -91,6 +91,9 @@ struct CollisionContext {
   Rng* rng = nullptr;                      ///< splash directions
   std::vector<SpawnRequest>* spawns = nullptr;
   std::uint64_t removed_inside = 0;        ///< §3.4.2 removals this pass
+  /// The system's own hit action (ParticleSystemDef::on_hit), replacing the collider's.
+  const HitAction* on_hit = nullptr;
+  const SplitOnHit* on_hit_split = nullptr;
 };
 
 /// Collides particles [begin, end) of one system with every collider, after integration. Each

@@ -256,6 +256,10 @@ void World::Impl::collide_system(std::size_t index, std::size_t begin, std::size
   ctx.contact_speed = def.contact_speed;
   ctx.rng = &ps.splash_rng;
   ctx.spawns = &ps.spawns;
+  if (ps.def.on_hit) {
+    ctx.on_hit = &*ps.def.on_hit;
+    ctx.on_hit_split = &ps.def.on_hit_split;
+  }
   ps.spawns.clear();
   detail::collide(st, begin, end, h, colliders, ctx, ps.forces);
   ps.removed_inside += ctx.removed_inside;

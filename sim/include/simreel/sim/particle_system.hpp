@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -208,6 +209,11 @@ struct ParticleSystemDef {
   std::string collision_group;
   double particle_restitution = 0.5;  ///< e in [0, 1] between particles (pair: the mean)
   double particle_friction = 0.1;     ///< Coulomb mu >= 0 between particles (pair: the mean)
+  /// What this system's particles do when they hit any collider, overriding each collider's
+  /// Material::on_hit (and its SplitOnHit with `on_hit_split`) when set: rain that splashes on
+  /// whatever it falls on. Unset: each collider decides.
+  std::optional<HitAction> on_hit;
+  SplitOnHit on_hit_split;
 };
 
 /// Read-only view of a particle system's live particles, valid until the next World::advance().
