@@ -81,7 +81,7 @@ json smoke_emitter(const json& k, const std::string& name, double rise, double l
       {"disk_radius", source_radius},
       {"position", vec(vec3(k, "position"))},
       {"direction", json::array({0, 0, 1})},
-      {"rate", 220.0 * density},
+      {"rate", 110.0 * density},
       {"lifetime", dist(lifetime, 0.15 * lifetime, 0.3 * lifetime, 2.0 * lifetime)},
       {"start_speed", dist(rise, 0.15 * rise, 0.0, 3.0 * rise)},
       {"spread_deg", dist(0.0, 6.0)},
@@ -95,13 +95,17 @@ json smoke_emitter(const json& k, const std::string& name, double rise, double l
       {"size_over_lifetime", json::array({{{"t", 0.0}, {"size", 0.6}},
                                           {{"t", 0.3}, {"size", 1.6}},
                                           {{"t", 1.0}, {"size", 3.5}}})},
+      // Split (§3.9.1): early, then again half a second later (120 internal steps at the default
+      // 1/240 s), each time into 2 children deviating up to 25 degrees; the sideways kicks decay
+      // only over the drag time (1 s), so the deviations accumulate and the column opens like a
+      // cone as it rises. Each emitted puff becomes (2 + 1)^2 = 9.
       {"split", {{"enabled", true},
                  {"children", 2},
-                 {"age", 0.12 * lifetime},
-                 {"delay_steps", 1},
-                 {"depth", 1},
-                 {"velocity_fraction", 0.9},
-                 {"direction_deviation_deg", 14.0},
+                 {"age", 0.08 * lifetime},
+                 {"delay_steps", 120},
+                 {"depth", 2},
+                 {"velocity_fraction", 1.0},
+                 {"direction_deviation_deg", 25.0},
                  {"size_fraction", 0.85},
                  {"lifetime_deviation", 0.15 * lifetime}}},
       {"render_style", "soft"},
@@ -119,8 +123,8 @@ Derived smoke(const json& k, const std::string& name) {
   const json colors = json::array({key(0.0, rgba(c[0], c[1], c[2], 0.0)), key(0.06, rgba(c[0], c[1], c[2], a)),
                                    key(0.5, rgba(c[0], c[1], c[2], 0.6 * a)),
                                    key(1.0, rgba(c[0], c[1], c[2], 0.0))});
-  // Strong drag: the velocity relaxes to the air's in m / k_d = 0.25 s (mean mass 2e-4 kg).
-  const double drag = 2e-4 / 0.25;
+  // Strong drag: the velocity relaxes to the air's in m / k_d = 1 s (mean mass 2e-4 kg).
+  const double drag = 2e-4 / 1.0;
   d.emitters.push_back(smoke_emitter(k, name, rise, life, density, num(k, "source_radius_m"), colors, drag));
   d.emitters.back()["role"] = "smoke";
   const auto w = vec3(k, "wind_m_s");
@@ -153,7 +157,7 @@ Derived fire_smoke(const json& k, const std::string& name) {
                                    key(0.5 * (st[1] + st[2]), rgba(0.28, 0.25, 0.23, 0.9 * a)),
                                    key(st[2], rgba(0.16, 0.15, 0.145, 0.85 * a)),
                                    key(1.0, rgba(0.03, 0.03, 0.03, 0.0))});
-  const double drag = 2e-4 / 0.25;
+  const double drag = 2e-4 / 1.0;
   json smoke_e = smoke_emitter(k, name + "/smoke", rise, life, density, radius, colors, drag);
   smoke_e["role"] = "smoke";
   d.emitters.push_back(smoke_e);
