@@ -149,3 +149,29 @@ TEST(EffectRecipes, SmokeRisesAtItsRiseSpeedAndSpreadsAsAWideningCone) {
   // children move off-axis at the same speed, so the mean vertical part is a little below it.
   EXPECT_NEAR(vz / double(v.count), rise, 0.1 * rise);
 }
+
+TEST(EffectRecipes, BadKnobsNameTheFileAndPointer) {
+  auto errors_of = [](const json& emitter) {
+    try {
+      app::scene_from_json(json{{"emitters", json::array({emitter})}}, "fx.json");
+    } catch (const app::SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::string e = errors_of({{"effect", "rain"}, {"intensity_mm_h", 1000}});
+  EXPECT_NE(e.find("fx.json: /emitters/0/intensity_mm_h: expected a number in [0.1, 300]"), std::string::npos) << e;
+  e = errors_of({{"effect", "rian"}});
+  EXPECT_NE(e.find("fx.json: /emitters/0/effect"), std::string::npos) << e;
+  EXPECT_NE(e.find("rain"), std::string::npos) << e;
+  e = errors_of({{"effect", "smoke"}, {"rise_sped_m_s", 1}});
+  EXPECT_NE(e.find("did you mean \"rise_speed_m_s\""), std::string::npos) << e;
+  e = errors_of({{"effect", "fire_smoke"}, {"material", "plastic"}});
+  EXPECT_NE(e.find("/emitters/0/material"), std::string::npos) << e;
+  // Overrides are checked like hand-written keys, at their own pointer.
+  e = errors_of({{"effect", "jet"}, {"overrides", {{"rat", 5}}}});
+  EXPECT_NE(e.find("fx.json: /emitters/0/overrides/rat: unknown key \"rat\"; did you mean \"rate\"?"), std::string::npos) << e;
+  e = errors_of({{"effect", "fire_smoke"}, {"overrides", {{"rate", 5}}}});
+  EXPECT_NE(e.find("expected a role name (smoke, core)"), std::string::npos) << e;
+  EXPECT_EQ(errors_of({{"effect", "fire_smoke"}, {"overrides", {{"core", {{"rate", 5}}}}}}), "");
+}
