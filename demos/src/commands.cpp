@@ -662,56 +662,39 @@ int simulate_command(const RunOptions& o, const std::string& export_csv) {
     if (frame > 0) sw.world.advance(dt);
     if (frame < first) continue;
     const std::string prefix = std::to_string(frame) + ",";
+    // One row per particle, then per cloth vertex (system = cloth name, id = row * columns +
+    // column).
+    auto rows = [&](const std::string& name, std::size_t n, const float* x, const float* v,
+                    const std::uint64_t* ids) {
+      for (std::size_t p = 0; p < n; ++p) {
+        buf += prefix;
+        put_float(sw.world.time());
+        buf += ',';
+        buf += name;
+        buf += ',';
+        buf += std::to_string(ids ? ids[p] : p);
+        for (std::size_t k = 0; k < 3; ++k) {
+          buf += ',';
+          put_float(x[3 * p + k]);
+        }
+        for (std::size_t k = 0; k < 3; ++k) {
+          buf += ',';
+          put_float(v[3 * p + k]);
+        }
+        buf += '\n';
+      }
+      if (buf.size() > (1u << 20)) {
+        ok = std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
+        buf.clear();
+      }
+    };
     for (std::size_t i = 0; i < sw.systems.size(); ++i) {
       const sim::ParticleView v = sw.world.particles(sw.systems[i]);
-      const std::string& name = scene.emitters[i].system.name;
-      for (std::size_t p = 0; p < v.count; ++p) {
-        buf += prefix;
-        put_float(sw.world.time());
-        buf += ',';
-        buf += name;
-        buf += ',';
-        buf += std::to_string(v.id[p]);
-        for (int k = 0; k < 3; ++k) {
-          buf += ',';
-          put_float(v.position[3 * p + k]);
-        }
-        for (int k = 0; k < 3; ++k) {
-          buf += ',';
-          put_float(v.velocity[3 * p + k]);
-        }
-        buf += '\n';
-      }
-      if (buf.size() > (1u << 20)) {
-        ok = std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
-        buf.clear();
-      }
+      rows(scene.emitters[i].system.name, v.count, v.position, v.velocity, v.id);
     }
-    // Cloth vertices: system = cloth name, id = vertex index (row * columns + column).
     for (std::size_t i = 0; i < sw.cloths.size(); ++i) {
       const sim::ClothView v = sw.world.cloth(sw.cloths[i]);
-      const std::string& name = scene.cloths[i].def.name;
-      for (std::size_t p = 0; p < v.vertex_count; ++p) {
-        buf += prefix;
-        put_float(sw.world.time());
-        buf += ',';
-        buf += name;
-        buf += ',';
-        buf += std::to_string(p);
-        for (int k = 0; k < 3; ++k) {
-          buf += ',';
-          put_float(v.positions[3 * p + std::size_t(k)]);
-        }
-        for (int k = 0; k < 3; ++k) {
-          buf += ',';
-          put_float(v.velocities[3 * p + std::size_t(k)]);
-        }
-        buf += '\n';
-      }
-      if (buf.size() > (1u << 20)) {
-        ok = std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
-        buf.clear();
-      }
+      rows(scene.cloths[i].def.name, v.vertex_count, v.positions, v.velocities, nullptr);
     }
   }
   ok = ok && std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();

@@ -842,22 +842,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     scene.light.ground_ambient = to_vec3f(s.vec3("ground_ambient", {g.x(), g.y(), g.z()}));
     s.finish();
   }
-  auto read_array = [&](const std::string& key, auto&& each) {
-    const json* a = r.get(key);
-    if (!a) return;
-    if (!a->is_array()) {
-      r.error(key, "an array of objects", *a);
-      return;
-    }
-    for (std::size_t i = 0; i < a->size(); ++i) {
-      const std::string p = r.pointer(key) + "/" + std::to_string(i);
-      if (!(*a)[i].is_object()) {
-        r.error_at(p, "expected an object, found " + describe((*a)[i]));
-        continue;
-      }
-      each((*a)[i], p, i);
-    }
-  };
+  auto read_array = [&](const std::string& key, auto&& each) { object_array(r, key, each); };
   read_array("colliders", [&](const json& j, const std::string& p, std::size_t i) {
     scene.colliders.push_back(collider(j, p, file, errors, i));
   });
