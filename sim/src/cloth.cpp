@@ -63,6 +63,7 @@ void validate(const ClothDef& d) {
   check_nonneg("aero.air_density", d.aero.air_density);
   check_nonneg("thickness", d.thickness);
   check_nonneg("friction", d.friction);
+  if (!(d.restitution >= 0.0 && d.restitution <= 1.0)) bad("restitution", "in [0, 1]", d.restitution);
   if (!(d.cg_tolerance > 0.0) || !std::isfinite(d.cg_tolerance))
     bad("cg_tolerance", "> 0 and finite", d.cg_tolerance);
   if (d.cg_max_iterations < 1) bad("cg_max_iterations", ">= 1", double(d.cg_max_iterations));
@@ -657,6 +658,7 @@ ClothStats Cloth::stats() const {
   st.max_z = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < S.n; ++i) {
     st.kinetic_energy += 0.5 * S.vertex_mass * S.v[i].squaredNorm();
+    st.momentum += S.vertex_mass * S.v[i];
     st.min_z = std::min(st.min_z, S.x[i].z());
     st.max_z = std::max(st.max_z, S.x[i].z());
   }
@@ -677,6 +679,19 @@ const ClothDef& Cloth::definition() const { return s_->def; }
 const std::shared_ptr<const ClothTopology>& Cloth::topology() const { return s_->topo; }
 const std::vector<Vec3>& Cloth::positions() const { return s_->x; }
 const std::vector<Vec3>& Cloth::velocities() const { return s_->v; }
+const std::vector<Vec3>& Cloth::start_positions() const { return s_->x_start; }
+double Cloth::inverse_mass(std::size_t i) const {
+  return s_->free[i] ? 1.0 / s_->vertex_mass : 0.0;
+}
+
+void Cloth::apply_impulses(const std::vector<Vec3>& impulses) {
+  State& S = *s_;
+  if (impulses.size() != S.n)
+    throw std::invalid_argument("Cloth::apply_impulses: expected one impulse per vertex");
+  for (std::size_t i = 0; i < S.n; ++i)
+    if (S.free[i]) S.v[i] += impulses[i] / S.vertex_mass;
+  S.refresh_views();
+}
 
 void Cloth::set_state(const std::vector<Vec3>& positions, const std::vector<Vec3>& velocities) {
   State& S = *s_;
