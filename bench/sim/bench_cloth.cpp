@@ -16,6 +16,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <numbers>
 
 #include "simreel/sim/world.hpp"
@@ -32,6 +33,7 @@ ClothDef peer_cloth(std::size_t nodes) {
   d.mass = 1.0;
   d.transform.translation = Vec3(0, 0, 2.0);  // horizontal, falls and swings from its corners
   d.pins = {{0, 0, {}}, {0, nodes - 1, {}}};
+  if (const char* tol = std::getenv("CLOTH_CG_TOL")) d.cg_tolerance = std::atof(tol);
   return d;
 }
 
@@ -41,7 +43,8 @@ void cloth_peer_scene(benchmark::State& state) {
   double max_strain = 0.0, cg = 0.0, passes = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
-    World world(WorldDef{1.0 / 60, 1, 0.05});
+    const char* threads = std::getenv("CLOTH_THREADS");
+    World world(WorldDef{1.0 / 60, 1, 0.05, threads != nullptr ? std::atoi(threads) : 1});
     const ClothHandle h = world.add_cloth(peer_cloth(nodes));
     max_strain = cg = passes = 0.0;
     state.ResumeTiming();
