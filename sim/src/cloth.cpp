@@ -215,6 +215,7 @@ struct Cloth::State {
   std::vector<Vec3> dv, b, r, z, p, Ap;
   // Maximum-deformation pass workspace.
   std::vector<double> t, t_next;
+  std::vector<std::int32_t> changed_in;  // per vertex: last pass that changed its t (-1: none)
   std::vector<Vec3> origin, path;
   std::vector<std::uint8_t> hit;
   std::vector<Vec3> nacc;            // vertex normal accumulator
@@ -469,6 +470,7 @@ void Cloth::State::max_deformation_pass() {
     origin[i] = free[i] ? x_start[i] : x[i];
     path[i] = x[i] - origin[i];
     t[i] = 1.0;
+    changed_in[i] = -1;
   }
   constexpr std::size_t kMaxPasses = 64;
   bool any_moved = false;
@@ -480,8 +482,13 @@ void Cloth::State::max_deformation_pass() {
     std::vector<double>& tw = book_pass ? t_next : t;
     if (book_pass)
       for (std::size_t i = 0; i < n; ++i) t_next[i] = t[i];
+    // A repeat only revisits springs with an end whose t changed in the previous pass or this
+    // one: every other spring has the positions it had when last found within the limit, so
+    // skipping it changes nothing (the result is the same as checking all of them).
+    const auto pass = std::int32_t(strain_passes);
     for (std::size_t s = 0; s < T.limited_count; ++s) {
       const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
+      if (!book_pass && changed_in[a] < pass - 1 && changed_in[b] < pass - 1) continue;
       const double L = T.rest_length[s];
       const Vec3 pa = origin[a] + t[a] * path[a], pb = origin[b] + t[b] * path[b];
       const double l2 = (pa - pb).squaredNorm();
@@ -509,8 +516,10 @@ void Cloth::State::max_deformation_pass() {
         }
       }
       const double ta = t[a], tb = t[b];
-      if (free[a] && tp * ta < tw[a]) { tw[a] = tp * ta; changed = true; }
-      if (free[b] && tp * tb < tw[b]) { tw[b] = tp * tb; changed = true; }
+      bool moved = false;
+      if (free[a] && tp * ta < tw[a]) { tw[a] = tp * ta; changed = moved = true; changed_in[a] = pass; }
+      if (free[b] && tp * tb < tw[b]) { tw[b] = tp * tb; changed = moved = true; changed_in[b] = pass; }
+      if (!moved) changed_in[a] = changed_in[b] = pass;  // still over: look again next pass
     }
     if (!violated) break;
     ++strain_passes;
@@ -600,6 +609,7 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     w->assign(n, Vec3::Zero());
   S.t.assign(n, 1.0);
   S.t_next.assign(n, 1.0);
+  S.changed_in.assign(n, -1);
   S.hit.assign(n, 0);
   S.fpos.assign(3 * n, 0.0f);
   S.fnor.assign(3 * n, 0.0f);
