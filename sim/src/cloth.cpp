@@ -207,6 +207,9 @@ struct Cloth::State {
   std::vector<int> pin_of;           // index into def.pins or -1
   std::vector<Vec3> pin_rest;        // fixed pins: initial world position
   // Implicit Euler workspace (n or spring_count entries; allocated once).
+  std::vector<double> ks, kds;       // per spring: k_s, k_d of its family
+  std::vector<double> spring_length; // per spring: current length (m), set by forces()
+  std::vector<Vec3> spring_dir;      // per spring: unit a -> b, set by forces()
   std::vector<Sym3> S;               // per spring: h k_d nnᵀ + h² ∂f/∂x block
   std::vector<Sym3> precond;         // per vertex: inverse of the diagonal block (0 if pinned)
   std::vector<Sym3> aero_damping;    // per vertex: -∂f_aero/∂v, lumped (implicit Euler only)
@@ -270,9 +273,11 @@ void Cloth::State::forces(double t) {
     const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
     const Vec3 d = x[b] - x[a];
     const double l = d.norm();
+    spring_length[s] = l;  // reused by the implicit step's Jacobian (x has not moved since)
     if (!(l > 0.0)) continue;
     const Vec3 u = d / l;
-    const Vec3 fa = (k_of(s) * (l - T.rest_length[s]) + kd_of(s) * (v[b] - v[a]).dot(u)) * u;
+    spring_dir[s] = u;
+    const Vec3 fa = (ks[s] * (l - T.rest_length[s]) + kds[s] * (v[b] - v[a]).dot(u)) * u;
     f[a] += fa;
     f[b] -= fa;
   }
@@ -345,19 +350,18 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   // Spring blocks, the h² ∂f/∂x v0 term and the pinned columns moved to the right-hand side.
   for (std::size_t s = 0; s < ns; ++s) {
     const std::uint32_t a = T.spring_a[s], c = T.spring_b[s];
-    const Vec3 d = x[c] - x[a];
-    const double l = d.norm();
+    const double l = spring_length[s];  // from forces(), same x
     if (!(l > 0.0)) {
       S[s] = Sym3{};
       continue;
     }
-    const Vec3 u = d / l;
-    const double k = k_of(s);
+    const Vec3& u = spring_dir[s];
+    const double k = ks[s];
     const double transverse = k * std::max(0.0, 1.0 - T.rest_length[s] / l);
     Sym3 K = Sym3::outer(u, k - transverse);
     K.add_diagonal(transverse);  // k (nnᵀ + τ (I - nnᵀ))
     Sym3 Ss = K.scaled(h2);
-    Ss += Sym3::outer(u, h * kd_of(s));
+    Ss += Sym3::outer(u, h * kds[s]);
     S[s] = Ss;
     const Vec3 w = h2 * (K * (v[c] - v[a]));
     if (free[a]) {
@@ -599,6 +603,14 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     if (!def.pins[k].path.empty()) S.x[i] = def.pins[k].path.sample(0.0).translation;
   }
   S.S.assign(ns, Sym3{});
+  S.ks.resize(ns);
+  S.kds.resize(ns);
+  for (std::size_t s = 0; s < ns; ++s) {
+    S.ks[s] = S.k_of(s);
+    S.kds[s] = S.kd_of(s);
+  }
+  S.spring_length.assign(ns, 0.0);
+  S.spring_dir.assign(ns, Vec3::Zero());
   S.precond.assign(n, Sym3{});
   for (std::size_t i = 0; i < n; ++i)
     if (!S.free[i]) S.pinned.push_back(std::uint32_t(i));
