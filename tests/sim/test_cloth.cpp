@@ -194,6 +194,36 @@ TEST(Cloth, NoVertexInsideSphereAfterDrape) {
   EXPECT_GT(on_ground, std::size_t(20));                    // and its hem on the ground
 }
 
+// A cloth dropped across a horizontal cylinder (a rail, axis along world y): at every step no
+// vertex is inside the cylinder grown by the thickness (round side; the square rims are the
+// cylinder's own convention) and the sheet hangs over it.
+TEST(Cloth, DropOverCylinderLeavesNoVertexInside) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  CylinderDef rail;
+  rail.radius = 0.1;
+  rail.half_height = 1.0;
+  rail.transform.translation = Vec3(0.03, 0.0, 0.3);
+  rail.transform.rotation = upright();  // local z -> world -y
+  w.add_cylinder(rail);
+  const ClothDef def = drop_cloth(0.10);
+  const ClothHandle h = w.add_cloth(def);
+  std::size_t on_rail = 0;
+  for (int f = 0; f < 90; ++f) {
+    w.advance(kFrame);
+    const ClothView v = w.cloth(h);
+    on_rail = 0;
+    for (std::size_t i = 0; i < v.vertex_count; ++i) {
+      const Vec3 q = vertex(v, i) - rail.transform.translation;
+      const double rho = std::hypot(q.x(), q.z());  // distance from the axis
+      ASSERT_GE(rho, rail.radius + def.thickness - 1e-4) << "vertex " << i << " frame " << f;
+      if (rho < rail.radius + def.thickness + 1e-3) ++on_rail;
+    }
+    ASSERT_LE(w.cloth_stats(h).max_strain, 0.10 + kStrainEps) << "frame " << f;
+  }
+  EXPECT_GT(on_rail, std::size_t(10));
+  EXPECT_LT(w.cloth_stats(h).min_z, 0.0);  // both halves hang below the rail
+}
+
 /// A closed box-shaped triangle mesh (12 triangles) of half extents e in its local frame.
 MeshDef box_mesh(const Vec3& e) {
   MeshDef m;
