@@ -13,9 +13,26 @@
 //   256 x 256: wall 76.8 s (CPU 34.9 s), 205k node-frames/s, CG 10.7, passes 41.6, strain 0.100
 // The 0.5 s goal for 64 x 64 is not met (CPU 1.76 s); ~85 % of the time is the CG (matrix-free
 // spring-block product, ~0.2 ms per product at 64 x 64).
+//
+// Measured 2026-11-21 (wt-cloth2, same machine and load, 1 thread, CPU time; identical counters,
+// so identical results): repeats of the maximum-deformation pass revisit only springs next to a
+// vertex whose t changed; spring stiffness/damping per spring and the spring directions of
+// forces() reused by the Jacobian:
+//   64 x 64:   CPU 1.44 s (was 1.57-1.76 s), CG 30.6/step, passes 10.9/step, max strain 0.100
+//   128 x 128: CPU 8.05 s (was 10.1 s), CG 35.3, passes 27.7, strain 0.100
+//   256 x 256: CPU 24.5 s (was 34.9 s), CG 10.7, passes 41.6, strain 0.100
+// CG tolerance trade-off on 64 x 64 (env CLOTH_CG_TOL; every cloth test passes at 1e-1 too):
+//   1e-2: 1.44 s (30.6 CG/step) · 3e-2: ~1.3 s (21.0) · 5e-2: ~1.0 s (11.0) · 1e-1: 0.62 s (4.0,
+//   26.5 passes/step); the default stays 1e-2.
+// Tried and dropped (CPU time, 64 x 64): gather-form product per vertex with OpenMP and fixed-order
+// chunked reductions (bit-identical at any thread count) — 2.11 s on 1 thread (each spring block
+// applied twice), 10.5 s CPU / 21.5 s wall on 2 threads of this shared 2-core machine; spring
+// blocks stored in float — 1.76 s (conversions, and 2 more CG iterations per step).
+// Env CLOTH_THREADS sets WorldDef::threads (default 1).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <numbers>
 
 #include "simreel/sim/world.hpp"
@@ -32,6 +49,7 @@ ClothDef peer_cloth(std::size_t nodes) {
   d.mass = 1.0;
   d.transform.translation = Vec3(0, 0, 2.0);  // horizontal, falls and swings from its corners
   d.pins = {{0, 0, {}}, {0, nodes - 1, {}}};
+  if (const char* tol = std::getenv("CLOTH_CG_TOL")) d.cg_tolerance = std::atof(tol);
   return d;
 }
 
@@ -41,7 +59,8 @@ void cloth_peer_scene(benchmark::State& state) {
   double max_strain = 0.0, cg = 0.0, passes = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
-    World world(WorldDef{1.0 / 60, 1, 0.05});
+    const char* threads = std::getenv("CLOTH_THREADS");
+    World world(WorldDef{1.0 / 60, 1, 0.05, threads != nullptr ? std::atoi(threads) : 1});
     const ClothHandle h = world.add_cloth(peer_cloth(nodes));
     max_strain = cg = passes = 0.0;
     state.ResumeTiming();

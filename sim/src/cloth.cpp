@@ -63,6 +63,7 @@ void validate(const ClothDef& d) {
   check_nonneg("aero.air_density", d.aero.air_density);
   check_nonneg("thickness", d.thickness);
   check_nonneg("friction", d.friction);
+  if (!(d.restitution >= 0.0 && d.restitution <= 1.0)) bad("restitution", "in [0, 1]", d.restitution);
   if (!(d.cg_tolerance > 0.0) || !std::isfinite(d.cg_tolerance))
     bad("cg_tolerance", "> 0 and finite", d.cg_tolerance);
   if (d.cg_max_iterations < 1) bad("cg_max_iterations", ">= 1", double(d.cg_max_iterations));
@@ -206,6 +207,9 @@ struct Cloth::State {
   std::vector<int> pin_of;           // index into def.pins or -1
   std::vector<Vec3> pin_rest;        // fixed pins: initial world position
   // Implicit Euler workspace (n or spring_count entries; allocated once).
+  std::vector<double> ks, kds;       // per spring: k_s, k_d of its family
+  std::vector<double> spring_length; // per spring: current length (m), set by forces()
+  std::vector<Vec3> spring_dir;      // per spring: unit a -> b, set by forces()
   std::vector<Sym3> S;               // per spring: h k_d nnᵀ + h² ∂f/∂x block
   std::vector<Sym3> precond;         // per vertex: inverse of the diagonal block (0 if pinned)
   std::vector<Sym3> aero_damping;    // per vertex: -∂f_aero/∂v, lumped (implicit Euler only)
@@ -214,6 +218,7 @@ struct Cloth::State {
   std::vector<Vec3> dv, b, r, z, p, Ap;
   // Maximum-deformation pass workspace.
   std::vector<double> t, t_next;
+  std::vector<std::int32_t> changed_in;  // per vertex: last pass that changed its t (-1: none)
   std::vector<Vec3> origin, path;
   std::vector<std::uint8_t> hit;
   std::vector<Vec3> nacc;            // vertex normal accumulator
@@ -268,9 +273,11 @@ void Cloth::State::forces(double t) {
     const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
     const Vec3 d = x[b] - x[a];
     const double l = d.norm();
+    spring_length[s] = l;  // reused by the implicit step's Jacobian (x has not moved since)
     if (!(l > 0.0)) continue;
     const Vec3 u = d / l;
-    const Vec3 fa = (k_of(s) * (l - T.rest_length[s]) + kd_of(s) * (v[b] - v[a]).dot(u)) * u;
+    spring_dir[s] = u;
+    const Vec3 fa = (ks[s] * (l - T.rest_length[s]) + kds[s] * (v[b] - v[a]).dot(u)) * u;
     f[a] += fa;
     f[b] -= fa;
   }
@@ -343,19 +350,18 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   // Spring blocks, the h² ∂f/∂x v0 term and the pinned columns moved to the right-hand side.
   for (std::size_t s = 0; s < ns; ++s) {
     const std::uint32_t a = T.spring_a[s], c = T.spring_b[s];
-    const Vec3 d = x[c] - x[a];
-    const double l = d.norm();
+    const double l = spring_length[s];  // from forces(), same x
     if (!(l > 0.0)) {
       S[s] = Sym3{};
       continue;
     }
-    const Vec3 u = d / l;
-    const double k = k_of(s);
+    const Vec3& u = spring_dir[s];
+    const double k = ks[s];
     const double transverse = k * std::max(0.0, 1.0 - T.rest_length[s] / l);
     Sym3 K = Sym3::outer(u, k - transverse);
     K.add_diagonal(transverse);  // k (nnᵀ + τ (I - nnᵀ))
     Sym3 Ss = K.scaled(h2);
-    Ss += Sym3::outer(u, h * kd_of(s));
+    Ss += Sym3::outer(u, h * kds[s]);
     S[s] = Ss;
     const Vec3 w = h2 * (K * (v[c] - v[a]));
     if (free[a]) {
@@ -468,6 +474,7 @@ void Cloth::State::max_deformation_pass() {
     origin[i] = free[i] ? x_start[i] : x[i];
     path[i] = x[i] - origin[i];
     t[i] = 1.0;
+    changed_in[i] = -1;
   }
   constexpr std::size_t kMaxPasses = 64;
   bool any_moved = false;
@@ -479,8 +486,13 @@ void Cloth::State::max_deformation_pass() {
     std::vector<double>& tw = book_pass ? t_next : t;
     if (book_pass)
       for (std::size_t i = 0; i < n; ++i) t_next[i] = t[i];
+    // A repeat only revisits springs with an end whose t changed in the previous pass or this
+    // one: every other spring has the positions it had when last found within the limit, so
+    // skipping it changes nothing (the result is the same as checking all of them).
+    const auto pass = std::int32_t(strain_passes);
     for (std::size_t s = 0; s < T.limited_count; ++s) {
       const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
+      if (!book_pass && changed_in[a] < pass - 1 && changed_in[b] < pass - 1) continue;
       const double L = T.rest_length[s];
       const Vec3 pa = origin[a] + t[a] * path[a], pb = origin[b] + t[b] * path[b];
       const double l2 = (pa - pb).squaredNorm();
@@ -508,8 +520,10 @@ void Cloth::State::max_deformation_pass() {
         }
       }
       const double ta = t[a], tb = t[b];
-      if (free[a] && tp * ta < tw[a]) { tw[a] = tp * ta; changed = true; }
-      if (free[b] && tp * tb < tw[b]) { tw[b] = tp * tb; changed = true; }
+      bool moved = false;
+      if (free[a] && tp * ta < tw[a]) { tw[a] = tp * ta; changed = moved = true; changed_in[a] = pass; }
+      if (free[b] && tp * tb < tw[b]) { tw[b] = tp * tb; changed = moved = true; changed_in[b] = pass; }
+      if (!moved) changed_in[a] = changed_in[b] = pass;  // still over: look again next pass
     }
     if (!violated) break;
     ++strain_passes;
@@ -589,6 +603,14 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     if (!def.pins[k].path.empty()) S.x[i] = def.pins[k].path.sample(0.0).translation;
   }
   S.S.assign(ns, Sym3{});
+  S.ks.resize(ns);
+  S.kds.resize(ns);
+  for (std::size_t s = 0; s < ns; ++s) {
+    S.ks[s] = S.k_of(s);
+    S.kds[s] = S.kd_of(s);
+  }
+  S.spring_length.assign(ns, 0.0);
+  S.spring_dir.assign(ns, Vec3::Zero());
   S.precond.assign(n, Sym3{});
   for (std::size_t i = 0; i < n; ++i)
     if (!S.free[i]) S.pinned.push_back(std::uint32_t(i));
@@ -599,6 +621,7 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     w->assign(n, Vec3::Zero());
   S.t.assign(n, 1.0);
   S.t_next.assign(n, 1.0);
+  S.changed_in.assign(n, -1);
   S.hit.assign(n, 0);
   S.fpos.assign(3 * n, 0.0f);
   S.fnor.assign(3 * n, 0.0f);
@@ -657,6 +680,7 @@ ClothStats Cloth::stats() const {
   st.max_z = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < S.n; ++i) {
     st.kinetic_energy += 0.5 * S.vertex_mass * S.v[i].squaredNorm();
+    st.momentum += S.vertex_mass * S.v[i];
     st.min_z = std::min(st.min_z, S.x[i].z());
     st.max_z = std::max(st.max_z, S.x[i].z());
   }
@@ -677,6 +701,19 @@ const ClothDef& Cloth::definition() const { return s_->def; }
 const std::shared_ptr<const ClothTopology>& Cloth::topology() const { return s_->topo; }
 const std::vector<Vec3>& Cloth::positions() const { return s_->x; }
 const std::vector<Vec3>& Cloth::velocities() const { return s_->v; }
+const std::vector<Vec3>& Cloth::start_positions() const { return s_->x_start; }
+double Cloth::inverse_mass(std::size_t i) const {
+  return s_->free[i] ? 1.0 / s_->vertex_mass : 0.0;
+}
+
+void Cloth::apply_impulses(const std::vector<Vec3>& impulses) {
+  State& S = *s_;
+  if (impulses.size() != S.n)
+    throw std::invalid_argument("Cloth::apply_impulses: expected one impulse per vertex");
+  for (std::size_t i = 0; i < S.n; ++i)
+    if (S.free[i]) S.v[i] += impulses[i] / S.vertex_mass;
+  S.refresh_views();
+}
 
 void Cloth::set_state(const std::vector<Vec3>& positions, const std::vector<Vec3>& velocities) {
   State& S = *s_;

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "narrow_phase.hpp"
+
 namespace simreel::sim::detail {
 
 namespace {
@@ -77,6 +79,78 @@ bool box(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Vec3
   return true;
 }
 
+constexpr int kMaxSlides = 3;  // contacts followed per vertex per collider (wedges, concave meshes)
+
+/// Could the vertex's path x_start -> x come within `thickness` of the solid? World AABB test,
+/// the solid's box grown by its own motion over the step (kinematic colliders) and the thickness.
+bool near_solid(const Collider& c, const Vec3& x_start, const Vec3& x, double thickness) {
+  const double motion =
+      (c.center - c.prev_center).norm() +
+      (c.R - c.prev_R).norm() * ((c.aabb_center - c.center).norm() + c.aabb_half.norm());
+  const Vec3 grow = c.aabb_half + Vec3::Constant(thickness + motion);
+  const Vec3 lo = x_start.cwiseMin(x), hi = x_start.cwiseMax(x);
+  return ((lo - c.aabb_center).array() <= grow.array()).all() &&
+         ((c.aabb_center - hi).array() <= grow.array()).all();
+}
+
+/// Sphere, cylinder and triangle mesh (static or kinematic). The vertex's path x_start -> x is
+/// swept as a sphere of radius `thickness` with the particle pass's closed forms and AABB-tree
+/// query (sweep_collider, Coutinho §3.4, §2.2), along the motion relative to a kinematic body, so
+/// a fast vertex cannot tunnel. At the first contact the vertex stops on the grown surface and the
+/// rest of its displacement, less its normal part, slides on along the tangent plane and is
+/// swept again (up to kMaxSlides contacts; after the last one it stays at the contact point).
+/// A vertex that ends inside the sphere or cylinder grown by `thickness` without a swept contact
+/// (it started inside the solid: a collider moved onto it) goes out to the nearest point of the
+/// grown surface. For meshes the sweep alone keeps vertices out: a vertex that somehow started
+/// deep inside a mesh is not pushed out.
+bool solid(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Vec3& n) {
+  if (!near_solid(c, x_start, x, thickness)) return false;
+  bool touched = false;
+  Vec3 a = x_start, b = x;
+  for (int k = 0; k < kMaxSlides; ++k) {
+    SweepHit h;
+    if (!sweep_collider(c, a, b, thickness, k == 0, h)) break;
+    touched = true;
+    n = h.normal;
+    if (k == kMaxSlides - 1) {
+      b = h.point;
+      break;
+    }
+    Vec3 rest = (1.0 - h.s) * (b - a);
+    rest -= std::min(0.0, rest.dot(n)) * n;
+    a = h.point;
+    b = h.point + rest;
+  }
+  x = b;
+  if (c.shape == Collider::Shape::sphere) {
+    const Vec3 off = x - c.center;
+    const double rg = c.radius + thickness, d = off.norm();
+    if (d < rg && d > 0.0) {
+      n = off / d;
+      x = c.center + rg * n;
+      touched = true;
+    }
+  } else if (c.shape == Collider::Shape::cylinder) {
+    Vec3 q = c.R.transpose() * (x - c.center);
+    const double rg = c.radius + thickness, hg = c.half_height + thickness;
+    const double rho = q.head<2>().norm();
+    if (rho < rg && std::abs(q.z()) < hg) {
+      Vec3 ln;
+      if (rg - rho < hg - std::abs(q.z()) && rho > 0.0) {
+        ln = Vec3(q.x() / rho, q.y() / rho, 0.0);
+        q.head<2>() = rg * ln.head<2>();
+      } else {
+        ln = Vec3(0.0, 0.0, q.z() >= 0.0 ? 1.0 : -1.0);
+        q.z() = hg * ln.z();
+      }
+      x = c.center + c.R * q;
+      n = c.R * ln;
+      touched = true;
+    }
+  }
+  return touched;
+}
+
 }  // namespace
 
 void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
@@ -102,7 +176,8 @@ void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector
           case Collider::Shape::sphere:
           case Collider::Shape::cylinder:
           case Collider::Shape::mesh:
-            break;  // TODO(cloth): vertex projection for these kinds
+            touched = solid(c, x_start[i], x[i], thickness, normal);
+            break;
         }
         if (touched) {
           respond(v[i], normal, c.point_velocity(x[i]), friction);

@@ -413,6 +413,18 @@ bool inside_solid(const Collider& c, const Vec3& p) {
 
 }  // namespace
 
+bool sweep_collider(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                    SweepHit& hit) {
+  Hit best;
+  best.s = hit.s;
+  sweep(c, a, b, r, first, best);
+  if (best.collider == nullptr) return false;
+  hit.s = best.s;
+  hit.normal = best.normal;
+  hit.point = best.point;
+  return true;
+}
+
 /// Impulse response of a particle against an immovable collider (Coutinho §3.6.1 with the
 /// collider's mass taken as infinite): relative normal velocity v_n' = -e v_n, tangential
 /// velocity reduced by the Coulomb impulse mu (1 + e) |v_n| but never reversed — when

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bvh.hpp"
+#include "narrow_phase.hpp"
 #include "particle_store.hpp"
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/random.hpp"
@@ -107,6 +108,15 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
 /// integrator (particle–particle overlap correction) cannot carry it through a surface.
 void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
                             const std::vector<Collider>& colliders);
+
+/// First contact of a sphere of radius r moving a -> b (world) with one collider (Coutinho §3.4):
+/// the same closed forms and AABB-tree query the particle pass uses. `first`: the segment starts
+/// in the body's start-of-step pose (relative motion of a kinematic body, §2.1). On a contact
+/// earlier than hit.s, sets hit.s (fraction of the segment), hit.normal (unit, surface to the
+/// sphere) and hit.point (the centre there, exactly r from the surface) and returns true. A start
+/// point inside the solid itself is no contact (the caller decides: removal or push-out).
+bool sweep_collider(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                    SweepHit& hit);
 
 /// Impulse response of a particle against an immovable collider, see collider.cpp. Exposed for
 /// the tests of the critical-friction case.

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cloth_particles.hpp"
 #include "collider_impl.hpp"
 #include "emitter.hpp"
 #include "forces.hpp"
@@ -91,6 +92,7 @@ struct World::Impl {
   /// Particle–particle collisions of every opted-in system (internal and by group).
   void collide_particles();
   std::vector<Cloth> cloths;  // cloth: one generation per slot, never removed yet
+  detail::ClothParticleScratch cloth_scratch;  // particles against cloth (issue 6)
 
   detail::Collider& collider(ColliderHandle h) {
     if (h.id.kind != ObjectKind::collider || h.id.index >= colliders.size() ||
@@ -137,6 +139,14 @@ void World::Impl::step(double t0, double t1) {
       << "): non-finite vertex state at internal step " << steps + 1 << ", t = " << t1 << " s";
     throw NonFiniteState(m.str());
   }
+  // --- Particles against cloth (issue 6): after the cloth step, both have moved over [t0, t1];
+  // each contact's impulse is shared by the triangle's vertices (cloth_particles.hpp).
+  for (Cloth& cloth : cloths) {
+    if (!cloth.definition().collide_particles) continue;
+    for (detail::ParticleSystemState& ps : systems)
+      if (ps.def.collide) detail::collide_particles_with_cloth(ps.store, t1 - t0, cloth, cloth_scratch);
+  }
+  // --- end particles against cloth
   ++steps;
 }
 

@@ -99,6 +99,10 @@ struct ClothDef {
   double thickness = 0.005;  ///< (m) vertices keep this distance from collider surfaces, >= 0
   double friction = 0.3;     ///< Coulomb coefficient for cloth-collider contact, >= 0
   bool collide = true;       ///< collide with the world's colliders
+  /// Particles (rain, jets) of systems with ParticleSystemDef::collide hit the cloth's triangles;
+  /// each impulse is shared by the triangle's vertices by barycentric weight (see World::advance).
+  bool collide_particles = true;
+  double restitution = 0.1;  ///< particle–cloth coefficient of restitution, in [0, 1]
   /// Implicit Euler: CG stops at |r| <= tol |b| (> 0). Loose by default: the solve only has to be
   /// stable and plausible, and the maximum-deformation pass bounds the stretch whatever the
   /// residual (1e-2 takes ~30 iterations on the 64 x 64 benchmark cloth, 1e-4 ~140).
@@ -152,6 +156,7 @@ struct ClothStats {
   double min_z = 0.0, max_z = 0.0;  ///< (m) vertex height range
   std::size_t cg_iterations = 0;  ///< CG iterations of the last implicit step
   std::size_t strain_passes = 0;  ///< maximum-deformation passes of the last step (1 = the book's)
+  Vec3 momentum = Vec3::Zero();   ///< (kg m/s) Σ m v, double precision
 };
 
 /// One cloth instance.
@@ -181,6 +186,14 @@ class Cloth {
   /// Overwrites the state (tests, tools); pins keep their imposed positions from the next step.
   /// @throws std::invalid_argument unless both hold n finite vectors.
   void set_state(const std::vector<Vec3>& positions, const std::vector<Vec3>& velocities);
+  /// Positions (m, world) at the start of the last step (the paths of the swept tests).
+  [[nodiscard]] const std::vector<Vec3>& start_positions() const;
+  /// 1 / vertex mass (1/kg) of vertex i; 0 for a pinned vertex (its motion is imposed).
+  [[nodiscard]] double inverse_mass(std::size_t i) const;
+  /// Adds impulse J_i (N s, world frame) to every free vertex i: v_i += J_i / m_vertex; pinned
+  /// vertices ignore theirs. Used by the particle contact pass. @throws std::invalid_argument
+  /// unless `impulses` holds n entries.
+  void apply_impulses(const std::vector<Vec3>& impulses);
   /// Wind velocity (m/s) at world point p and time t, gusts included.
   [[nodiscard]] Vec3 wind_at(const Vec3& p, double t) const;
 
