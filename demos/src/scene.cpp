@@ -763,6 +763,8 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   d.thickness = r.number("thickness", d.thickness, 0.0, kInf);
   d.friction = r.number("friction", d.friction, 0.0, kInf);
   d.collide = r.boolean("collide", d.collide);
+  d.collide_particles = r.boolean("collide_particles", d.collide_particles);
+  d.restitution = r.number("restitution", d.restitution, 0.0, 1.0);
   d.gravity = gravity;
   const auto color = r.color("color", {0.75, 0.12, 0.12, 1});
   c.color = {float(color[0]), float(color[1]), float(color[2]), float(color[3])};

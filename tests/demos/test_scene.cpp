@@ -163,3 +163,13 @@ TEST(SceneCamera, BadPathAndOrbitValuesNamePointers) {
   e = errors_of(json::parse(R"({"render":{"background":"night"}})"));
   EXPECT_NE(e.find("s.json: /render/background: expected \"sky\" or a colour"), std::string::npos) << e;
 }
+
+TEST(SceneCloth, ParticleContactKeysAreReadAndChecked) {
+  const auto s = scene_from_json(json::parse(R"({"cloths":[{"collide_particles":false,"restitution":0.4}]})"), "s.json");
+  ASSERT_EQ(s.cloths.size(), 1u);
+  EXPECT_FALSE(s.cloths[0].def.collide_particles);
+  EXPECT_DOUBLE_EQ(s.cloths[0].def.restitution, 0.4);
+  const std::string e = errors_of(json::parse(R"({"cloths":[{"restitution":2,"collide_particles":"yes"}]})"));
+  EXPECT_NE(e.find("s.json: /cloths/0/restitution: expected a number in [0, 1]"), std::string::npos) << e;
+  EXPECT_NE(e.find("s.json: /cloths/0/collide_particles: expected"), std::string::npos) << e;
+}
