@@ -337,10 +337,12 @@ struct Renderer::Impl {
   void draw_shadow_map();
   void draw_meshes();
   void draw_droplets();
+  void draw_sky();
   void copy_scene_depth();
   void draw_particles();
   void set_particle_uniforms(const Program& p) const;
-  void upload_stream(ParticleStream& stream);
+  void sort_back_to_front(std::size_t n);
+  void upload_stream(ParticleStream& stream, const std::uint32_t* order = nullptr);
   Image read_back();
 
   const GlTable& gl;
@@ -355,6 +357,11 @@ struct Renderer::Impl {
   // A single-sample copy of the opaque depth that soft particles read (a texture cannot be
   // sampled while it is the depth attachment being tested against).
   GLuint depth_fbo = 0, depth_tex = 0;
+  // The sky gradient, drawn once into a target like the scene's and copied into the scene
+  // target each frame: a same-format copy costs a fraction of shading the gradient again, and
+  // the samples are the very values the sky pass wrote (the settings never change).
+  GLuint sky_fbo = 0, sky_color = 0;
+  bool sky_drawn = false;
   // Tone-mapped 8-bit output that is read back.
   GLuint out_fbo = 0, out_color = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
@@ -382,10 +389,9 @@ struct Renderer::Impl {
   Vec3f light_right = Vec3f::UnitX(), light_up = Vec3f::UnitY();
   bool shadow_enabled = false;
   float shadow_bias = 0.f, shadow_offset = 0.f, shadow_radius = 0.f;
-  std::vector<float> gather;  // soft particles of all batches before sorting
   std::vector<float> sort_depth;
-  std::vector<std::uint32_t> sort_index;
-  std::vector<std::uint8_t> pixels;
+  std::vector<std::uint32_t> sort_index, sort_scratch;
+  std::vector<std::uint32_t> sort_key, sort_key_scratch;
 };
 
 void Renderer::Impl::check_framebuffer(const char* what) const {
@@ -469,6 +475,18 @@ void Renderer::Impl::create() {
     check_framebuffer("multisampled scene");
   }
 
+  gl.GenRenderbuffers(1, &sky_color);
+  gl.BindRenderbuffer(GL_RENDERBUFFER, sky_color);
+  if (samples > 0) {
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA16F, w, h);
+  } else {
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA16F, w, h);
+  }
+  gl.GenFramebuffers(1, &sky_fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, sky_fbo);
+  gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, sky_color);
+  check_framebuffer("sky");
+
   gl.GenRenderbuffers(1, &out_color);
   gl.BindRenderbuffer(GL_RENDERBUFFER, out_color);
   gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
@@ -543,10 +561,10 @@ void Renderer::Impl::destroy() noexcept {
   }
   if (quad_ebo != 0) gl.DeleteBuffers(1, &quad_ebo);
   if (empty_vao != 0) gl.DeleteVertexArrays(1, &empty_vao);
-  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo, &depth_fbo}) {
+  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo, &depth_fbo, &sky_fbo}) {
     if (*fbo != 0) gl.DeleteFramebuffers(1, fbo);
   }
-  for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color}) {
+  for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color, &sky_color}) {
     if (*rb != 0) gl.DeleteRenderbuffers(1, rb);
   }
   for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex}) {
@@ -554,8 +572,9 @@ void Renderer::Impl::destroy() noexcept {
   }
   quad_ebo = empty_vao = 0;
   quad_capacity = 0;
-  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = 0;
-  msaa_color = msaa_depth = resolve_depth = out_color = 0;
+  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = sky_fbo = 0;
+  msaa_color = msaa_depth = resolve_depth = out_color = sky_color = 0;
+  sky_drawn = false;
   resolve_tex = shadow_tex = depth_tex = 0;
   for (Program* p : {&sky_program, &lit_program, &depth_program, &particle_depth_program, &post_program}) {
     *p = Program();
@@ -581,40 +600,73 @@ Renderer::Impl::Drawable& Renderer::Impl::add(ObjectKey key, Kind kind) {
 void Renderer::Impl::gather_particles() {
   // Soft particles of every batch are merged and sorted back to front, so two overlapping
   // batches blend correctly; additive ones, droplets (opaque) and thin streaks need no order.
-  gather.clear();
+  soft.staging.clear();  // unsorted; upload_stream takes the particles in sort_index order
   additive.staging.clear();
   droplets.staging.clear();
   streaks.staging.clear();
   for (const ObjectKey key : order) {
     const Drawable& d = drawables.at(key);
     if (d.kind != Kind::particles) continue;
-    std::vector<float>* dst = &gather;
+    std::vector<float>* dst = &soft.staging;
     if (d.style == ParticleStyle::additive) dst = &additive.staging;
     if (d.style == ParticleStyle::droplet) dst = &droplets.staging;
     if (d.style == ParticleStyle::streak) dst = &streaks.staging;
     dst->insert(dst->end(), d.instances.begin(), d.instances.end());
   }
 
-  const std::size_t n = gather.size() / kInstanceFloats;
-  soft.staging.resize(gather.size());
+  const std::size_t n = soft.staging.size() / kInstanceFloats;
   if (n > 0) {
     const Vec3f forward = (camera.target - camera.position).normalized();
     sort_depth.resize(n);
-    sort_index.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-      const float* c = &gather[i * kInstanceFloats];
+      const float* c = &soft.staging[i * kInstanceFloats];
       sort_depth[i] = (Vec3f(c[0], c[1], c[2]) - camera.position).dot(forward);
-      sort_index[i] = std::uint32_t(i);
     }
+    sort_back_to_front(n);
+  }
+  upload_stream(soft, sort_index.data());
+  for (ParticleStream* stream : {&additive, &droplets, &streaks}) upload_stream(*stream);
+}
+
+void Renderer::Impl::sort_back_to_front(std::size_t n) {
+  // sort_index = particles by decreasing depth, equal depths in their given order: the order
+  // std::stable_sort with `depth[a] > depth[b]` gives, found by a least-significant-digit
+  // radix sort of the depths' bits (four passes of 8 bits, stable), several times faster for
+  // 100k particles. NaN depths (no strict weak order) keep the comparison sort.
+  sort_index.resize(n);
+  for (std::size_t i = 0; i < n; ++i) sort_index[i] = std::uint32_t(i);
+  bool has_nan = false;
+  sort_key.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float d = sort_depth[i] + 0.f;  // -0 becomes +0: the comparison sees them equal
+    has_nan |= d != d;
+    std::uint32_t bits;
+    std::memcpy(&bits, &d, sizeof bits);
+    // Bits that increase with the float; inverted, so that far (large depth) comes first.
+    const std::uint32_t ascending = (bits & 0x80000000u) != 0 ? ~bits : bits | 0x80000000u;
+    sort_key[i] = ~ascending;
+  }
+  if (has_nan) {
     std::stable_sort(sort_index.begin(), sort_index.end(), [&](std::uint32_t a, std::uint32_t b) {
       return sort_depth[a] > sort_depth[b];
     });
-    for (std::size_t i = 0; i < n; ++i) {
-      std::memcpy(&soft.staging[i * kInstanceFloats], &gather[sort_index[i] * kInstanceFloats],
-                  kInstanceFloats * sizeof(float));
-    }
+    return;
   }
-  for (ParticleStream* stream : {&soft, &additive, &droplets, &streaks}) upload_stream(*stream);
+  sort_scratch.resize(n);
+  sort_key_scratch.resize(n);
+  for (int shift = 0; shift < 32; shift += 8) {
+    std::size_t start[257] = {};
+    for (std::size_t i = 0; i < n; ++i) ++start[((sort_key[i] >> shift) & 0xffu) + 1];
+    if (start[((sort_key[0] >> shift) & 0xffu) + 1] == n) continue;  // one bucket: no change
+    for (int b = 0; b < 256; ++b) start[b + 1] += start[b];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t at = start[(sort_key[i] >> shift) & 0xffu]++;
+      sort_scratch[at] = sort_index[i];
+      sort_key_scratch[at] = sort_key[i];
+    }
+    sort_index.swap(sort_scratch);
+    sort_key.swap(sort_key_scratch);
+  }
 }
 
 void Renderer::Impl::draw_shadow_map() {
@@ -768,7 +820,7 @@ void Renderer::Impl::draw_meshes() {
   }
 }
 
-void Renderer::Impl::upload_stream(ParticleStream& stream) {
+void Renderer::Impl::upload_stream(ParticleStream& stream, const std::uint32_t* order) {
   stream.count = stream.staging.size() / stream.floats;
   if (stream.count == 0) return;
   if (stream.count > quad_capacity) {
@@ -787,9 +839,9 @@ void Renderer::Impl::upload_stream(ParticleStream& stream) {
   // gl_VertexID).
   const std::size_t f = stream.floats;
   stream.expanded.resize(4 * stream.staging.size());
-  const float* src = stream.staging.data();
   float* dst = stream.expanded.data();
-  for (std::size_t i = 0; i < stream.count; ++i, src += f) {
+  for (std::size_t i = 0; i < stream.count; ++i) {
+    const float* src = &stream.staging[(order != nullptr ? order[i] : i) * f];
     for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
@@ -875,6 +927,26 @@ void Renderer::Impl::draw_droplets() {
   gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
 }
 
+void Renderer::Impl::draw_sky() {
+  const int w = settings.width;
+  const int h = settings.height;
+  if (!sky_drawn) {
+    gl.BindFramebuffer(GL_FRAMEBUFFER, sky_fbo);
+    gl.Disable(GL_DEPTH_TEST);
+    const bool solid = settings.background == Background::solid;
+    sky_program.use();
+    sky_program.set("u_sky_top", solid ? settings.background_color : settings.sky_top);
+    sky_program.set("u_sky_bottom", solid ? settings.background_color : settings.sky_bottom);
+    sky_program.set("u_viewport", float(w), float(h));
+    gl.BindVertexArray(empty_vao);
+    gl.DrawArrays(GL_TRIANGLES, 0, 3);
+    sky_drawn = true;
+  }
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, sky_fbo);
+  gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, samples > 0 ? msaa_fbo : resolve_fbo);
+  gl.BlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+}
+
 void Renderer::Impl::copy_scene_depth() {
   const GLuint scene_fbo = samples > 0 ? msaa_fbo : resolve_fbo;
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo);
@@ -916,17 +988,13 @@ void Renderer::Impl::draw_particles() {
 Image Renderer::Impl::read_back() {
   const int w = settings.width;
   const int h = settings.height;
-  const std::size_t row = std::size_t(w) * 4;
-  pixels.resize(row * std::size_t(h));
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, out_fbo);
   gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
   gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-  gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
-  // GL rows run bottom to top; Image rows top to bottom.
+  // The tone map pass wrote the rows upside down, so GL's bottom-to-top rows are the Image's
+  // top-to-bottom ones: read straight into the image, no flip copy.
   Image image(w, h);
-  for (int y = 0; y < h; ++y) {
-    std::memcpy(&image.rgba[std::size_t(y) * row], &pixels[std::size_t(h - 1 - y) * row], row);
-  }
+  gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, image.rgba.data());
   return image;
 }
 
@@ -1191,18 +1259,11 @@ Image Renderer::render() {
   r.gather_particles();
   r.draw_shadow_map();
 
-  gl.BindFramebuffer(GL_FRAMEBUFFER, r.samples > 0 ? r.msaa_fbo : r.resolve_fbo);
   gl.Viewport(0, 0, w, h);
+  r.draw_sky();
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.samples > 0 ? r.msaa_fbo : r.resolve_fbo);
   gl.DepthMask(GL_TRUE);
   gl.Clear(GL_DEPTH_BUFFER_BIT);
-  gl.Disable(GL_DEPTH_TEST);
-  const bool solid = r.settings.background == Background::solid;
-  r.sky_program.use();
-  r.sky_program.set("u_sky_top", solid ? r.settings.background_color : r.settings.sky_top);
-  r.sky_program.set("u_sky_bottom", solid ? r.settings.background_color : r.settings.sky_bottom);
-  r.sky_program.set("u_viewport", float(w), float(h));
-  gl.BindVertexArray(r.empty_vao);
-  gl.DrawArrays(GL_TRIANGLES, 0, 3);
 
   gl.Enable(GL_DEPTH_TEST);
   gl.DepthFunc(GL_LESS);
@@ -1228,6 +1289,7 @@ Image Renderer::render() {
   gl.BindTexture(GL_TEXTURE_2D, r.resolve_tex);
   r.post_program.use();
   r.post_program.set("u_hdr", 0);
+  r.post_program.set("u_height", float(h));
   gl.BindVertexArray(r.empty_vao);
   gl.DrawArrays(GL_TRIANGLES, 0, 3);
   gl.BindVertexArray(0);

@@ -454,11 +454,15 @@ vec3 srgb_encode(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
 }
+uniform float u_height;  // rows of the target: the image is written upside down (see below)
 void main() {
-  vec3 c = texelFetch(u_hdr, ivec2(gl_FragCoord.xy), 0).rgb;
+  // The scene's pixel this fragment shows: rows are flipped here, so that GL's bottom-to-top
+  // read back is already the image's top-to-bottom order (exact: integers and halves).
+  vec2 frag = vec2(gl_FragCoord.x, u_height - gl_FragCoord.y);
+  vec3 c = texelFetch(u_hdr, ivec2(frag), 0).rgb;
   c = srgb_encode(tonemap(max(c, 0.0)));
   // Half-LSB interleaved-gradient dither: no banding in the sky gradient; fixed per pixel.
-  float noise = fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+  float noise = fract(52.9829189 * fract(dot(frag, vec2(0.06711056, 0.00583715))));
   c += (noise - 0.5) / 255.0;
   o_color = vec4(c, 1.0);
 }
