@@ -364,6 +364,8 @@ struct Renderer::Impl {
   bool sky_drawn = false;
   // Tone-mapped 8-bit output that is read back.
   GLuint out_fbo = 0, out_color = 0;
+  // The tone map for every half-float value (kToneLutFs), 256 x 256 floats, made once.
+  GLuint tone_lut_tex = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint empty_vao = 0, quad_ebo = 0;
   std::size_t quad_capacity = 0;  // particles quad_ebo indexes
@@ -423,7 +425,8 @@ void Renderer::Impl::create() {
   depth_program = Program(gl, "shadow depth", source({kDepthVs}), source({kDepthFs}));
   particle_depth_program = Program(gl, "particle shadow depth", source({kParticleDepthVs}),
                                    source({kParticleDepthFs}));
-  post_program = Program(gl, "tone map", source({kFullscreenVs}), source({kPostFs}));
+  post_program = Program(gl, "tone map", source({kFullscreenVs}),
+                         source({kPackingExtension, kPostFs}));
 
   GLint max_samples = 0;
   gl.GetIntegerv(GL_MAX_SAMPLES, &max_samples);
@@ -541,6 +544,36 @@ void Renderer::Impl::create() {
   }
   gl.BindVertexArray(0);
   gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+
+  {
+    gl.GenTextures(1, &tone_lut_tex);
+    gl.BindTexture(GL_TEXTURE_2D, tone_lut_tex);
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_R32F, 256, 256, 0, GL_RED, GL_FLOAT, nullptr);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    GLuint lut_fbo = 0;
+    gl.GenFramebuffers(1, &lut_fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, lut_fbo);
+    gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tone_lut_tex, 0);
+    const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status == GL_FRAMEBUFFER_COMPLETE) {
+      const Program lut(gl, "tone map table", source({kFullscreenVs}),
+                        source({kPackingExtension, kToneMapGlsl, kToneLutFs}));
+      lut.use();
+      gl.Viewport(0, 0, 256, 256);
+      gl.Disable(GL_DEPTH_TEST);
+      gl.Disable(GL_BLEND);
+      gl.BindVertexArray(empty_vao);
+      gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      gl.BindVertexArray(0);
+    }
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl.DeleteFramebuffers(1, &lut_fbo);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      throw ContextError(std::string("renderer: the tone map table framebuffer is incomplete: ") +
+                         framebuffer_status_name(status));
+    }
+  }
   check_error("creating the renderer's framebuffers and buffers");
 }
 
@@ -567,7 +600,7 @@ void Renderer::Impl::destroy() noexcept {
   for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color, &sky_color}) {
     if (*rb != 0) gl.DeleteRenderbuffers(1, rb);
   }
-  for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex}) {
+  for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex, &tone_lut_tex}) {
     if (*tex != 0) gl.DeleteTextures(1, tex);
   }
   quad_ebo = empty_vao = 0;
@@ -575,7 +608,7 @@ void Renderer::Impl::destroy() noexcept {
   msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = sky_fbo = 0;
   msaa_color = msaa_depth = resolve_depth = out_color = sky_color = 0;
   sky_drawn = false;
-  resolve_tex = shadow_tex = depth_tex = 0;
+  resolve_tex = shadow_tex = depth_tex = tone_lut_tex = 0;
   for (Program* p : {&sky_program, &lit_program, &depth_program, &particle_depth_program, &post_program}) {
     *p = Program();
   }
@@ -1289,6 +1322,10 @@ Image Renderer::render() {
   gl.BindTexture(GL_TEXTURE_2D, r.resolve_tex);
   r.post_program.use();
   r.post_program.set("u_hdr", 0);
+  r.post_program.set("u_tone_lut", 4);
+  gl.ActiveTexture(GL_TEXTURE4);
+  gl.BindTexture(GL_TEXTURE_2D, r.tone_lut_tex);
+  gl.ActiveTexture(GL_TEXTURE0);
   r.post_program.set("u_height", float(h));
   gl.BindVertexArray(r.empty_vao);
   gl.DrawArrays(GL_TRIANGLES, 0, 3);
