@@ -362,6 +362,9 @@ struct Renderer::Impl {
   // the samples are the very values the sky pass wrote (the settings never change).
   GLuint sky_fbo = 0, sky_color = 0;
   bool sky_drawn = false;
+  // depth_tex holds the cleared depth (1) everywhere: what a copy gives when no opaque object
+  // was drawn, so such frames skip the copy (a multisample depth resolve) after the first.
+  bool depth_copy_clear = false;
   // Tone-mapped 8-bit output that is read back.
   GLuint out_fbo = 0, out_color = 0;
   // The tone map for every half-float value (kToneLutFs), 256 x 256 floats, made once.
@@ -608,6 +611,7 @@ void Renderer::Impl::destroy() noexcept {
   msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = sky_fbo = 0;
   msaa_color = msaa_depth = resolve_depth = out_color = sky_color = 0;
   sky_drawn = false;
+  depth_copy_clear = false;
   resolve_tex = shadow_tex = depth_tex = tone_lut_tex = 0;
   for (Program* p : {&sky_program, &lit_program, &depth_program, &particle_depth_program, &post_program}) {
     *p = Program();
@@ -982,10 +986,20 @@ void Renderer::Impl::draw_sky() {
 
 void Renderer::Impl::copy_scene_depth() {
   const GLuint scene_fbo = samples > 0 ? msaa_fbo : resolve_fbo;
-  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo);
-  gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depth_fbo);
-  gl.BlitFramebuffer(0, 0, settings.width, settings.height, 0, 0, settings.width, settings.height,
-                     GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  bool opaque = droplets.count > 0;
+  for (const ObjectKey key : order) opaque = opaque || drawables.at(key).kind != Kind::particles;
+  if (opaque) {
+    gl.BindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo);
+    gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depth_fbo);
+    gl.BlitFramebuffer(0, 0, settings.width, settings.height, 0, 0, settings.width, settings.height,
+                       GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    depth_copy_clear = false;
+  } else if (!depth_copy_clear) {
+    gl.BindFramebuffer(GL_FRAMEBUFFER, depth_fbo);
+    gl.DepthMask(GL_TRUE);
+    gl.Clear(GL_DEPTH_BUFFER_BIT);  // the scene's clear depth, 1
+    depth_copy_clear = true;
+  }
   gl.BindFramebuffer(GL_FRAMEBUFFER, scene_fbo);
   gl.ActiveTexture(GL_TEXTURE3);
   gl.BindTexture(GL_TEXTURE_2D, depth_tex);
