@@ -927,6 +927,7 @@ const Program& Renderer::Impl::particle_program(ParticleProgram which) {
   Program& p = particle_programs[which][variant];
   if (!p.valid()) {
     using namespace detail;
+    // The fragment stages see SUN_TAPS too: without a shadow map v_sun is the constant 1.
     const char* taps = variant == 0 ? "#define SUN_TAPS 0\n" : variant == 1 ? "#define SUN_TAPS 1\n"
                                                                          : "#define SUN_TAPS 4\n";
     const std::string vs = which == streak_pp ? source({taps, kShadowGlsl, kStreakVs})
@@ -934,18 +935,18 @@ const Program& Renderer::Impl::particle_program(ParticleProgram which) {
     switch (which) {
       case soft_pp:
         p = Program(gl, "soft particle", vs,
-                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
+                    source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
         break;
       case additive_pp:
         p = Program(gl, "additive particle", vs,
-                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
+                    source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
         break;
       case droplet_pp:
         p = Program(gl, "droplet particle", vs,
-                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
+                    source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
         break;
       case streak_pp:
-        p = Program(gl, "streak particle", vs, source({kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
+        p = Program(gl, "streak particle", vs, source({taps, kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
         break;
     }
   }

@@ -231,7 +231,11 @@ void main() {
 inline constexpr char kSphereDepthGlsl[] = R"(
 in vec2 v_corner;
 in vec4 v_color;
+#if SUN_TAPS == 0
+const float v_sun = 1.0;  // no shadow map this frame: the vertex stage's v_sun is 1
+#else
 in float v_sun;
+#endif
 flat in vec4 v_center_view;
 uniform vec3 u_up_view;  // world +z in the view frame: a view-frame normal's world z is dot(n, u_up_view)
 // Writes the depth of the sphere's front surface at this fragment; h is the half chord
@@ -366,7 +370,11 @@ inline constexpr char kStreakFs[] = R"(
 noperspective in vec2 v_local;
 flat in float v_length;
 in vec4 v_color;
+#if SUN_TAPS == 0
+const float v_sun = 1.0;  // no shadow map this frame: the vertex stage's v_sun is 1
+#else
 in float v_sun;
+#endif
 in float v_distance;
 flat in float v_radius;
 out vec4 o_color;
