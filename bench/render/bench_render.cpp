@@ -3,6 +3,7 @@
 // variants that show where the time goes. Usage: bench_render [particles] [frames]
 // Runs ./raw_osmesa_baseline from its own directory for the reference figure.
 #include <algorithm>
+#include <chrono>
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
@@ -21,16 +22,24 @@ namespace {
 using namespace simreel::render;
 
 // Process CPU time (all threads, llvmpipe's included) per frame: on a machine shared with
-// other jobs it varies much less than wall time. Median of `frames` after 2 warm-up frames.
-double median_ms(int frames, const std::function<void()>& frame) {
-  std::vector<double> ms;
+// other jobs it varies much less than wall time. Median of `frames` after 2 warm-up frames;
+// the median wall time of the same frames goes to `wall_ms`.
+double median_ms(int frames, const std::function<void()>& frame, double* wall_ms = nullptr) {
+  std::vector<double> ms, wall;
   for (int f = 0; f < frames + 2; ++f) {
+    const auto w0 = std::chrono::steady_clock::now();
     const std::clock_t t0 = std::clock();
     frame();
     const std::clock_t t1 = std::clock();
-    if (f >= 2) ms.push_back(1000.0 * double(t1 - t0) / CLOCKS_PER_SEC);
+    const auto w1 = std::chrono::steady_clock::now();
+    if (f >= 2) {
+      ms.push_back(1000.0 * double(t1 - t0) / CLOCKS_PER_SEC);
+      wall.push_back(std::chrono::duration<double, std::milli>(w1 - w0).count());
+    }
   }
   std::sort(ms.begin(), ms.end());
+  std::sort(wall.begin(), wall.end());
+  if (wall_ms != nullptr) *wall_ms = wall[wall.size() / 2];
   return ms[ms.size() / 2];
 }
 
@@ -64,12 +73,13 @@ int main(int argc, char** argv) {
     s.particle_shadows = c.particle_shadows;
     Renderer r(*context, s);
     const ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
+    double wall = 0.0;
     const double ms = median_ms(frames, [&] {
       r.set_particles(1, batch);  // new data every frame, as from a simulation
       (void)r.render();
-    });
+    }, &wall);
     if (full == 0.0) full = ms;
-    std::printf("simreel %-48s %8.2f ms CPU/frame\n", c.name, ms);
+    std::printf("simreel %-48s %8.2f ms CPU/frame %8.2f ms wall\n", c.name, ms, wall);
   }
   {
     RenderSettings s;
@@ -78,12 +88,14 @@ int main(int argc, char** argv) {
     Renderer r(*context, s);
     const ParticleBatch batch{n, cloud.position.data(), cloud.color.data(), cloud.radius.data(), ParticleStyle::soft};
     const double copy = median_ms(frames, [&] { r.set_particles(1, batch); });
+    double wall = 0.0;
     const double tiny = median_ms(frames, [&] {
       r.set_particles(1, batch);
       (void)r.render();
-    });
+    }, &wall);
     std::printf("simreel %-48s %8.2f ms CPU/frame\n", "set_particles copy only", copy);
-    std::printf("simreel %-48s %8.2f ms CPU/frame\n", "soft at 64x36 (CPU sort + upload + vertices)", tiny);
+    std::printf("simreel %-48s %8.2f ms CPU/frame %8.2f ms wall\n",
+                "soft at 64x36 (CPU sort + upload + vertices)", tiny, wall);
   }
 
   const std::filesystem::path self = std::filesystem::absolute(argv[0]).parent_path();

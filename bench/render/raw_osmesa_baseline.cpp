@@ -8,6 +8,7 @@
 #include <GL/osmesa.h>
 
 #include <algorithm>
+#include <chrono>
 #include <ctime>
 #include <cmath>
 #include <cstdio>
@@ -183,8 +184,9 @@ int main(int argc, char** argv) {
   g::UniformMatrix4fv(g::GetUniformLocation(program, "u_proj"), 1, GL_FALSE, proj);
 
   std::vector<unsigned char> pixels(std::size_t(w) * h * 4);
-  std::vector<double> ms;
+  std::vector<double> ms, wall;
   for (int f = 0; f < frames + 2; ++f) {
+    const auto w0 = std::chrono::steady_clock::now();
     const std::clock_t t0 = std::clock();  // process CPU time, llvmpipe's threads included
     g::BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
     g::Viewport(0, 0, w, h);
@@ -206,12 +208,18 @@ int main(int argc, char** argv) {
     g::ReadBuffer(GL_COLOR_ATTACHMENT0);
     g::ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
     const std::clock_t t1 = std::clock();
-    if (f >= 2) ms.push_back(1000.0 * double(t1 - t0) / CLOCKS_PER_SEC);  // 2 warm-up frames
+    const auto w1 = std::chrono::steady_clock::now();
+    if (f >= 2) {  // 2 warm-up frames
+      ms.push_back(1000.0 * double(t1 - t0) / CLOCKS_PER_SEC);
+      wall.push_back(std::chrono::duration<double, std::milli>(w1 - w0).count());
+    }
   }
   std::sort(ms.begin(), ms.end());
+  std::sort(wall.begin(), wall.end());
   const GLenum err = g::GetError();
-  std::printf("raw_osmesa_baseline: %zu sprites %dx%d msaa %d: median %.2f ms CPU/frame (min %.2f, %d frames)%s\n",
-              n, w, h, samples, ms[ms.size() / 2], ms.front(), frames, err ? " GL ERROR" : "");
+  std::printf("raw_osmesa_baseline: %zu sprites %dx%d msaa %d: median %.2f ms CPU/frame (min %.2f, %d frames), %.2f ms wall%s\n",
+              n, w, h, samples, ms[ms.size() / 2], ms.front(), frames, wall[wall.size() / 2],
+              err ? " GL ERROR" : "");
   OSMesaDestroyContext(ctx);
   return err ? 1 : 0;
 }

@@ -337,10 +337,12 @@ struct Renderer::Impl {
   void draw_shadow_map();
   void draw_meshes();
   void draw_droplets();
+  void draw_sky();
   void copy_scene_depth();
   void draw_particles();
   void set_particle_uniforms(const Program& p) const;
-  void upload_stream(ParticleStream& stream);
+  void sort_back_to_front(std::size_t n);
+  void upload_stream(ParticleStream& stream, const std::uint32_t* order = nullptr);
   Image read_back();
 
   const GlTable& gl;
@@ -355,8 +357,18 @@ struct Renderer::Impl {
   // A single-sample copy of the opaque depth that soft particles read (a texture cannot be
   // sampled while it is the depth attachment being tested against).
   GLuint depth_fbo = 0, depth_tex = 0;
+  // The sky gradient, drawn once into a target like the scene's and copied into the scene
+  // target each frame: a same-format copy costs a fraction of shading the gradient again, and
+  // the samples are the very values the sky pass wrote (the settings never change).
+  GLuint sky_fbo = 0, sky_color = 0;
+  bool sky_drawn = false;
+  // depth_tex holds the cleared depth (1) everywhere: what a copy gives when no opaque object
+  // was drawn, so such frames skip the copy (a multisample depth resolve) after the first.
+  bool depth_copy_clear = false;
   // Tone-mapped 8-bit output that is read back.
   GLuint out_fbo = 0, out_color = 0;
+  // The tone map for every half-float value (kToneLutFs), 256 x 256 floats, made once.
+  GLuint tone_lut_tex = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint empty_vao = 0, quad_ebo = 0;
   std::size_t quad_capacity = 0;  // particles quad_ebo indexes
@@ -382,10 +394,9 @@ struct Renderer::Impl {
   Vec3f light_right = Vec3f::UnitX(), light_up = Vec3f::UnitY();
   bool shadow_enabled = false;
   float shadow_bias = 0.f, shadow_offset = 0.f, shadow_radius = 0.f;
-  std::vector<float> gather;  // soft particles of all batches before sorting
   std::vector<float> sort_depth;
-  std::vector<std::uint32_t> sort_index;
-  std::vector<std::uint8_t> pixels;
+  std::vector<std::uint32_t> sort_index, sort_scratch;
+  std::vector<std::uint32_t> sort_key, sort_key_scratch;
 };
 
 void Renderer::Impl::check_framebuffer(const char* what) const {
@@ -417,7 +428,8 @@ void Renderer::Impl::create() {
   depth_program = Program(gl, "shadow depth", source({kDepthVs}), source({kDepthFs}));
   particle_depth_program = Program(gl, "particle shadow depth", source({kParticleDepthVs}),
                                    source({kParticleDepthFs}));
-  post_program = Program(gl, "tone map", source({kFullscreenVs}), source({kPostFs}));
+  post_program = Program(gl, "tone map", source({kFullscreenVs}),
+                         source({kPackingExtension, kPostFs}));
 
   GLint max_samples = 0;
   gl.GetIntegerv(GL_MAX_SAMPLES, &max_samples);
@@ -468,6 +480,18 @@ void Renderer::Impl::create() {
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
     check_framebuffer("multisampled scene");
   }
+
+  gl.GenRenderbuffers(1, &sky_color);
+  gl.BindRenderbuffer(GL_RENDERBUFFER, sky_color);
+  if (samples > 0) {
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA16F, w, h);
+  } else {
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA16F, w, h);
+  }
+  gl.GenFramebuffers(1, &sky_fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, sky_fbo);
+  gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, sky_color);
+  check_framebuffer("sky");
 
   gl.GenRenderbuffers(1, &out_color);
   gl.BindRenderbuffer(GL_RENDERBUFFER, out_color);
@@ -523,6 +547,36 @@ void Renderer::Impl::create() {
   }
   gl.BindVertexArray(0);
   gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+
+  {
+    gl.GenTextures(1, &tone_lut_tex);
+    gl.BindTexture(GL_TEXTURE_2D, tone_lut_tex);
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_R32F, 256, 256, 0, GL_RED, GL_FLOAT, nullptr);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    GLuint lut_fbo = 0;
+    gl.GenFramebuffers(1, &lut_fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, lut_fbo);
+    gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tone_lut_tex, 0);
+    const GLenum status = gl.CheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status == GL_FRAMEBUFFER_COMPLETE) {
+      const Program lut(gl, "tone map table", source({kFullscreenVs}),
+                        source({kPackingExtension, kToneMapGlsl, kToneLutFs}));
+      lut.use();
+      gl.Viewport(0, 0, 256, 256);
+      gl.Disable(GL_DEPTH_TEST);
+      gl.Disable(GL_BLEND);
+      gl.BindVertexArray(empty_vao);
+      gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      gl.BindVertexArray(0);
+    }
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl.DeleteFramebuffers(1, &lut_fbo);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      throw ContextError(std::string("renderer: the tone map table framebuffer is incomplete: ") +
+                         framebuffer_status_name(status));
+    }
+  }
   check_error("creating the renderer's framebuffers and buffers");
 }
 
@@ -543,20 +597,22 @@ void Renderer::Impl::destroy() noexcept {
   }
   if (quad_ebo != 0) gl.DeleteBuffers(1, &quad_ebo);
   if (empty_vao != 0) gl.DeleteVertexArrays(1, &empty_vao);
-  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo, &depth_fbo}) {
+  for (GLuint* fbo : {&msaa_fbo, &resolve_fbo, &out_fbo, &shadow_fbo, &depth_fbo, &sky_fbo}) {
     if (*fbo != 0) gl.DeleteFramebuffers(1, fbo);
   }
-  for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color}) {
+  for (GLuint* rb : {&msaa_color, &msaa_depth, &resolve_depth, &out_color, &sky_color}) {
     if (*rb != 0) gl.DeleteRenderbuffers(1, rb);
   }
-  for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex}) {
+  for (GLuint* tex : {&resolve_tex, &shadow_tex, &depth_tex, &tone_lut_tex}) {
     if (*tex != 0) gl.DeleteTextures(1, tex);
   }
   quad_ebo = empty_vao = 0;
   quad_capacity = 0;
-  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = 0;
-  msaa_color = msaa_depth = resolve_depth = out_color = 0;
-  resolve_tex = shadow_tex = depth_tex = 0;
+  msaa_fbo = resolve_fbo = out_fbo = shadow_fbo = depth_fbo = sky_fbo = 0;
+  msaa_color = msaa_depth = resolve_depth = out_color = sky_color = 0;
+  sky_drawn = false;
+  depth_copy_clear = false;
+  resolve_tex = shadow_tex = depth_tex = tone_lut_tex = 0;
   for (Program* p : {&sky_program, &lit_program, &depth_program, &particle_depth_program, &post_program}) {
     *p = Program();
   }
@@ -581,40 +637,73 @@ Renderer::Impl::Drawable& Renderer::Impl::add(ObjectKey key, Kind kind) {
 void Renderer::Impl::gather_particles() {
   // Soft particles of every batch are merged and sorted back to front, so two overlapping
   // batches blend correctly; additive ones, droplets (opaque) and thin streaks need no order.
-  gather.clear();
+  soft.staging.clear();  // unsorted; upload_stream takes the particles in sort_index order
   additive.staging.clear();
   droplets.staging.clear();
   streaks.staging.clear();
   for (const ObjectKey key : order) {
     const Drawable& d = drawables.at(key);
     if (d.kind != Kind::particles) continue;
-    std::vector<float>* dst = &gather;
+    std::vector<float>* dst = &soft.staging;
     if (d.style == ParticleStyle::additive) dst = &additive.staging;
     if (d.style == ParticleStyle::droplet) dst = &droplets.staging;
     if (d.style == ParticleStyle::streak) dst = &streaks.staging;
     dst->insert(dst->end(), d.instances.begin(), d.instances.end());
   }
 
-  const std::size_t n = gather.size() / kInstanceFloats;
-  soft.staging.resize(gather.size());
+  const std::size_t n = soft.staging.size() / kInstanceFloats;
   if (n > 0) {
     const Vec3f forward = (camera.target - camera.position).normalized();
     sort_depth.resize(n);
-    sort_index.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-      const float* c = &gather[i * kInstanceFloats];
+      const float* c = &soft.staging[i * kInstanceFloats];
       sort_depth[i] = (Vec3f(c[0], c[1], c[2]) - camera.position).dot(forward);
-      sort_index[i] = std::uint32_t(i);
     }
+    sort_back_to_front(n);
+  }
+  upload_stream(soft, sort_index.data());
+  for (ParticleStream* stream : {&additive, &droplets, &streaks}) upload_stream(*stream);
+}
+
+void Renderer::Impl::sort_back_to_front(std::size_t n) {
+  // sort_index = particles by decreasing depth, equal depths in their given order: the order
+  // std::stable_sort with `depth[a] > depth[b]` gives, found by a least-significant-digit
+  // radix sort of the depths' bits (four passes of 8 bits, stable), several times faster for
+  // 100k particles. NaN depths (no strict weak order) keep the comparison sort.
+  sort_index.resize(n);
+  for (std::size_t i = 0; i < n; ++i) sort_index[i] = std::uint32_t(i);
+  bool has_nan = false;
+  sort_key.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float d = sort_depth[i] + 0.f;  // -0 becomes +0: the comparison sees them equal
+    has_nan |= d != d;
+    std::uint32_t bits;
+    std::memcpy(&bits, &d, sizeof bits);
+    // Bits that increase with the float; inverted, so that far (large depth) comes first.
+    const std::uint32_t ascending = (bits & 0x80000000u) != 0 ? ~bits : bits | 0x80000000u;
+    sort_key[i] = ~ascending;
+  }
+  if (has_nan) {
     std::stable_sort(sort_index.begin(), sort_index.end(), [&](std::uint32_t a, std::uint32_t b) {
       return sort_depth[a] > sort_depth[b];
     });
-    for (std::size_t i = 0; i < n; ++i) {
-      std::memcpy(&soft.staging[i * kInstanceFloats], &gather[sort_index[i] * kInstanceFloats],
-                  kInstanceFloats * sizeof(float));
-    }
+    return;
   }
-  for (ParticleStream* stream : {&soft, &additive, &droplets, &streaks}) upload_stream(*stream);
+  sort_scratch.resize(n);
+  sort_key_scratch.resize(n);
+  for (int shift = 0; shift < 32; shift += 8) {
+    std::size_t start[257] = {};
+    for (std::size_t i = 0; i < n; ++i) ++start[((sort_key[i] >> shift) & 0xffu) + 1];
+    if (start[((sort_key[0] >> shift) & 0xffu) + 1] == n) continue;  // one bucket: no change
+    for (int b = 0; b < 256; ++b) start[b + 1] += start[b];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t at = start[(sort_key[i] >> shift) & 0xffu]++;
+      sort_scratch[at] = sort_index[i];
+      sort_key_scratch[at] = sort_key[i];
+    }
+    sort_index.swap(sort_scratch);
+    sort_key.swap(sort_key_scratch);
+  }
 }
 
 void Renderer::Impl::draw_shadow_map() {
@@ -768,7 +857,7 @@ void Renderer::Impl::draw_meshes() {
   }
 }
 
-void Renderer::Impl::upload_stream(ParticleStream& stream) {
+void Renderer::Impl::upload_stream(ParticleStream& stream, const std::uint32_t* order) {
   stream.count = stream.staging.size() / stream.floats;
   if (stream.count == 0) return;
   if (stream.count > quad_capacity) {
@@ -787,9 +876,9 @@ void Renderer::Impl::upload_stream(ParticleStream& stream) {
   // gl_VertexID).
   const std::size_t f = stream.floats;
   stream.expanded.resize(4 * stream.staging.size());
-  const float* src = stream.staging.data();
   float* dst = stream.expanded.data();
-  for (std::size_t i = 0; i < stream.count; ++i, src += f) {
+  for (std::size_t i = 0; i < stream.count; ++i) {
+    const float* src = &stream.staging[(order != nullptr ? order[i] : i) * f];
     for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
@@ -838,6 +927,7 @@ const Program& Renderer::Impl::particle_program(ParticleProgram which) {
   Program& p = particle_programs[which][variant];
   if (!p.valid()) {
     using namespace detail;
+    // The fragment stages see SUN_TAPS too: without a shadow map v_sun is the constant 1.
     const char* taps = variant == 0 ? "#define SUN_TAPS 0\n" : variant == 1 ? "#define SUN_TAPS 1\n"
                                                                          : "#define SUN_TAPS 4\n";
     const std::string vs = which == streak_pp ? source({taps, kShadowGlsl, kStreakVs})
@@ -845,18 +935,18 @@ const Program& Renderer::Impl::particle_program(ParticleProgram which) {
     switch (which) {
       case soft_pp:
         p = Program(gl, "soft particle", vs,
-                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
+                    source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleSoftFs}));
         break;
       case additive_pp:
         p = Program(gl, "additive particle", vs,
-                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
+                    source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleAddFs}));
         break;
       case droplet_pp:
         p = Program(gl, "droplet particle", vs,
-                    source({kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
+                    source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kParticleDropletFs}));
         break;
       case streak_pp:
-        p = Program(gl, "streak particle", vs, source({kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
+        p = Program(gl, "streak particle", vs, source({taps, kAmbientGlsl, kSceneDepthGlsl, kStreakFs}));
         break;
     }
   }
@@ -875,12 +965,42 @@ void Renderer::Impl::draw_droplets() {
   gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
 }
 
+void Renderer::Impl::draw_sky() {
+  const int w = settings.width;
+  const int h = settings.height;
+  if (!sky_drawn) {
+    gl.BindFramebuffer(GL_FRAMEBUFFER, sky_fbo);
+    gl.Disable(GL_DEPTH_TEST);
+    const bool solid = settings.background == Background::solid;
+    sky_program.use();
+    sky_program.set("u_sky_top", solid ? settings.background_color : settings.sky_top);
+    sky_program.set("u_sky_bottom", solid ? settings.background_color : settings.sky_bottom);
+    sky_program.set("u_viewport", float(w), float(h));
+    gl.BindVertexArray(empty_vao);
+    gl.DrawArrays(GL_TRIANGLES, 0, 3);
+    sky_drawn = true;
+  }
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, sky_fbo);
+  gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, samples > 0 ? msaa_fbo : resolve_fbo);
+  gl.BlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+}
+
 void Renderer::Impl::copy_scene_depth() {
   const GLuint scene_fbo = samples > 0 ? msaa_fbo : resolve_fbo;
-  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo);
-  gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depth_fbo);
-  gl.BlitFramebuffer(0, 0, settings.width, settings.height, 0, 0, settings.width, settings.height,
-                     GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  bool opaque = droplets.count > 0;
+  for (const ObjectKey key : order) opaque = opaque || drawables.at(key).kind != Kind::particles;
+  if (opaque) {
+    gl.BindFramebuffer(GL_READ_FRAMEBUFFER, scene_fbo);
+    gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depth_fbo);
+    gl.BlitFramebuffer(0, 0, settings.width, settings.height, 0, 0, settings.width, settings.height,
+                       GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    depth_copy_clear = false;
+  } else if (!depth_copy_clear) {
+    gl.BindFramebuffer(GL_FRAMEBUFFER, depth_fbo);
+    gl.DepthMask(GL_TRUE);
+    gl.Clear(GL_DEPTH_BUFFER_BIT);  // the scene's clear depth, 1
+    depth_copy_clear = true;
+  }
   gl.BindFramebuffer(GL_FRAMEBUFFER, scene_fbo);
   gl.ActiveTexture(GL_TEXTURE3);
   gl.BindTexture(GL_TEXTURE_2D, depth_tex);
@@ -916,17 +1036,13 @@ void Renderer::Impl::draw_particles() {
 Image Renderer::Impl::read_back() {
   const int w = settings.width;
   const int h = settings.height;
-  const std::size_t row = std::size_t(w) * 4;
-  pixels.resize(row * std::size_t(h));
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, out_fbo);
   gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
   gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-  gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
-  // GL rows run bottom to top; Image rows top to bottom.
+  // The tone map pass wrote the rows upside down, so GL's bottom-to-top rows are the Image's
+  // top-to-bottom ones: read straight into the image, no flip copy.
   Image image(w, h);
-  for (int y = 0; y < h; ++y) {
-    std::memcpy(&image.rgba[std::size_t(y) * row], &pixels[std::size_t(h - 1 - y) * row], row);
-  }
+  gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, image.rgba.data());
   return image;
 }
 
@@ -1191,18 +1307,11 @@ Image Renderer::render() {
   r.gather_particles();
   r.draw_shadow_map();
 
-  gl.BindFramebuffer(GL_FRAMEBUFFER, r.samples > 0 ? r.msaa_fbo : r.resolve_fbo);
   gl.Viewport(0, 0, w, h);
+  r.draw_sky();
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.samples > 0 ? r.msaa_fbo : r.resolve_fbo);
   gl.DepthMask(GL_TRUE);
   gl.Clear(GL_DEPTH_BUFFER_BIT);
-  gl.Disable(GL_DEPTH_TEST);
-  const bool solid = r.settings.background == Background::solid;
-  r.sky_program.use();
-  r.sky_program.set("u_sky_top", solid ? r.settings.background_color : r.settings.sky_top);
-  r.sky_program.set("u_sky_bottom", solid ? r.settings.background_color : r.settings.sky_bottom);
-  r.sky_program.set("u_viewport", float(w), float(h));
-  gl.BindVertexArray(r.empty_vao);
-  gl.DrawArrays(GL_TRIANGLES, 0, 3);
 
   gl.Enable(GL_DEPTH_TEST);
   gl.DepthFunc(GL_LESS);
@@ -1228,6 +1337,11 @@ Image Renderer::render() {
   gl.BindTexture(GL_TEXTURE_2D, r.resolve_tex);
   r.post_program.use();
   r.post_program.set("u_hdr", 0);
+  r.post_program.set("u_tone_lut", 4);
+  gl.ActiveTexture(GL_TEXTURE4);
+  gl.BindTexture(GL_TEXTURE_2D, r.tone_lut_tex);
+  gl.ActiveTexture(GL_TEXTURE0);
+  r.post_program.set("u_height", float(h));
   gl.BindVertexArray(r.empty_vao);
   gl.DrawArrays(GL_TRIANGLES, 0, 3);
   gl.BindVertexArray(0);
