@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace simreel::sim::detail {
 
@@ -18,7 +19,8 @@ std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uin
 
 }  // namespace
 
-void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, double contact_speed) {
+void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, double contact_speed,
+                           double h, const std::vector<Collider>* colliders) {
   std::size_t n = 0;
   for (const auto& m : members) n += m.store->count;
   x.resize(n);
@@ -27,6 +29,8 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   radius.resize(n);
   restitution.resize(n);
   friction.resize(n);
+  key.resize(n);
+  collides.resize(n);
   std::size_t k = 0;
   for (const auto& m : members) {
     const ParticleStore& s = *m.store;
@@ -37,27 +41,42 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       radius[k] = s.radius[i];
       restitution[k] = m.restitution;
       friction[k] = m.friction;
+      key[k] = (std::uint64_t(m.system) << 40) | s.id[i];
+      collides[k] = m.collide ? 1 : 0;
     }
   }
   x_before.clear();
   if (n < 2) return;
-  find_contacts(contact_speed);
-  if (contacts.empty()) return;
-  solve();
-  x_before = x;
-  // Overlaps left by the discrete step are reduced without changing velocities (a fixed share
-  // per step, split by inverse mass), in contact order.
-  for (const Contact& c : contacts) {
-    const Vec3 d = x[c.j] - x[c.i];
-    const double dist = d.norm();
-    const double depth = radius[c.i] + radius[c.j] - dist;
-    if (!(depth > 0.0) || !(dist > 0.0)) continue;
-    const Vec3 nn = d / dist;
-    const double w = inv_mass[c.i] + inv_mass[c.j];
-    const double corr = position_fraction * depth / w;
-    x[c.i] -= corr * inv_mass[c.i] * nn;
-    x[c.j] += corr * inv_mass[c.j] * nn;
+  find_contacts(contact_speed, h);
+  if (colliders != nullptr && !colliders->empty())
+    find_collider_contacts(*colliders, h, contact_speed);
+  WarmCache* cache = nullptr;
+  if (warm_start && !members.empty()) {
+    for (WarmCache& c : caches_)
+      if (c.group == members.front().system) cache = &c;
+    if (cache == nullptr) {
+      caches_.emplace_back();
+      cache = &caches_.back();
+      cache->group = members.front().system;
+    }
+    load_warm_start(*cache);
   }
+  v_before_ = v;
+  solve();
+  if (cache != nullptr) store_warm_start(*cache);
+  if (contacts.empty()) return;
+  // The integrator moved each particle along its end-of-step velocity (x1 = x0 + dt v1, the
+  // semi-implicit Euler step; first order for the others), so the position follows the change
+  // the contact impulses made to it: a stack whose weight the solve cancels stays where it was
+  // instead of sinking g h^2 per step into overlaps the projection must undo.
+  x_before = x;
+  k = 0;
+  for (const auto& m : members) {
+    const ParticleStore& s = *m.store;
+    for (std::size_t i = 0; i < s.count; ++i, ++k)
+      x[k] += std::min(double(s.age[i]), h) * (v[k] - v_before_[k]);
+  }
+  project_positions();
   k = 0;
   for (const auto& m : members) {
     ParticleStore& s = *m.store;
@@ -69,7 +88,106 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   }
 }
 
-void ParticleCollider::find_contacts(double contact_speed) {
+void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colliders, double h,
+                                              double contact_speed) {
+  constexpr int kMaxPerCollider = 3;
+  SurfaceContact found[kMaxPerCollider];
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    if (!collides.empty() && collides[p] == 0) continue;
+    const double r = radius[p];
+    for (std::size_t ci = 0; ci < colliders.size(); ++ci) {
+      const Collider& col = colliders[ci];
+      const HitAction act = col.material.on_hit;
+      if (act == HitAction::kill || act == HitAction::split) continue;  // the swept pass's job
+      const int m = surface_contacts(col, x[p], r, margin_fraction * r, found, kMaxPerCollider);
+      for (int q = 0; q < m; ++q) {
+        Contact c;
+        c.i = kCollider;
+        c.j = std::uint32_t(p);
+        c.collider = std::uint32_t(ci);
+        c.n = found[q].normal;
+        c.depth = -found[q].gap;
+        c.m_eff = 1.0 / inv_mass[p];
+        c.vc = col.point_velocity(x[p] - (r + found[q].gap) * c.n);
+        // Speculative while apart: the particle may still close the gap this step.
+        c.target = found[q].gap > 0.0 ? -found[q].gap / h : 0.0;
+        const Vec3 dv = v[p] - c.vc;
+        const Vec3 vt = dv - dv.dot(c.n) * c.n;
+        c.mu = act == HitAction::stick ? std::numeric_limits<double>::infinity()
+               : vt.norm() <= contact_speed ? col.material.static_mu()
+                                            : col.material.friction;
+        contacts.push_back(c);
+      }
+    }
+  }
+}
+
+void ParticleCollider::load_warm_start(const WarmCache& c) {
+  constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  std::size_t cursor = 0;
+  for (Contact& ct : contacts) {
+    ct.pn0 = 0.0;
+    ct.pt0 = Vec3::Zero();
+    // Only resting contacts: an impact's impulse is its own, the previous step's says nothing.
+    if (ct.target != 0.0 && ct.i != kCollider) continue;
+    const bool wall = ct.i == kCollider;
+    const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
+    const std::uint64_t kj = wall ? (kWall | ct.collider) : key[ct.j];
+    // Contacts come in ascending particle order, mostly with ascending keys: walk a cursor,
+    // and search only when a key goes back.
+    if (cursor > 0 && (cursor > c.ki.size() || c.ki[cursor - 1] >= ki))
+      cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), ki) - c.ki.begin());
+    while (cursor < c.ki.size() && c.ki[cursor] < ki) ++cursor;
+    for (std::size_t q = cursor; q < c.ki.size() && c.ki[q] == ki; ++q) {
+      if (c.kj[q] != kj || (wall && c.n[q].dot(ct.n) < 0.99)) continue;
+      ct.pn0 = c.pn[q];
+      const Vec3 t = c.pt[q] - c.pt[q].dot(ct.n) * ct.n;  // onto the current tangent plane
+      const double bound = ct.mu * ct.pn0, len = t.norm();
+      ct.pt0 = len > bound ? Vec3(t * (bound / len)) : t;
+      break;
+    }
+  }
+}
+
+void ParticleCollider::store_warm_start(WarmCache& c) const {
+  constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  c.ki.clear();
+  c.kj.clear();
+  c.n.clear();
+  c.pt.clear();
+  c.pn.clear();
+  bool sorted = true;
+  for (const Contact& ct : contacts) {
+    if (!(ct.pn > 0.0)) continue;
+    const bool wall = ct.i == kCollider;
+    const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
+    sorted = sorted && (c.ki.empty() || c.ki.back() <= ki);
+    c.ki.push_back(ki);
+    c.kj.push_back(wall ? (kWall | ct.collider) : key[ct.j]);
+    c.n.push_back(ct.n);
+    c.pt.push_back(ct.pt);
+    c.pn.push_back(ct.pn);
+  }
+  if (sorted) return;
+  // Keys out of order (particles of several systems interleaved): sort by ki, ties in contact
+  // order, so lookups stay deterministic.
+  std::vector<std::size_t> order(c.ki.size());
+  for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return c.ki[a] < c.ki[b]; });
+  WarmCache s;
+  for (std::size_t q : order) {
+    s.ki.push_back(c.ki[q]);
+    s.kj.push_back(c.kj[q]);
+    s.n.push_back(c.n[q]);
+    s.pt.push_back(c.pt[q]);
+    s.pn.push_back(c.pn[q]);
+  }
+  s.group = c.group;
+  c = std::move(s);
+}
+
+void ParticleCollider::find_contacts(double contact_speed, double h) {
   contacts.clear();
   const std::size_t n = x.size();
   if (n < 2) return;
@@ -78,7 +196,8 @@ void ParticleCollider::find_contacts(double contact_speed) {
     sum_r += radius[i];
     max_r = std::max(max_r, radius[i]);
   }
-  cell_size = std::max(4.0 * sum_r / double(n), 2.0 * max_r);
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  cell_size = std::max(4.0 * sum_r / double(n), (2.0 + margin) * max_r);
   const double inv_cell = 1.0 / cell_size;
   std::uint32_t table = 1;
   while (table < 2 * n) table <<= 1;
@@ -112,18 +231,23 @@ void ParticleCollider::find_contacts(double contact_speed) {
               continue;
             const Vec3 d = x[j] - x[i];
             const double rr = radius[i] + radius[j];
+            const double reach = rr + margin * std::min(radius[i], radius[j]);
             const double d2 = d.squaredNorm();
-            if (!(d2 < rr * rr) || !(d2 > 0.0)) continue;
+            if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
             const double dist = std::sqrt(d2);
+            const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
+            // Apart but within the margin: a speculative resting contact (it may close the gap
+            // this step, no more), so a pile's contacts hold without first overlapping. An
+            // impact is left until it overlaps, where it gets its restitution.
+            if (dist >= rr && -vn > contact_speed) continue;
             Contact c;
             c.i = std::uint32_t(i);
             c.j = j;
             c.n = d / dist;
             c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
             c.depth = rr - dist;
-            const double vn = (v[j] - v[i]).dot(c.n);  // < 0: approaching
             const double e = 0.5 * (restitution[i] + restitution[j]);
-            c.target = -vn > contact_speed ? -e * vn : 0.0;
+            c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
             c.mu = 0.5 * (friction[i] + friction[j]);
             contacts.push_back(c);
           }
@@ -133,22 +257,27 @@ void ParticleCollider::find_contacts(double contact_speed) {
 
 void ParticleCollider::solve() {
   for (Contact& c : contacts) {
-    c.pn = 0.0;
-    c.pt = Vec3::Zero();
+    c.pn = c.pn0;
+    c.pt = c.pt0;
+    const Vec3 p = c.pn0 * c.n + c.pt0;
+    if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
+    v[c.j] += inv_mass[c.j] * p;
   }
   for (int it = 0; it < iterations; ++it) {
     for (Contact& c : contacts) {
-      const double wi = inv_mass[c.i], wj = inv_mass[c.j];
-      Vec3 dv = v[c.j] - v[c.i];
+      const bool wall = c.i == kCollider;
+      const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+      const Vec3& vi = wall ? c.vc : v[c.i];
+      Vec3 dv = v[c.j] - vi;
       // Normal: accumulated impulse clamped to push only.
       const double vn = dv.dot(c.n);
       const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
       const double dpn = pn_new - c.pn;
       c.pn = pn_new;
-      v[c.i] -= (dpn * wi) * c.n;
+      if (!wall) v[c.i] -= (dpn * wi) * c.n;
       v[c.j] += (dpn * wj) * c.n;
       // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
-      dv = v[c.j] - v[c.i];
+      dv = v[c.j] - (wall ? c.vc : v[c.i]);
       const Vec3 vt = dv - dv.dot(c.n) * c.n;
       Vec3 pt_new = c.pt - c.m_eff * vt;
       const double bound = c.mu * c.pn;
@@ -156,8 +285,39 @@ void ParticleCollider::solve() {
       if (len > bound) pt_new *= bound / len;
       const Vec3 dpt = pt_new - c.pt;
       c.pt = pt_new;
-      v[c.i] -= wi * dpt;
+      if (!wall) v[c.i] -= wi * dpt;
       v[c.j] += wj * dpt;
+    }
+  }
+}
+
+void ParticleCollider::project_positions() {
+  if (x_before.size() != x.size()) x_before = x;
+  for (int it = 0; it < position_iterations; ++it) {
+    for (const Contact& c : contacts) {
+      const bool wall = c.i == kCollider;
+      double slop = 0.0, depth = 0.0;
+      Vec3 nn = c.n;
+      if (wall) {
+        // The surface as the plane of its closest feature at the start of the projection.
+        depth = c.depth - c.n.dot(x[c.j] - x_before[c.j]);
+      } else {
+        const Vec3 d = x[c.j] - x[c.i];
+        const double dist = d.norm();
+        if (!(dist > 0.0)) continue;
+        nn = d / dist;
+        depth = radius[c.i] + radius[c.j] - dist;
+        slop = slop_fraction * std::min(radius[c.i], radius[c.j]);
+      }
+      // Each contact aims at the same end depth in every sweep, so the sweeps converge to it.
+      // A collider contact may close its gap (goal 0) but not go deeper.
+      const double goal = wall ? (c.depth > 0.0 ? (1.0 - position_fraction) * c.depth : 0.0)
+                               : c.depth - position_fraction * std::max(0.0, c.depth - slop);
+      if (!(depth > goal)) continue;
+      const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+      const double corr = (depth - goal) / (wi + wj);
+      if (!wall) x[c.i] -= corr * wi * nn;
+      x[c.j] += corr * wj * nn;
     }
   }
 }

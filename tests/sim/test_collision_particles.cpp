@@ -152,6 +152,42 @@ TEST(SimParticleCollision, GridFindsExactlyTheBruteForceContacts) {
   EXPECT_NEAR(pc.cell_size, 2 * 2 * 0.0175, 0.004);  // 2 x mean diameter (mean r = 17.5 mm)
 }
 
+TEST(SimParticleCollision, StackOfTenOnAPlaneStaysStackedWithoutDrift) {
+  // Resting contact (§3.6.3): ten particles in a column on the ground. The ground contact is in
+  // the same solve as the pair contacts and the resting impulses are warm started, so the
+  // column holds with its weight carried down to the ground, neither sinking nor creeping.
+  const double r = 0.01;
+  World world;
+  PlaneDef ground;
+  ground.material = Material(0.5, 0.5);
+  world.add_plane(ground);
+  ParticleSystemDef def = test::spawn_only_system();
+  def.collide_particles = true;
+  def.particle_restitution = 0.5;
+  def.particle_friction = 0.5;
+  const auto ps = world.add_particle_system(def);
+  std::vector<Vec3> start;
+  for (int k = 0; k < 10; ++k) {
+    start.emplace_back(0, 0, r + 2 * r * k);
+    world.spawn_particle(ps, start.back(), Vec3::Zero(), 0.01, r, 100);
+  }
+  double drift = 0, speed = 0;
+  for (int frame = 0; frame < 5 * 24; ++frame) {
+    world.advance(1.0 / 24);
+    const ParticleView v = world.particles(ps);
+    ASSERT_EQ(v.count, 10u);
+    for (std::size_t i = 0; i < v.count; ++i) {
+      drift = std::max(drift, (position_of(v, i) - start[i]).norm());
+      speed = std::max(speed, velocity_of(v, i).norm());
+      EXPECT_GE(v.position[3 * i + 2], r - 1e-6) << i;
+    }
+  }
+  EXPECT_LT(drift, 1e-3);
+  EXPECT_LT(speed, 1e-2);
+  // The column is still a column: the top particle sits (almost) where it started.
+  EXPECT_NEAR(world.particles(ps).position[3 * 9 + 2], 19 * r, 1e-3);
+}
+
 TEST(SimParticleCollision, SystemsCollideAcrossAGroupOnlyWhenTheyOptIn) {
   for (bool grouped : {false, true}) {
     World world;
