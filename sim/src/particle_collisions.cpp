@@ -128,8 +128,9 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
   for (Contact& ct : contacts) {
     ct.pn0 = 0.0;
     ct.pt0 = Vec3::Zero();
-    // Only resting contacts: an impact's impulse is its own, the previous step's says nothing.
-    if (ct.target != 0.0 && ct.i != kCollider) continue;
+    // Only resting and speculative contacts (target <= 0): an impact's impulse is its own, the
+    // previous step's says nothing about it.
+    if (ct.target > 0.0) continue;
     const bool wall = ct.i == kCollider;
     const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
     const std::uint64_t kj = wall ? (kWall | ct.collider) : key[ct.j];
@@ -138,14 +139,22 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
     if (cursor > 0 && (cursor > c.ki.size() || c.ki[cursor - 1] >= ki))
       cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), ki) - c.ki.begin());
     while (cursor < c.ki.size() && c.ki[cursor] < ki) ++cursor;
+    // A collider may give a particle several contacts: the one with the nearest normal.
+    std::size_t best = c.ki.size();
+    double best_dot = 0.99;
     for (std::size_t q = cursor; q < c.ki.size() && c.ki[q] == ki; ++q) {
-      if (c.kj[q] != kj || (wall && c.n[q].dot(ct.n) < 0.99)) continue;
-      ct.pn0 = c.pn[q];
-      const Vec3 t = c.pt[q] - c.pt[q].dot(ct.n) * ct.n;  // onto the current tangent plane
-      const double bound = ct.mu * ct.pn0, len = t.norm();
-      ct.pt0 = len > bound ? Vec3(t * (bound / len)) : t;
-      break;
+      if (c.kj[q] != kj) continue;
+      const double dot = wall ? c.n[q].dot(ct.n) : 1.0;
+      if (dot < best_dot) continue;
+      best = q;
+      best_dot = dot;
+      if (!wall) break;
     }
+    if (best == c.ki.size()) continue;
+    ct.pn0 = c.pn[best];
+    const Vec3 t = c.pt[best] - c.pt[best].dot(ct.n) * ct.n;  // onto the current tangent plane
+    const double bound = ct.mu * ct.pn0, len = t.norm();
+    ct.pt0 = len > bound ? Vec3(t * (bound / len)) : t;
   }
 }
 

@@ -50,7 +50,7 @@ class ParticleCollider {
   int iterations = 16;            ///< Gauss–Seidel sweeps per step
   int position_iterations = 4;    ///< Gauss–Seidel sweeps of the overlap projection
   double position_fraction = 0.8; ///< share of an overlap beyond the slop removed per step
-  double slop_fraction = 0.002;    ///< overlap of a pair left alone, times the smaller radius
+  double slop_fraction = 0.01;    ///< overlap of a pair left alone, times the smaller radius
   double margin_fraction = 0.25;  ///< collider contacts within this gap, times the radius
   double pair_margin_fraction = 0.05;  ///< pair contacts within this gap, times the smaller radius
   bool warm_start = true;
