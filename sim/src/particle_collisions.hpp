@@ -23,8 +23,10 @@
 // over the same contacts (colliders immovable) that leaves a small slop and does not touch
 // velocities, so it neither injects energy nor pushes the bottom of a pile into a collider.
 //
-// Known limits: particle pairs are found by overlap at the end of the step (not swept like
-// particle vs collider).
+// Known limits: particle pairs are found at the end of the step, overlapping or (slow ones)
+// within the margin, not swept like particle vs collider. Particles are frictional points that
+// cannot roll and pairs have one (dynamic) coefficient, so the surface of a pile steeper than
+// atan(mu) still slides now and then.
 
 #include <cstddef>
 #include <cstdint>
