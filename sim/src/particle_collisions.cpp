@@ -10,10 +10,11 @@ namespace simreel::sim::detail {
 
 namespace {
 
-std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uint32_t mask) {
-  // Teschner et al. 2003 spatial hash primes.
+std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uint32_t level,
+                        std::uint32_t mask) {
+  // Teschner et al. 2003 spatial hash primes; the level (§2.3.2) is one more coordinate.
   const auto h = std::uint64_t(x) * 73856093ull ^ std::uint64_t(y) * 19349663ull ^
-                 std::uint64_t(z) * 83492791ull;
+                 std::uint64_t(z) * 83492791ull ^ std::uint64_t(level) * 2654435761ull;
   return std::uint32_t(h ^ (h >> 29)) & mask;
 }
 
@@ -200,25 +201,40 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
   contacts.clear();
   const std::size_t n = x.size();
   if (n < 2) return;
-  double sum_r = 0.0, max_r = 0.0;
+  double sum_r = 0.0, max_r = 0.0, min_r = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n; ++i) {
     sum_r += radius[i];
     max_r = std::max(max_r, radius[i]);
+    min_r = std::min(min_r, radius[i]);
   }
   const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
-  cell_size = std::max(4.0 * sum_r / double(n), (2.0 + margin) * max_r);
-  const double inv_cell = 1.0 / cell_size;
+  const double reach_d = 2.0 + 2.0 * margin;  // a sphere's reach, times its radius
+  // Uniform grid (§2.3.1) unless sizes differ by about an order of magnitude or more; then the
+  // multi-level grid (§2.3.2): level l has cells 2 x 2^l the smallest reach, each particle
+  // lives in the finest level whose cells hold its reach.
+  levels = 1;
+  if (max_r > 8.0 * min_r) {
+    cell_size = 2.0 * reach_d * min_r;
+    while (std::ldexp(cell_size, levels - 1) < reach_d * max_r) ++levels;
+  } else {
+    cell_size = std::max(4.0 * sum_r / double(n), reach_d * max_r);
+  }
   std::uint32_t table = 1;
   while (table < 2 * n) table <<= 1;
   const std::uint32_t mask = table - 1;
   cell_xyz_.resize(3 * n);
   cell_hash_.resize(n);
+  level_.resize(n);
   bucket_start_.assign(std::size_t(table) + 1, 0);
   sorted_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t l = 0;
+    while (int(l) + 1 < levels && std::ldexp(cell_size, int(l)) < reach_d * radius[i]) ++l;
+    level_[i] = std::uint8_t(l);
+    const double inv_cell = 1.0 / std::ldexp(cell_size, int(l));
     for (int a = 0; a < 3; ++a)
       cell_xyz_[3 * i + std::size_t(a)] = std::int64_t(std::floor(x[i][a] * inv_cell));
-    cell_hash_[i] = hash_cell(cell_xyz_[3 * i], cell_xyz_[3 * i + 1], cell_xyz_[3 * i + 2], mask);
+    cell_hash_[i] = hash_cell(cell_xyz_[3 * i], cell_xyz_[3 * i + 1], cell_xyz_[3 * i + 2], l, mask);
     ++bucket_start_[cell_hash_[i] + 1];
   }
   for (std::uint32_t b = 0; b < table; ++b) bucket_start_[b + 1] += bucket_start_[b];
@@ -226,41 +242,53 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
   cursor_.assign(bucket_start_.begin(), bucket_start_.end() - 1);
   for (std::size_t i = 0; i < n; ++i) sorted_[cursor_[cell_hash_[i]]++] = std::uint32_t(i);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::int64_t cx = cell_xyz_[3 * i], cy = cell_xyz_[3 * i + 1], cz = cell_xyz_[3 * i + 2];
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const std::int64_t nx = cx + dx, ny = cy + dy, nz = cz + dz;
-          const std::uint32_t b = hash_cell(nx, ny, nz, mask);
-          for (std::uint32_t q = bucket_start_[b]; q < bucket_start_[b + 1]; ++q) {
-            const std::uint32_t j = sorted_[q];
-            if (j <= i) continue;
-            // Another cell hashed into the same bucket: it is visited from its own offset.
-            if (cell_xyz_[3 * j] != nx || cell_xyz_[3 * j + 1] != ny || cell_xyz_[3 * j + 2] != nz)
-              continue;
-            const Vec3 d = x[j] - x[i];
-            const double rr = radius[i] + radius[j];
-            const double reach = rr + margin * std::min(radius[i], radius[j]);
-            const double d2 = d.squaredNorm();
-            if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
-            const double dist = std::sqrt(d2);
-            const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
-            // Apart but within the margin: a speculative resting contact (it may close the gap
-            // this step, no more), so a pile's contacts hold without first overlapping. An
-            // impact is left until it overlaps, where it gets its restitution.
-            if (dist >= rr && -vn > contact_speed) continue;
-            Contact c;
-            c.i = std::uint32_t(i);
-            c.j = j;
-            c.n = d / dist;
-            c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
-            c.depth = rr - dist;
-            const double e = 0.5 * (restitution[i] + restitution[j]);
-            c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
-            c.mu = 0.5 * (friction[i] + friction[j]);
-            contacts.push_back(c);
+    // Own level (pairs j > i), then every coarser one: a pair of different levels is found once,
+    // from its smaller particle, in the 27 cells of the larger one's level (its cells are at
+    // least both reaches).
+    for (int l = level_[i]; l < levels; ++l) {
+      std::int64_t cx = cell_xyz_[3 * i], cy = cell_xyz_[3 * i + 1], cz = cell_xyz_[3 * i + 2];
+      if (l != level_[i]) {
+        const double inv_cell = 1.0 / std::ldexp(cell_size, l);
+        cx = std::int64_t(std::floor(x[i][0] * inv_cell));
+        cy = std::int64_t(std::floor(x[i][1] * inv_cell));
+        cz = std::int64_t(std::floor(x[i][2] * inv_cell));
+      }
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const std::int64_t nx = cx + dx, ny = cy + dy, nz = cz + dz;
+            const std::uint32_t b = hash_cell(nx, ny, nz, std::uint32_t(l), mask);
+            for (std::uint32_t q = bucket_start_[b]; q < bucket_start_[b + 1]; ++q) {
+              const std::uint32_t j = sorted_[q];
+              if (level_[j] != l || (l == level_[i] && j <= i)) continue;
+              // Another cell hashed into the same bucket: it is visited from its own offset.
+              if (cell_xyz_[3 * j] != nx || cell_xyz_[3 * j + 1] != ny ||
+                  cell_xyz_[3 * j + 2] != nz)
+                continue;
+              const Vec3 d = x[j] - x[i];
+              const double rr = radius[i] + radius[j];
+              const double reach = rr + margin * std::min(radius[i], radius[j]);
+              const double d2 = d.squaredNorm();
+              if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
+              const double dist = std::sqrt(d2);
+              const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
+              // Apart but within the margin: a speculative resting contact (it may close the gap
+              // this step, no more), so a pile's contacts hold without first overlapping. An
+              // impact is left until it overlaps, where it gets its restitution.
+              if (dist >= rr && -vn > contact_speed) continue;
+              Contact c;
+              c.i = std::uint32_t(i);
+              c.j = j;
+              c.n = d / dist;
+              c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
+              c.depth = rr - dist;
+              const double e = 0.5 * (restitution[i] + restitution[j]);
+              c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
+              c.mu = 0.5 * (friction[i] + friction[j]);
+              contacts.push_back(c);
+            }
           }
-        }
+    }
   }
 }
 

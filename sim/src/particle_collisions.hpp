@@ -88,7 +88,10 @@ class ParticleCollider {
   };
   std::vector<Contact> contacts;
   /// Fills `contacts` from x/radius with the hashed grid. Cell size: 2 x the mean diameter, or
-  /// the largest diameter if that is bigger, so the 27 neighbouring cells hold every contact.
+  /// the largest diameter if that is bigger, so the 27 neighbouring cells hold every contact;
+  /// when the largest would need cells over 4 x those, a multi-level grid (Coutinho §2.3.2):
+  /// cells doubling per level, each particle in the finest level that holds its reach, pairs
+  /// across levels searched from the smaller particle in the larger one's level.
   /// With h > 0 (s, the step), pairs up to pair_margin_fraction x the smaller radius apart and
   /// not approaching faster than contact_speed are speculative resting contacts (target
   /// -gap / h); with h = 0 only overlaps count.
@@ -103,7 +106,8 @@ class ParticleCollider {
   /// untouched); colliders do not move, their contacts' depths are measured from x_before
   /// (set to x if it is not filled).
   void project_positions();
-  double cell_size = 0.0;  ///< (m) of the last find_contacts()
+  double cell_size = 0.0;  ///< (m) of the last find_contacts(), at its finest level
+  int levels = 1;          ///< grid levels of the last find_contacts() (1: uniform grid)
 
  private:
   /// Previous step's resting impulses of one group (keyed by its first system).
@@ -120,6 +124,7 @@ class ParticleCollider {
 
   std::vector<std::uint32_t> bucket_start_, cursor_, sorted_, cell_hash_;
   std::vector<std::int64_t> cell_xyz_;
+  std::vector<std::uint8_t> level_;
 };
 
 }  // namespace simreel::sim::detail
