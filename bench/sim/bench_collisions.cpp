@@ -144,6 +144,10 @@ void internal_phase(benchmark::State& state, bool solve) {
   for (auto _ : state) {
     if (solve) {
       pc.v = v0;
+      for (auto& c : pc.contacts) {  // cold start
+        c.pn = 0.0;
+        c.pt = Vec3::Zero();
+      }
       pc.solve();
     } else {
       pc.find_contacts(0.05);

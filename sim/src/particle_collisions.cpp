@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace simreel::sim::detail {
 
@@ -127,8 +128,8 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
   std::size_t cursor = 0;
   for (Contact& ct : contacts) {
-    ct.pn0 = 0.0;
-    ct.pt0 = Vec3::Zero();
+    ct.pn = 0.0;
+    ct.pt = Vec3::Zero();
     // Only resting and speculative contacts (target <= 0): an impact's impulse is its own, the
     // previous step's says nothing about it.
     if (ct.target > 0.0) continue;
@@ -152,10 +153,10 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
       if (!wall) break;
     }
     if (best == c.ki.size()) continue;
-    ct.pn0 = c.pn[best];
+    ct.pn = c.pn[best];
     const Vec3 t = c.pt[best] - c.pt[best].dot(ct.n) * ct.n;  // onto the current tangent plane
-    const double bound = ct.mu * ct.pn0, len = t.norm();
-    ct.pt0 = len > bound ? Vec3(t * (bound / len)) : t;
+    const double bound = ct.mu * ct.pn, len = t.norm();
+    ct.pt = len > bound ? Vec3(t * (bound / len)) : t;
   }
 }
 
@@ -260,7 +261,7 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
             const std::uint32_t b = hash_cell(nx, ny, nz, std::uint32_t(l), mask);
             for (std::uint32_t q = bucket_start_[b]; q < bucket_start_[b + 1]; ++q) {
               const std::uint32_t j = sorted_[q];
-              if (level_[j] != l || (l == level_[i] && j <= i)) continue;
+              if ((levels > 1 && level_[j] != l) || (l == level_[i] && j <= i)) continue;
               // Another cell hashed into the same bucket: it is visited from its own offset.
               if (cell_xyz_[3 * j] != nx || cell_xyz_[3 * j + 1] != ny ||
                   cell_xyz_[3 * j + 2] != nz)
@@ -294,38 +295,42 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
 
 void ParticleCollider::solve() {
   for (Contact& c : contacts) {
-    c.pn = c.pn0;
-    c.pt = c.pt0;
-    const Vec3 p = c.pn0 * c.n + c.pt0;
+    const Vec3 p = c.pn * c.n + c.pt;
     if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
     v[c.j] += inv_mass[c.j] * p;
   }
-  for (int it = 0; it < iterations; ++it) {
+  // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
+  const auto update = [&](Contact& c, auto wall_tag) {
+    constexpr bool wall = decltype(wall_tag)::value;
+    const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+    Vec3 dv = v[c.j] - (wall ? c.vc : v[c.i]);
+    // Normal: accumulated impulse clamped to push only.
+    const double vn = dv.dot(c.n);
+    const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
+    const double dpn = pn_new - c.pn;
+    c.pn = pn_new;
+    if (!wall) v[c.i] -= (dpn * wi) * c.n;
+    v[c.j] += (dpn * wj) * c.n;
+    // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
+    dv = v[c.j] - (wall ? c.vc : v[c.i]);
+    const Vec3 vt = dv - dv.dot(c.n) * c.n;
+    Vec3 pt_new = c.pt - c.m_eff * vt;
+    const double bound = c.mu * c.pn;
+    const double len = pt_new.norm();
+    if (len > bound) pt_new *= bound / len;
+    const Vec3 dpt = pt_new - c.pt;
+    c.pt = pt_new;
+    if (!wall) v[c.i] -= wi * dpt;
+    v[c.j] += wj * dpt;
+  };
+  for (int it = 0; it < iterations; ++it)
     for (Contact& c : contacts) {
-      const bool wall = c.i == kCollider;
-      const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
-      const Vec3& vi = wall ? c.vc : v[c.i];
-      Vec3 dv = v[c.j] - vi;
-      // Normal: accumulated impulse clamped to push only.
-      const double vn = dv.dot(c.n);
-      const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
-      const double dpn = pn_new - c.pn;
-      c.pn = pn_new;
-      if (!wall) v[c.i] -= (dpn * wi) * c.n;
-      v[c.j] += (dpn * wj) * c.n;
-      // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
-      dv = v[c.j] - (wall ? c.vc : v[c.i]);
-      const Vec3 vt = dv - dv.dot(c.n) * c.n;
-      Vec3 pt_new = c.pt - c.m_eff * vt;
-      const double bound = c.mu * c.pn;
-      const double len = pt_new.norm();
-      if (len > bound) pt_new *= bound / len;
-      const Vec3 dpt = pt_new - c.pt;
-      c.pt = pt_new;
-      if (!wall) v[c.i] -= wi * dpt;
-      v[c.j] += wj * dpt;
+      if (c.i == kCollider) {
+        update(c, std::true_type{});
+      } else {
+        update(c, std::false_type{});
+      }
     }
-  }
 }
 
 void ParticleCollider::project_positions() {

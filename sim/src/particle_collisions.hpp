@@ -50,7 +50,7 @@ struct ParticleGroupMember {
 class ParticleCollider {
  public:
   int iterations = 16;            ///< Gauss–Seidel sweeps per step
-  int position_iterations = 4;    ///< Gauss–Seidel sweeps of the overlap projection
+  int position_iterations = 2;    ///< Gauss–Seidel sweeps of the overlap projection
   double position_fraction = 0.8; ///< share of an overlap beyond the slop removed per step
   double slop_fraction = 0.01;    ///< overlap of a pair left alone, times the smaller radius
   double margin_fraction = 0.25;  ///< collider contacts within this gap, times the radius
@@ -79,10 +79,9 @@ class ParticleCollider {
     double target;      ///< wanted separating normal speed after the solve
     double depth;       ///< overlap (m); negative: gap to a collider
     double mu;
-    double pn = 0.0;    ///< accumulated normal impulse (N s), >= 0
-    Vec3 pt = Vec3::Zero();  ///< accumulated friction impulse
-    double pn0 = 0.0;   ///< warm start of pn (previous step's impulse of a resting contact)
-    Vec3 pt0 = Vec3::Zero();
+    double pn = 0.0;    ///< accumulated normal impulse (N s), >= 0; solve() starts from it
+                        ///< (the warm start: the previous step's impulse, else 0)
+    Vec3 pt = Vec3::Zero();  ///< accumulated friction impulse, likewise
     Vec3 vc = Vec3::Zero();     ///< (m/s) velocity of the collider's surface point
     std::uint32_t collider = 0;
   };
@@ -100,7 +99,8 @@ class ParticleCollider {
   /// `collides` set (all when it is empty), h (s) the step.
   void find_collider_contacts(const std::vector<Collider>& colliders, double h,
                               double contact_speed);
-  /// Sequential impulses over `contacts` for `iterations` sweeps, from the warm start.
+  /// Sequential impulses over `contacts` for `iterations` sweeps, starting from (and applying)
+  /// the impulses the contacts hold: the warm start, zero as find_contacts() leaves them.
   void solve();
   /// Moves positions to remove position_fraction of each overlap beyond the slop (velocities
   /// untouched); colliders do not move, their contacts' depths are measured from x_before

@@ -120,6 +120,10 @@ TEST(SimParticleCollision, SequentialImpulsesConvergeToTheSimultaneousLinearSyst
   double prev = 1e300;
   for (int iters : {2, 8, 32, 200}) {
     pc.v = v0;
+    for (auto& c : pc.contacts) {  // a cold start, as find_contacts() leaves them
+      c.pn = 0.0;
+      c.pt = Vec3::Zero();
+    }
     pc.iterations = iters;
     pc.solve();
     double err = 0;
