@@ -118,6 +118,21 @@ void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
 bool sweep_collider(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
                     SweepHit& hit);
 
+/// A sphere's contact with a collider's surface at the end of a step: the closest feature
+/// (face, edge or vertex), for the resting-contact constraints of the particle solve (§3.6.3).
+struct SurfaceContact {
+  Vec3 normal = Vec3::Zero();  ///< unit, world frame, from the surface towards the centre
+  double gap = 0.0;            ///< (m) surface to sphere distance; negative: overlap
+};
+
+/// Closest features of collider c to the sphere (centre p, radius r, world frame) with
+/// gap < margin, nearest first, at most max_out with normals apart by more than ~2.5 degrees (a
+/// particle in a mesh crease touches one facet per side; the facets sharing an edge or vertex
+/// give one contact). A centre inside a sphere, cylinder or closed mesh gives none (§3.4.2
+/// removes it); one inside a box gives the face it is least deep behind. Returns the count.
+int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
+                     SurfaceContact* out, int max_out);
+
 /// Impulse response of a particle against an immovable collider, see collider.cpp. Exposed for
 /// the tests of the critical-friction case.
 Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, double contact_speed,

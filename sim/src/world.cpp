@@ -89,8 +89,9 @@ struct World::Impl {
   }
   /// Colliders of system `index` over particles [begin, end), then its splash droplets.
   void collide_system(std::size_t index, std::size_t begin, std::size_t end, double h);
-  /// Particle–particle collisions of every opted-in system (internal and by group).
-  void collide_particles();
+  /// Particle–particle collisions of every opted-in system (internal and by group), with the
+  /// resting contacts on colliders in the same solve; h (s) is the step.
+  void collide_particles(double h);
   std::vector<Cloth> cloths;  // cloth: one generation per slot, never removed yet
   detail::ClothParticleScratch cloth_scratch;  // particles against cloth (issue 6)
 
@@ -129,7 +130,7 @@ void World::Impl::step(double t0, double t1) {
   for (detail::Collider& c : colliders)
     if (c.kinematic()) c.update(t1);
   for (std::size_t s = 0; s < systems.size(); ++s) step_system(s, t0, t1);
-  collide_particles();
+  collide_particles(t1 - t0);
   // Cloth (§3.9.2) after the particle systems.
   for (std::size_t c = 0; c < cloths.size(); ++c) {
     if (cloths[c].step(t0, t1, &colliders)) continue;
@@ -293,7 +294,7 @@ void World::Impl::collide_system(std::size_t index, std::size_t begin, std::size
   }
 }
 
-void World::Impl::collide_particles() {
+void World::Impl::collide_particles(double h) {
   // Groups in order of their first member; a system without a group is its own group.
   std::vector<bool> done(systems.size(), false);
   std::vector<detail::ParticleGroupMember> members;
@@ -307,11 +308,12 @@ void World::Impl::collide_particles() {
       const bool same = u == s || (!d.collision_group.empty() && du.collision_group == d.collision_group);
       if (!same || done[u]) continue;
       done[u] = true;
-      members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction, du.collide});
+      members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction,
+                         du.collide, std::uint32_t(u)});
     }
     // A lone system without collide_particles has nobody to collide with.
     if (members.size() == 1 && !d.collide_particles) continue;
-    particle_collider.run(members, def.contact_speed);
+    particle_collider.run(members, def.contact_speed, h, &colliders);
     if (colliders.empty() || particle_collider.x_before.empty()) continue;
     // The overlap correction moved particles: sweep those moves against the colliders (§3.4).
     std::size_t k = 0;

