@@ -17,7 +17,7 @@ size="${GALLERY_SIZE:-480x270}"
 tmp="${GALLERY_TMP:-/tmp/gallery}"
 # Sheets are kept under ~400 KB; thousands of thin rain streaks compress badly (rain: 476 KB,
 # curtain: 420 KB at 480x270).
-declare -A size_for=([rain]=400x225 [curtain]=400x225)
+declare -A size_for=([rain]=400x225 [curtain]=400x225 [rain_on_mesh]=400x225)
 [[ -z "${GALLERY_SIZE:-}" ]] || size_for=()
 [[ -x "$simreel" ]] || { echo "make_gallery: $simreel not found; build the simreel target first" >&2; exit 1; }
 
