@@ -299,17 +299,9 @@ void sweep_sphere(const Collider& c, const Vec3& a, const Vec3& b, double r, boo
   local_segment(c, a, b, first, m, d);
   const double Rg = c.radius + r;
   const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - Rg * Rg;
+  if (C <= 0.0 && m.norm() < c.radius) return;  // inside the sphere itself: §3.4.2 removal
   double s;
-  if (C <= 0.0) {
-    if (m.norm() < c.radius || !(B < 0.0)) return;
-    s = 0.0;
-  } else {
-    if (!(B < 0.0) || A == 0.0) return;
-    const double disc = B * B - A * C;
-    if (disc < 0.0) return;
-    s = (-B - std::sqrt(disc)) / A;
-    if (s > 1.0) return;
-  }
+  if (!np::first_entry(A, B, C, s)) return;
   if (!(s < best.s)) return;
   const Vec3 n = c.R * (m + s * d).normalized();
   best = Hit{s, n, Vec3(c.center + Rg * n), &c};

@@ -22,22 +22,30 @@ struct SweepHit {
 
 namespace np {
 
+/// First time s in [0, 1] at which a point m + s d enters the ball |x| <= rho, given
+/// A = |d|², B = m·d, C = |m|² - rho² (the closed form of a swept sphere against a vertex,
+/// an edge's axis or a sphere, Coutinho §3.5). A start inside (C <= 0) counts at s = 0 when it
+/// moves further in. Returns false when there is no such entry.
+inline bool first_entry(double A, double B, double C, double& s) {
+  if (!(B < 0.0)) return false;
+  if (C <= 0.0) {
+    s = 0.0;
+    return true;
+  }
+  if (A == 0.0) return false;
+  const double disc = B * B - A * C;
+  if (disc < 0.0) return false;
+  s = (-B - std::sqrt(disc)) / A;
+  return s <= 1.0;
+}
+
 /// A start point inside the grown feature counts as a contact at s = 0 when it moves further in
 /// (the particle rests on, or was pushed a little into, the surface), and is put back on it.
 inline void sweep_vertex(const Vec3& v, const Vec3& a, const Vec3& d, double r, SweepHit& best) {
   const Vec3 m = a - v;
   const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - r * r;
   double s;
-  if (C <= 0.0) {
-    if (!(B < 0.0)) return;
-    s = 0.0;
-  } else {
-    if (!(B < 0.0) || A == 0.0) return;
-    const double disc = B * B - A * C;
-    if (disc < 0.0) return;
-    s = (-B - std::sqrt(disc)) / A;
-    if (s > 1.0) return;
-  }
+  if (!first_entry(A, B, C, s)) return;
   if (!(s < best.s)) return;
   const Vec3 p = a + s * d;
   const Vec3 off = p - v;
@@ -58,16 +66,7 @@ inline void sweep_edge(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3
   const Vec3 dp = d - (d.dot(e) / ee) * e;
   const double A = dp.squaredNorm(), B = mp.dot(dp), C = mp.squaredNorm() - r * r;
   double s;
-  if (C <= 0.0) {
-    if (!(B < 0.0)) return;
-    s = 0.0;
-  } else {
-    if (!(B < 0.0) || A == 0.0) return;
-    const double disc = B * B - A * C;
-    if (disc < 0.0) return;
-    s = (-B - std::sqrt(disc)) / A;
-    if (s > 1.0) return;
-  }
+  if (!first_entry(A, B, C, s)) return;
   if (!(s < best.s)) return;
   const Vec3 p = a + s * d;
   const double u = (p - p0).dot(e) / ee;
