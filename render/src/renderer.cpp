@@ -1,4 +1,5 @@
 #include "simreel/render/renderer.hpp"
+#include "simreel/render/scene_list.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -1278,6 +1279,20 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
       out[11] = 0.f;
     }
   }
+}
+
+void Renderer::apply(const SceneList& list) {
+  for (const SceneList::Added& a : list.added) {
+    if (const auto* plane = std::get_if<PlaneDesc>(&a.desc)) add_plane(a.key, *plane);
+    else if (const auto* box = std::get_if<BoxDesc>(&a.desc)) add_box(a.key, *box);
+    else add_mesh(a.key, std::get<MeshDesc>(a.desc));
+    if (a.has_transform) set_transform(a.key, a.translation, a.rotation);
+  }
+  for (const SceneList::Moved& m : list.moved) set_transform(m.key, m.translation, m.rotation);
+  for (const ObjectKey key : list.removed) remove(key);
+  for (const SceneList::Particles& p : list.particles) set_particles(p.key, p.batch);
+  for (const SceneList::MeshVertices& m : list.meshes) update_mesh(m.key, m.positions, m.normals);
+  if (list.camera) set_camera(*list.camera);
 }
 
 void Renderer::remove(ObjectKey key) {

@@ -115,6 +115,8 @@ struct ParticleBatch {
   float streak_s = 0.02f;  ///< (s) streak length per unit speed: a streak covers velocity x streak_s
 };
 
+struct SceneList;  // scene_list.hpp
+
 class Renderer {
  public:
   /// The context must be current on this thread and outlive the renderer. @throws ContextError
@@ -155,6 +157,10 @@ class Renderer {
   ///         holds a mesh.
   void set_particles(ObjectKey key, const ParticleBatch& batch);
   void remove(ObjectKey key);  ///< unknown keys are ignored
+  /// Applies one frame's SceneList (scene_list.hpp) in its order: added (add_* and
+  /// set_transform), moved (set_transform), removed (remove), particles (set_particles), meshes
+  /// (update_mesh), camera (set_camera). @throws what those calls throw.
+  void apply(const SceneList& list);
 
   /// Draws the frame and reads it back: RGBA8, rows top to bottom, alpha 255.
   /// @throws ContextError if OpenGL reports an error.

@@ -1,0 +1,53 @@
+#pragma once
+/// @file atomic_file.hpp
+/// The one way simreel writes a file: to a temporary name in the target's directory, flushed and
+/// fsync'ed, then renamed over the final name. A reader (or a crash, a full disk, a Ctrl-C) never
+/// sees a half-written file under the final name. Used by every writer: PNG frames, contact
+/// sheets, videos (ffmpeg writes the temporary), CSV exports and golden JSON.
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace simreel::render {
+
+/// A file being written atomically. The temporary is `.NAME.tmp-PID-TID` beside the final path
+/// (same directory, so the rename cannot cross file systems). Destroying an AtomicFile that was
+/// not committed removes the temporary; the final name is never touched.
+class AtomicFile {
+ public:
+  /// Creates the parent directory if missing and opens the temporary for writing.
+  /// @throws IoError naming `path` and the system's reason.
+  explicit AtomicFile(std::filesystem::path path);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  /// The open temporary (for writers that need a FILE*, e.g. libpng); null after commit/discard.
+  [[nodiscard]] std::FILE* file() const { return file_; }
+  /// The temporary's path (for a child process that writes it, e.g. ffmpeg).
+  [[nodiscard]] const std::filesystem::path& temporary() const { return tmp_; }
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+
+  /// Appends bytes. @throws IoError naming the final path (e.g. disk full).
+  void write(std::string_view bytes);
+  /// Flushes, fsyncs and closes the temporary, then renames it to the final name.
+  /// @throws IoError naming the final path; the temporary is removed.
+  void commit();
+  /// For a temporary written by another process (ffmpeg): call commit() after it exited; the
+  /// FILE* this object opened is closed first.
+  /// Removes the temporary; never throws.
+  void discard() noexcept;
+
+ private:
+  std::filesystem::path path_;
+  std::filesystem::path tmp_;
+  std::FILE* file_ = nullptr;
+  bool done_ = false;
+};
+
+/// Writes `bytes` to `path` atomically (AtomicFile). @throws IoError naming the path.
+void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
+
+}  // namespace simreel::render
