@@ -48,8 +48,8 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   sim::Vec3 gravity{0, 0, -9.81};
   if (const json* sim_j = object_member(r, "simulation")) {
     ObjectReader s(*sim_j, r.pointer("simulation"), file, errors);
-    scene.world.max_step = s.number("max_step", scene.world.max_step, 0.0, 1.0, true);
-    scene.world.contact_speed = s.number("contact_speed", scene.world.contact_speed, 0.0, kInf);
+    scene.world.max_step = s.number("max_step", scene.world.max_step, sim::ranges::kWorldMaxStep);
+    scene.world.contact_speed = s.number("contact_speed", scene.world.contact_speed, sim::ranges::kWorldContactSpeed);
     gravity = to_vec(s.vec3("gravity", {0, 0, -9.81}));
     scene.world.threads = int(s.integer("threads", 0, 0, 1024));
     s.finish();

@@ -11,8 +11,8 @@ sim::SpringParams spring_params(ObjectReader& r, const std::string& key, sim::Sp
   const json* v = object_member(r, key);
   if (!v) return fallback;
   ObjectReader o(*v, r.pointer(key), r.file(), r.errors());
-  fallback.stiffness = o.number("stiffness", fallback.stiffness, 0.0, kInf);
-  fallback.damping = o.number("damping", fallback.damping, 0.0, kInf);
+  fallback.stiffness = o.number("stiffness", fallback.stiffness, ranges::kClothStiffness);
+  fallback.damping = o.number("damping", fallback.damping, ranges::kClothSpringDamping);
   o.finish();
   return fallback;
 }
@@ -25,10 +25,10 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   sim::ClothDef& d = c.def;
   ObjectReader r(j, ptr, file, errors);
   d.name = r.string("name", "cloth" + std::to_string(index));
-  d.rows = std::size_t(r.integer("rows", 16, 1, 1024));
-  d.columns = std::size_t(r.integer("columns", 16, 1, 1024));
+  d.rows = std::size_t(r.integer("rows", 16, ranges::kClothGrid));
+  d.columns = std::size_t(r.integer("columns", 16, ranges::kClothGrid));
   if (d.rows * d.columns < 2) r.error_at(r.pointer("rows"), "expected rows * columns >= 2");
-  const auto size = r.numbers("size_m", {1.0, 1.0}, 2, 0.0, kInf, true);
+  const auto size = r.numbers("size_m", {1.0, 1.0}, 2, ranges::kClothSize);
   d.width = size[0];
   d.height = size[1];
   if (r.has("mass") && r.has("areal_density"))
@@ -36,7 +36,7 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   if (r.has("areal_density"))
     d.mass = r.number("areal_density", 0.2, 0.0, kInf, true) * d.width * d.height;
   else
-    d.mass = r.number("mass", 0.2, 0.0, kInf, true);
+    d.mass = r.number("mass", 0.2, ranges::kClothMass);
   d.transform.translation = to_vec(r.vec3("position", {0, 0, 1}));
   d.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
   if (const json* pins = r.get("pins")) {
@@ -72,32 +72,32 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   d.stretch = spring_params(r, "stretch", d.stretch);
   d.shear = spring_params(r, "shear", d.shear);
   d.bend = spring_params(r, "bend", d.bend);
-  d.max_strain = r.number("max_strain", d.max_strain, 0.0, kInf);
+  d.max_strain = r.number("max_strain", d.max_strain, ranges::kClothMaxStrain);
   const std::string integ = r.choice("integrator", "implicit_euler",
                                      {"implicit_euler", "semi_implicit_euler", "explicit_euler"});
   d.integrator = integ == "semi_implicit_euler" ? sim::ClothIntegrator::semi_implicit_euler
                  : integ == "explicit_euler"    ? sim::ClothIntegrator::explicit_euler
                                                 : sim::ClothIntegrator::implicit_euler;
-  d.damping = r.number("damping", d.damping, 0.0, kInf);
+  d.damping = r.number("damping", d.damping, ranges::kClothDamping);
   if (const json* w = object_member(r, "wind")) {
     ObjectReader o(*w, r.pointer("wind"), file, errors);
     d.wind.velocity = to_vec(o.vec3("velocity", {0, 0, 0}));
-    d.wind.gust_amplitude = o.number("gust_amplitude", d.wind.gust_amplitude, 0.0, kInf);
-    d.wind.gust_frequency = o.number("gust_frequency", d.wind.gust_frequency, 0.0, kInf, true);
+    d.wind.gust_amplitude = o.number("gust_amplitude", d.wind.gust_amplitude, ranges::kClothGustAmplitude);
+    d.wind.gust_frequency = o.number("gust_frequency", d.wind.gust_frequency, ranges::kClothGustFrequency);
     o.finish();
   }
   if (const json* a = object_member(r, "aero")) {
     ObjectReader o(*a, r.pointer("aero"), file, errors);
-    d.aero.drag_coefficient = o.number("drag_coefficient", d.aero.drag_coefficient, 0.0, kInf);
-    d.aero.lift_coefficient = o.number("lift_coefficient", d.aero.lift_coefficient, 0.0, kInf);
-    d.aero.air_density = o.number("air_density", d.aero.air_density, 0.0, kInf);
+    d.aero.drag_coefficient = o.number("drag_coefficient", d.aero.drag_coefficient, ranges::kClothAero);
+    d.aero.lift_coefficient = o.number("lift_coefficient", d.aero.lift_coefficient, ranges::kClothAero);
+    d.aero.air_density = o.number("air_density", d.aero.air_density, ranges::kClothAero);
     o.finish();
   }
-  d.thickness = r.number("thickness", d.thickness, 0.0, kInf);
-  d.friction = r.number("friction", d.friction, 0.0, kInf);
+  d.thickness = r.number("thickness", d.thickness, ranges::kClothThickness);
+  d.friction = r.number("friction", d.friction, ranges::kClothFriction);
   d.collide = r.boolean("collide", d.collide);
   d.collide_particles = r.boolean("collide_particles", d.collide_particles);
-  d.restitution = r.number("restitution", d.restitution, 0.0, 1.0);
+  d.restitution = r.number("restitution", d.restitution, ranges::kClothRestitution);
   d.gravity = gravity;
   const auto color = r.color("color", {0.75, 0.12, 0.12, 1});
   c.color = {float(color[0]), float(color[1]), float(color[2]), float(color[3])};

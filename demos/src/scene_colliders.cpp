@@ -20,12 +20,12 @@ void hit_action(ObjectReader& r, const std::string& split_key, sim::Material& m)
   if (const json* sp = object_member(r, split_key)) {
     ObjectReader o(*sp, r.pointer(split_key), r.file(), r.errors());
     sim::SplitOnHit& x = m.split;
-    x.count = int(o.integer("count", x.count, 0, 64));
-    x.speed_fraction = o.number("speed_fraction", x.speed_fraction, 0.0, kInf);
-    x.size_fraction = o.number("size_fraction", x.size_fraction, 0.0, 1.0, true);
-    x.lifetime = o.number("lifetime", x.lifetime, 0.0, kInf, true);
-    x.spread_deg = o.number("spread_deg", x.spread_deg, 0.0, 90.0);
-    x.min_radius = o.number("min_radius", x.min_radius, 0.0, kInf);
+    x.count = int(o.integer("count", x.count, ranges::kHitSplitCount));
+    x.speed_fraction = o.number("speed_fraction", x.speed_fraction, ranges::kHitSplitSpeedFraction);
+    x.size_fraction = o.number("size_fraction", x.size_fraction, ranges::kHitSplitSizeFraction);
+    x.lifetime = o.number("lifetime", x.lifetime, ranges::kHitSplitLifetime);
+    x.spread_deg = o.number("spread_deg", x.spread_deg, ranges::kHitSplitSpreadDeg);
+    x.min_radius = o.number("min_radius", x.min_radius, ranges::kHitSplitMinRadius);
     o.finish();
   }
 }
@@ -34,8 +34,8 @@ void hit_action(ObjectReader& r, const std::string& split_key, sim::Material& m)
 /// from its "collider" sub-object.
 sim::Material material(ObjectReader& r) {
   sim::Material m;
-  m.restitution = r.number("restitution", m.restitution, 0.0, 1.0);
-  m.friction = r.number("friction", m.friction, 0.0, kInf);
+  m.restitution = r.number("restitution", m.restitution, ranges::kRestitution);
+  m.friction = r.number("friction", m.friction, ranges::kFriction);
   if (r.has("static_friction")) m.static_friction = r.number("static_friction", 0.0, 0.0, kInf);
   hit_action(r, "split", m);
   return m;
@@ -88,22 +88,22 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
     c.type = ColliderScene::Type::box;
     c.box.transform.translation = to_vec(r.vec3("position", {0, 0, 0}));
     c.box.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
-    const auto he = r.numbers("half_extents", {0.5, 0.5, 0.5}, 3, 0.0, kInf, true);
+    const auto he = r.numbers("half_extents", {0.5, 0.5, 0.5}, 3, ranges::kColliderSize);
     c.box.half_extents = {he[0], he[1], he[2]};
     c.box.material = collider_material(r);
     c.box.path = keyframe_path(r, "path");
   } else if (type == "sphere") {
     c.type = ColliderScene::Type::sphere;
     c.sphere.transform.translation = to_vec(r.vec3("position", {0, 0, 0}));
-    c.sphere.radius = r.number("radius", 0.5, 0.0, kInf, true);
+    c.sphere.radius = r.number("radius", 0.5, ranges::kColliderSize);
     c.sphere.material = collider_material(r);
     c.sphere.path = keyframe_path(r, "path");
   } else if (type == "cylinder") {
     c.type = ColliderScene::Type::cylinder;
     c.cylinder.transform.translation = to_vec(r.vec3("position", {0, 0, 0}));
     c.cylinder.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
-    c.cylinder.radius = r.number("radius", 0.5, 0.0, kInf, true);
-    c.cylinder.half_height = r.number("half_height", 0.5, 0.0, kInf, true);
+    c.cylinder.radius = r.number("radius", 0.5, ranges::kColliderSize);
+    c.cylinder.half_height = r.number("half_height", 0.5, ranges::kColliderSize);
     c.cylinder.material = collider_material(r);
     c.cylinder.path = keyframe_path(r, "path");
   } else if (type == "mesh") {

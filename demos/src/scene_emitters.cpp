@@ -21,13 +21,13 @@ void emitter_shape(ObjectReader& r, sim::EmitterDef& em) {
       {"cube", sim::EmitterShape::cube}};
   for (const auto& [name, value] : shapes)
     if (shape == name) em.shape = value;
-  em.disk_radius = r.number("disk_radius", em.disk_radius, 0.0, kInf, true);
-  const auto qs = r.numbers("quad_size", {em.quad_size[0], em.quad_size[1]}, 2, 0.0, kInf, true);
+  em.disk_radius = r.number("disk_radius", em.disk_radius, ranges::kEmitterSize);
+  const auto qs = r.numbers("quad_size", {em.quad_size[0], em.quad_size[1]}, 2, ranges::kEmitterSize);
   em.quad_size = {qs[0], qs[1]};
-  em.sphere_radius = r.number("sphere_radius", em.sphere_radius, 0.0, kInf, true);
-  const auto bs = r.numbers("box_size", {em.box_size[0], em.box_size[1], em.box_size[2]}, 3, 0.0, kInf, true);
+  em.sphere_radius = r.number("sphere_radius", em.sphere_radius, ranges::kEmitterSize);
+  const auto bs = r.numbers("box_size", {em.box_size[0], em.box_size[1], em.box_size[2]}, 3, ranges::kEmitterSize);
   em.box_size = {bs[0], bs[1], bs[2]};
-  em.cube_size = r.number("cube_size", em.cube_size, 0.0, kInf, true);
+  em.cube_size = r.number("cube_size", em.cube_size, ranges::kEmitterSize);
   const std::string mesh_file = r.string("mesh_file", "");
   if (em.shape != sim::EmitterShape::mesh) {
     if (!mesh_file.empty()) r.error_at(r.pointer("mesh_file"), "expected \"mesh_file\" only with \"shape\": \"mesh\"");
@@ -64,10 +64,10 @@ void emitter_extras(ObjectReader& r, sim::EmitterDef& em) {
         }
         ObjectReader br((*bursts)[i], bp, r.file(), r.errors());
         sim::Burst b;
-        b.time = br.number("time", 0.0, 0.0, kInf);
+        b.time = br.number("time", 0.0, ranges::kBurstTime);
         if (!br.has("count")) br.error_at(bp, "expected a \"count\" (particles per burst)");
         b.count = std::size_t(br.integer("count", 0, 0, 50'000'000));
-        b.repeat_interval = br.number("repeat_interval", 0.0, 0.0, kInf);
+        b.repeat_interval = br.number("repeat_interval", 0.0, ranges::kBurstRepeatInterval);
         b.cycles = std::size_t(br.integer("cycles", 1, 0, 1'000'000'000));
         if (b.cycles == 0 && !(b.repeat_interval > 0.0))
           br.error_at(br.pointer("cycles"), "expected cycles >= 1, or a repeat_interval > 0 for cycles 0 (forever)");
@@ -76,8 +76,8 @@ void emitter_extras(ObjectReader& r, sim::EmitterDef& em) {
       }
     }
   }
-  em.inherit_velocity = r.number("inherit_velocity", 0.0, 0.0, 1.0);
-  em.color_deviation = r.number("color_deviation", 0.0, 0.0, kInf);
+  em.inherit_velocity = r.number("inherit_velocity", 0.0, ranges::kEmitterInheritVelocity);
+  em.color_deviation = r.number("color_deviation", 0.0, ranges::kEmitterColorDeviation);
   if (const json* keys = r.get("size_over_lifetime")) {
     if (!keys->is_array() || keys->empty()) {
       r.error("size_over_lifetime", "a non-empty array of {\"t\": 0..1, \"size\": factor >= 0}", *keys);
@@ -90,8 +90,8 @@ void emitter_extras(ObjectReader& r, sim::EmitterDef& em) {
         }
         ObjectReader kr((*keys)[i], kp, r.file(), r.errors());
         sim::SizeKey key;
-        key.t = kr.number("t", 0.0, 0.0, 1.0);
-        key.size = kr.number("size", 1.0, 0.0, kInf);
+        key.t = kr.number("t", 0.0, ranges::kSizeKeyT);
+        key.size = kr.number("size", 1.0, ranges::kSizeKeySize);
         if (!em.size_over_lifetime.empty() && key.t < em.size_over_lifetime.back().t)
           kr.error_at(kr.pointer("t"), "expected keys in increasing t");
         kr.finish();
@@ -103,14 +103,14 @@ void emitter_extras(ObjectReader& r, sim::EmitterDef& em) {
     ObjectReader o(*sj, r.pointer("split"), r.file(), r.errors());
     sim::SplitDef& sp = em.split;
     sp.enabled = o.boolean("enabled", true);
-    sp.children = std::size_t(o.integer("children", long(sp.children), 1, 1'000'000));
-    sp.age = o.number("age", sp.age, 0.0, kInf);
-    sp.delay_steps = std::size_t(o.integer("delay_steps", long(sp.delay_steps), 1, 1'000'000));
-    sp.depth = std::size_t(o.integer("depth", long(sp.depth), 1, 32));
-    sp.velocity_fraction = o.number("velocity_fraction", sp.velocity_fraction, 0.0, kInf);
-    sp.direction_deviation_deg = o.number("direction_deviation_deg", sp.direction_deviation_deg, 0.0, 180.0);
-    sp.size_fraction = o.number("size_fraction", sp.size_fraction, 0.0, kInf, true);
-    sp.lifetime_deviation = o.number("lifetime_deviation", sp.lifetime_deviation, 0.0, kInf);
+    sp.children = std::size_t(o.integer("children", long(sp.children), ranges::kSplitChildren));
+    sp.age = o.number("age", sp.age, ranges::kSplitAge);
+    sp.delay_steps = std::size_t(o.integer("delay_steps", long(sp.delay_steps), ranges::kSplitDelaySteps));
+    sp.depth = std::size_t(o.integer("depth", long(sp.depth), ranges::kSplitDepth));
+    sp.velocity_fraction = o.number("velocity_fraction", sp.velocity_fraction, ranges::kSplitVelocityFraction);
+    sp.direction_deviation_deg = o.number("direction_deviation_deg", sp.direction_deviation_deg, ranges::kSplitDirectionDeviationDeg);
+    sp.size_fraction = o.number("size_fraction", sp.size_fraction, ranges::kSplitSizeFraction);
+    sp.lifetime_deviation = o.number("lifetime_deviation", sp.lifetime_deviation, ranges::kSplitLifetimeDeviation);
     o.finish();
   }
 }
@@ -132,7 +132,7 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
     dir = sim::Vec3::UnitZ();
   }
   em.transform.rotation = sim::Quat::FromTwoVectors(sim::Vec3::UnitZ(), dir.normalized());
-  em.rate = r.number("rate", em.rate, 0.0, 1e9);
+  em.rate = r.number("rate", em.rate, ranges::kEmitterRate);
   em.start_time = r.number("start_time", 0.0, 0.0, kInf);
   em.stop_time = r.number("stop_time", 1e300, 0.0, kInf);
   em.lifetime = distribution(r, "lifetime", em.lifetime, 0.0, kInf, "s");
@@ -142,7 +142,7 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   if (em.mass.mean <= 0.0) r.error_at(r.pointer("mass"), "expected a mean mass > 0 kg");
   em.radius = distribution(r, "particle_radius", em.radius, 0.0, kInf, "m");
   if (em.radius.mean <= 0.0) r.error_at(r.pointer("particle_radius"), "expected a mean radius > 0 m");
-  em.max_particles = std::size_t(r.integer("max_particles", 100000, 1, 50'000'000));
+  em.max_particles = std::size_t(r.integer("max_particles", 100000, ranges::kEmitterMaxParticles));
 
   if (r.has("color") && r.has("color_over_lifetime"))
     r.error_at(ptr, "expected either \"color\" or \"color_over_lifetime\", not both");
@@ -175,7 +175,7 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   em.path = keyframe_path(r, "path");
   emitter_extras(r, em);
   s.gravity = to_vec(r.vec3("gravity", {gravity.x(), gravity.y(), gravity.z()}));
-  s.drag = r.number("drag", 0.0, 0.0, kInf);
+  s.drag = r.number("drag", 0.0, ranges::kSystemDrag);
   particle_forces(r, s);  // integrator, tolerance, charge, pair_forces, initial_particles, springs
   s.collide = r.boolean("collide", true);
   // Particle–particle collisions (Coutinho §2.3.1, §3.6.1–3.6.2).

@@ -13,14 +13,14 @@ void particle_forces(ObjectReader& r, sim::ParticleSystemDef& s) {
                                            sim::Integrator::implicit_euler, sim::Integrator::adaptive};
   const std::string in = r.choice("integrator", "semi_implicit_euler", names);
   s.integrator = values[std::find(names.begin(), names.end(), in) - names.begin()];
-  s.tolerance = r.number("tolerance", s.tolerance, 0.0, kInf, true);
+  s.tolerance = r.number("tolerance", s.tolerance, ranges::kSystemTolerance);
   s.charge = distribution(r, "charge", s.charge, -kInf, kInf, "C");
   if (const json* pj = object_member(r, "pair_forces")) {
     ObjectReader o(*pj, r.pointer("pair_forces"), r.file(), r.errors());
-    s.pair_forces.gravitational_G = o.number("gravitational_G", 0.0, 0.0, kInf);
-    s.pair_forces.coulomb_K = o.number("coulomb_K", 0.0, 0.0, kInf);
-    s.pair_forces.cutoff = o.number("cutoff", 1.0, 0.0, kInf, true);
-    s.pair_forces.softening = o.number("softening", s.pair_forces.softening, 0.0, kInf);
+    s.pair_forces.gravitational_G = o.number("gravitational_G", 0.0, ranges::kPairG);
+    s.pair_forces.coulomb_K = o.number("coulomb_K", 0.0, ranges::kPairK);
+    s.pair_forces.cutoff = o.number("cutoff", 1.0, ranges::kPairCutoff);
+    s.pair_forces.softening = o.number("softening", s.pair_forces.softening, ranges::kPairSoftening);
     o.finish();
   }
   object_array(r, "initial_particles", [&](const json& j, const std::string& p, std::size_t) {
@@ -47,8 +47,8 @@ void particle_forces(ObjectReader& r, sim::ParticleSystemDef& s) {
     sp.a = std::uint64_t(o.integer("a", 0, 0, std::max(0LL, n_init - 1)));
     sp.b = std::uint64_t(o.integer("b", 1, 0, std::max(0LL, n_init - 1)));
     if (sp.a == sp.b && o.has("a")) o.error_at(o.pointer("b"), "expected b different from a");
-    sp.stiffness = o.number("stiffness", sp.stiffness, 0.0, kInf);
-    sp.damping = o.number("damping", sp.damping, 0.0, kInf);
+    sp.stiffness = o.number("stiffness", sp.stiffness, ranges::kSpringStiffness);
+    sp.damping = o.number("damping", sp.damping, ranges::kSpringDamping);
     const json* rl = o.get("rest_length");
     if (rl && rl->is_string() && rl->get<std::string>() == "initial") sp.rest_length = -1.0;
     else if (rl) sp.rest_length = o.number("rest_length", -1.0, 0.0, kInf);
@@ -97,9 +97,9 @@ ForceFieldScene force_field(const json& j, const std::string& ptr, const std::st
                                 : sim::RegionShape::everywhere;
     d.transform.translation = to_vec(o.vec3("center", {0, 0, 0}));
     d.transform.rotation = rotation_from_deg(o.vec3("rotation_deg", {0, 0, 0}));
-    if (d.shape == sim::RegionShape::sphere) d.radius = o.number("radius", 1.0, 0.0, kInf, true);
+    if (d.shape == sim::RegionShape::sphere) d.radius = o.number("radius", 1.0, ranges::kFieldRadius);
     if (d.shape == sim::RegionShape::box) {
-      const auto he = o.numbers("half_extents", {1, 1, 1}, 3, 0.0, kInf, true);
+      const auto he = o.numbers("half_extents", {1, 1, 1}, 3, ranges::kFieldHalfExtent);
       d.half_extents = sim::Vec3(he[0], he[1], he[2]);
     }
     o.finish();
@@ -124,10 +124,10 @@ ForceFieldScene force_field(const json& j, const std::string& ptr, const std::st
       d.inward_strength = r.number("inward_strength", 0.0);
       break;
     case sim::FieldKind::curl_noise:
-      d.amplitude = r.number("amplitude", d.amplitude, 0.0, kInf);
-      d.frequency = r.number("frequency", d.frequency, 0.0, kInf, true);
+      d.amplitude = r.number("amplitude", d.amplitude, ranges::kFieldAmplitude);
+      d.frequency = r.number("frequency", d.frequency, ranges::kFieldFrequency);
       d.scroll = to_vec(r.vec3("scroll", {0, 0, 0}));
-      d.drag = r.number("drag", d.drag, 0.0, kInf);
+      d.drag = r.number("drag", d.drag, ranges::kFieldDrag);
       break;
   }
   f.systems = system_names(r, "systems");
@@ -154,8 +154,8 @@ AttractorSpringScene attractor_spring(const json& j, const std::string& ptr, con
   }
   a.def.anchor = to_vec(r.vec3("anchor", {0, 0, 0}));
   a.def.path = keyframe_path(r, "path");
-  a.def.stiffness = r.number("stiffness", a.def.stiffness, 0.0, kInf);
-  a.def.damping = r.number("damping", a.def.damping, 0.0, kInf);
+  a.def.stiffness = r.number("stiffness", a.def.stiffness, ranges::kAttractorStiffness);
+  a.def.damping = r.number("damping", a.def.damping, ranges::kAttractorDamping);
   r.finish();
   return a;
 }

@@ -24,6 +24,9 @@
 
 namespace simreel::app::scene_read {
 
+/// The ranges written once for the loader and the engine (simreel/sim/ranges.hpp).
+namespace ranges = sim::ranges;
+
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kDeg = std::numbers::pi / 180.0;
 

@@ -82,7 +82,7 @@ sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key) {
       ObjectReader kr(k, kp, r.file(), r.errors());
       sim::Keyframe kf;
       if (!kr.has("time")) kr.error_at(kp, "expected a \"time\" (s)");
-      kf.time = kr.number("time", 0.0, 0.0, kInf);
+      kf.time = kr.number("time", 0.0, ranges::kKeyframeTime);
       kf.position = to_vec(kr.vec3("position", {0, 0, 0}));
       kf.rotation = rotation_from_deg(kr.vec3("rotation_deg", {0, 0, 0}));
       kr.finish();
