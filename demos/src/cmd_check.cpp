@@ -15,10 +15,6 @@
 #include "simreel/render/image_hash.hpp"
 #include "simreel/render/text_overlay.hpp"
 
-#ifndef SIMREEL_VERSION
-#define SIMREEL_VERSION "unknown"
-#endif
-
 namespace simreel::app {
 
 namespace fs = std::filesystem;

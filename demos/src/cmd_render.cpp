@@ -19,10 +19,6 @@
 #include "simreel/render/frame_sink.hpp"
 #include "simreel/render/text_overlay.hpp"
 
-#ifndef SIMREEL_VERSION
-#define SIMREEL_VERSION "unknown"
-#endif
-
 namespace simreel::app {
 
 namespace fs = std::filesystem;

@@ -10,6 +10,11 @@
 #include "json_reader.hpp"
 #include "scene.hpp"
 
+// The build defines it (CMake: the project version); the fallback keeps a bare compile working.
+#ifndef SIMREEL_VERSION
+#define SIMREEL_VERSION "unknown"
+#endif
+
 namespace simreel::app {
 
 /// --frames "N" or "A:B" -> [first, end). @throws SceneError.
