@@ -1,6 +1,6 @@
 #pragma once
 /// @file commands.hpp
-/// The subcommands of the `simreel` program. Each returns the process exit code:
+/// The subcommands of the `simreel` program, one file each (cmd_<name>.cpp). Each returns the process exit code:
 /// 0 ok, 1 runtime failure, 2 bad input or usage. Exceptions are mapped in main.cpp.
 
 #include <optional>
@@ -54,5 +54,9 @@ int simulate_command(const RunOptions& options, const std::string& export_csv);
 int validate_command(const std::string& scene, const std::vector<std::string>& overrides);
 /// algorithm: "phash", "dhash", "chash" or "all" (the three on one line).
 int hash_command(const std::vector<std::string>& images, const std::string& algorithm);
+/// `simreel presets [EFFECT] [--json]`: lists every effect and its knobs with type, default,
+/// range and unit; with --json, prints a ready-to-paste emitter object with every knob at its
+/// default. Returns the exit code (2 for an unknown effect).
+int presets_command(const std::string& effect, bool as_json);
 
 }  // namespace simreel::app

@@ -1,9 +1,6 @@
 #include "effect_scene.hpp"
 
 #include <algorithm>
-#include <iomanip>
-#include <iostream>
-#include <sstream>
 
 #include "simreel/effects/effects.hpp"
 
@@ -33,29 +30,6 @@ json read_knob(ObjectReader& r, const effects::KnobSpec& k) {
     case KnobType::choice: return r.choice(k.name, d.get<std::string>(), k.choices);
   }
   return d;
-}
-
-std::string type_name(KnobType t) {
-  switch (t) {
-    case KnobType::number: return "number";
-    case KnobType::integer: return "integer";
-    case KnobType::boolean: return "boolean";
-    case KnobType::vec2: return "[x, y]";
-    case KnobType::vec3: return "[x, y, z]";
-    case KnobType::color: return "[r, g, b]";
-    case KnobType::choice: return "choice";
-  }
-  return "value";
-}
-
-std::string range_text(const effects::KnobSpec& k) {
-  std::ostringstream s;
-  if (k.type == KnobType::choice) {
-    for (std::size_t i = 0; i < k.choices.size(); ++i) s << (i ? "|" : "") << k.choices[i];
-  } else if (k.type == KnobType::number || k.type == KnobType::integer || k.type == KnobType::vec2) {
-    s << k.min << " .. " << k.max;
-  }
-  return s.str();
 }
 
 }  // namespace
@@ -116,39 +90,6 @@ EffectExpansion expand_effect(const json& j, const std::string& ptr, const std::
   }
   out.force_fields = std::move(d.force_fields);
   return out;
-}
-
-int presets_command(const std::string& effect, bool as_json) {
-  const auto& specs = effects::effect_specs();
-  if (!effect.empty() && !effects::find_effect(effect)) {
-    std::cerr << "simreel: error: unknown effect \"" << effect << "\"; expected one of:";
-    for (const auto& e : specs) std::cerr << " " << e.name;
-    std::cerr << "\n";
-    return 2;
-  }
-  for (const auto& e : specs) {
-    if (!effect.empty() && e.name != effect) continue;
-    if (as_json) {
-      nlohmann::ordered_json o;
-      o["effect"] = e.name;
-      o["name"] = e.name;
-      for (const auto& k : e.knobs) o[k.name] = k.default_value;
-      o["overrides"] = nlohmann::ordered_json::object();
-      std::cout << o.dump(2) << "\n";
-      continue;
-    }
-    std::cout << e.name << " — " << e.book << "\n  " << e.description << "\n";
-    for (const auto& k : e.knobs) {
-      std::cout << "    " << std::left << std::setw(18) << k.name << std::setw(10) << type_name(k.type)
-                << " default " << std::setw(14) << k.default_value.dump();
-      const std::string range = range_text(k);
-      if (!range.empty()) std::cout << " range " << range;
-      if (!k.unit.empty()) std::cout << " (" << k.unit << ")";
-      std::cout << "\n      " << k.description << "\n";
-    }
-    std::cout << "\n";
-  }
-  return 0;
 }
 
 }  // namespace simreel::app

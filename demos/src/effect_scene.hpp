@@ -30,9 +30,4 @@ struct EffectExpansion {
 EffectExpansion expand_effect(const json& j, const std::string& ptr, const std::string& file,
                               std::vector<std::string>& errors, double gravity_z);
 
-/// `simreel presets [EFFECT] [--json]`: lists every effect and its knobs with type, default,
-/// range and unit; with --json, prints a ready-to-paste emitter object with every knob at its
-/// default. Returns the exit code (2 for an unknown effect).
-int presets_command(const std::string& effect, bool as_json);
-
 }  // namespace simreel::app

@@ -12,9 +12,12 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "simreel/sim/ranges.hpp"
 
 namespace simreel::app {
 
@@ -77,6 +80,18 @@ class ObjectReader {
   std::string choice(const std::string& key, const std::string& fallback,
                      const std::vector<std::string>& choices);
   std::array<double, 3> vec3(const std::string& key, std::array<double, 3> fallback);
+  /// The same with a range shared with the engine's validation (simreel/sim/ranges.hpp), so the
+  /// loader and the engine reject the same values; messages are those of the overloads above.
+  double number(const std::string& key, double fallback, const sim::Range& range) {
+    return number(key, fallback, range.min, range.max, range.min_open);
+  }
+  long long integer(const std::string& key, long long fallback, const sim::IntRange& range) {
+    return integer(key, fallback, range.min, range.max);
+  }
+  std::vector<double> numbers(const std::string& key, std::vector<double> fallback, std::size_t count,
+                              const sim::Range& range) {
+    return numbers(key, std::move(fallback), count, range.min, range.max, range.min_open);
+  }
   /// RGB (3 numbers) or RGBA (4 numbers) in [0, 1]; alpha defaults to 1.
   std::array<double, 4> color(const std::string& key, std::array<double, 4> fallback);
   /// Fixed-length array of numbers each in [min, max].

@@ -21,17 +21,13 @@ namespace {
   throw std::invalid_argument(m.str());
 }
 
-void check_nonneg(const std::string& field, double x) {
-  if (!(x >= 0.0) || !std::isfinite(x)) bad(field, ">= 0 and finite", x);
-}
-
 void validate(const ClothDef& d) {
-  if (d.rows < 1) bad("rows", ">= 1", double(d.rows));
-  if (d.columns < 1) bad("columns", ">= 1", double(d.columns));
+  require_in((long long)d.rows, ranges::kClothGrid, "ClothDef.rows");
+  require_in((long long)d.columns, ranges::kClothGrid, "ClothDef.columns");
   if (d.rows * d.columns < 2) bad("rows * columns", ">= 2", double(d.rows * d.columns));
-  if (!(d.width > 0.0) || !std::isfinite(d.width)) bad("width", "> 0 and finite", d.width);
-  if (!(d.height > 0.0) || !std::isfinite(d.height)) bad("height", "> 0 and finite", d.height);
-  if (!(d.mass > 0.0) || !std::isfinite(d.mass)) bad("mass", "> 0 and finite", d.mass);
+  require_in(d.width, ranges::kClothSize, "ClothDef.width");
+  require_in(d.height, ranges::kClothSize, "ClothDef.height");
+  require_in(d.mass, ranges::kClothMass, "ClothDef.mass");
   if (!d.transform.translation.allFinite() || !d.transform.rotation.coeffs().allFinite() ||
       d.transform.rotation.norm() == 0.0)
     throw std::invalid_argument("ClothDef.transform must be finite with a non-zero rotation");
@@ -45,25 +41,24 @@ void validate(const ClothDef& d) {
     }
     detail::validate(p.path, "ClothDef.pins[" + std::to_string(i) + "].path");
   }
-  check_nonneg("stretch.stiffness", d.stretch.stiffness);
-  check_nonneg("stretch.damping", d.stretch.damping);
-  check_nonneg("shear.stiffness", d.shear.stiffness);
-  check_nonneg("shear.damping", d.shear.damping);
-  check_nonneg("bend.stiffness", d.bend.stiffness);
-  check_nonneg("bend.damping", d.bend.damping);
-  if (!(d.max_strain >= 0.0)) bad("max_strain", ">= 0 (infinity disables)", d.max_strain);
+  require_in(d.stretch.stiffness, ranges::kClothStiffness, "ClothDef.stretch.stiffness");
+  require_in(d.stretch.damping, ranges::kClothSpringDamping, "ClothDef.stretch.damping");
+  require_in(d.shear.stiffness, ranges::kClothStiffness, "ClothDef.shear.stiffness");
+  require_in(d.shear.damping, ranges::kClothSpringDamping, "ClothDef.shear.damping");
+  require_in(d.bend.stiffness, ranges::kClothStiffness, "ClothDef.bend.stiffness");
+  require_in(d.bend.damping, ranges::kClothSpringDamping, "ClothDef.bend.damping");
+  require_in(d.max_strain, ranges::kClothMaxStrain, "ClothDef.max_strain");
   if (!d.gravity.allFinite()) throw std::invalid_argument("ClothDef.gravity must be finite");
-  check_nonneg("damping", d.damping);
+  require_in(d.damping, ranges::kClothDamping, "ClothDef.damping");
   if (!d.wind.velocity.allFinite()) throw std::invalid_argument("ClothDef.wind.velocity must be finite");
-  check_nonneg("wind.gust_amplitude", d.wind.gust_amplitude);
-  if (!(d.wind.gust_frequency > 0.0) || !std::isfinite(d.wind.gust_frequency))
-    bad("wind.gust_frequency", "> 0 and finite", d.wind.gust_frequency);
-  check_nonneg("aero.drag_coefficient", d.aero.drag_coefficient);
-  check_nonneg("aero.lift_coefficient", d.aero.lift_coefficient);
-  check_nonneg("aero.air_density", d.aero.air_density);
-  check_nonneg("thickness", d.thickness);
-  check_nonneg("friction", d.friction);
-  if (!(d.restitution >= 0.0 && d.restitution <= 1.0)) bad("restitution", "in [0, 1]", d.restitution);
+  require_in(d.wind.gust_amplitude, ranges::kClothGustAmplitude, "ClothDef.wind.gust_amplitude");
+  require_in(d.wind.gust_frequency, ranges::kClothGustFrequency, "ClothDef.wind.gust_frequency");
+  require_in(d.aero.drag_coefficient, ranges::kClothAero, "ClothDef.aero.drag_coefficient");
+  require_in(d.aero.lift_coefficient, ranges::kClothAero, "ClothDef.aero.lift_coefficient");
+  require_in(d.aero.air_density, ranges::kClothAero, "ClothDef.aero.air_density");
+  require_in(d.thickness, ranges::kClothThickness, "ClothDef.thickness");
+  require_in(d.friction, ranges::kClothFriction, "ClothDef.friction");
+  require_in(d.restitution, ranges::kClothRestitution, "ClothDef.restitution");
   if (!(d.cg_tolerance > 0.0) || !std::isfinite(d.cg_tolerance))
     bad("cg_tolerance", "> 0 and finite", d.cg_tolerance);
   if (d.cg_max_iterations < 1) bad("cg_max_iterations", ">= 1", double(d.cg_max_iterations));

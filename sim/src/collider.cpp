@@ -774,31 +774,20 @@ void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
 // Validation
 
 void validate(const Material& m, const std::string& what) {
-  if (!(m.restitution >= 0.0 && m.restitution <= 1.0)) {
-    std::ostringstream msg;
-    msg << what << ".restitution must be in [0, 1] (got " << m.restitution << ")";
-    throw std::invalid_argument(msg.str());
-  }
-  if (!(m.friction >= 0.0) || !std::isfinite(m.friction)) {
-    std::ostringstream msg;
-    msg << what << ".friction must be >= 0 and finite (got " << m.friction << ")";
-    throw std::invalid_argument(msg.str());
-  }
+  require_in(m.restitution, ranges::kRestitution, what + ".restitution");
+  require_in(m.friction, ranges::kFriction, what + ".friction");
   if (!std::isfinite(m.static_friction)) {
     std::ostringstream msg;
     msg << what << ".static_friction must be finite (got " << m.static_friction << ")";
     throw std::invalid_argument(msg.str());
   }
   const SplitOnHit& sp = m.split;
-  if (!(sp.count >= 0 && sp.count <= 64) || !(sp.speed_fraction >= 0.0) ||
-      !std::isfinite(sp.speed_fraction) || !(sp.size_fraction > 0.0 && sp.size_fraction <= 1.0) ||
-      !(sp.lifetime > 0.0) || !std::isfinite(sp.lifetime) ||
-      !(sp.spread_deg >= 0.0 && sp.spread_deg <= 90.0) || !(sp.min_radius >= 0.0)) {
-    std::ostringstream msg;
-    msg << what << ".split: expected count in [0, 64], speed_fraction >= 0, size_fraction in "
-        << "(0, 1], lifetime > 0, spread_deg in [0, 90], min_radius >= 0";
-    throw std::invalid_argument(msg.str());
-  }
+  require_in((long long)sp.count, ranges::kHitSplitCount, what + ".split.count");
+  require_in(sp.speed_fraction, ranges::kHitSplitSpeedFraction, what + ".split.speed_fraction");
+  require_in(sp.size_fraction, ranges::kHitSplitSizeFraction, what + ".split.size_fraction");
+  require_in(sp.lifetime, ranges::kHitSplitLifetime, what + ".split.lifetime");
+  require_in(sp.spread_deg, ranges::kHitSplitSpreadDeg, what + ".split.spread_deg");
+  require_in(sp.min_radius, ranges::kHitSplitMinRadius, what + ".split.min_radius");
 }
 
 void validate(const PlaneDef& def) {
@@ -810,13 +799,8 @@ void validate(const PlaneDef& def) {
 }
 
 void validate(const BoxDef& def) {
-  if (!(def.half_extents.minCoeff() > 0.0) || !def.half_extents.allFinite()) {
-    std::ostringstream msg;
-    msg << "BoxDef.half_extents must be > 0 and finite on every axis (got ("
-        << def.half_extents.x() << ", " << def.half_extents.y() << ", " << def.half_extents.z()
-        << "))";
-    throw std::invalid_argument(msg.str());
-  }
+  for (int k = 0; k < 3; ++k)
+    require_in(def.half_extents[k], ranges::kColliderSize, "BoxDef.half_extents[" + std::to_string(k) + "]");
   if (!def.transform.translation.allFinite() || !def.transform.rotation.coeffs().allFinite() ||
       !(def.transform.rotation.norm() > 1e-12))
     throw std::invalid_argument(

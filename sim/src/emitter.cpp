@@ -400,23 +400,19 @@ void validate(const ParticleSystemDef& def) {
   const std::string sys = "ParticleSystemDef '" + def.name + "'";
   const EmitterDef& e = def.emitter;
   if (!def.gravity.allFinite()) fail(sys + ": gravity must be finite");
-  if (!std::isfinite(def.drag) || def.drag < 0.0) {
-    std::ostringstream m;
-    m << sys << ": drag must be >= 0 and finite (got " << def.drag << ")";
-    fail(m.str());
-  }
+  require_in(def.drag, ranges::kSystemDrag, sys + ": drag");
   if (e.shape == EmitterShape::disk) {
-    positive(e.disk_radius, sys + ": emitter.disk_radius");
+    require_in(e.disk_radius, ranges::kEmitterSize, sys + ": emitter.disk_radius");
   } else if (e.shape == EmitterShape::quad) {
-    positive(e.quad_size[0], sys + ": emitter.quad_size[0]");
-    positive(e.quad_size[1], sys + ": emitter.quad_size[1]");
+    require_in(e.quad_size[0], ranges::kEmitterSize, sys + ": emitter.quad_size[0]");
+    require_in(e.quad_size[1], ranges::kEmitterSize, sys + ": emitter.quad_size[1]");
   } else if (e.shape == EmitterShape::sphere) {
-    positive(e.sphere_radius, sys + ": emitter.sphere_radius");
+    require_in(e.sphere_radius, ranges::kEmitterSize, sys + ": emitter.sphere_radius");
   } else if (e.shape == EmitterShape::box) {
     for (std::size_t k = 0; k < 3; ++k)
-      positive(e.box_size[k], sys + ": emitter.box_size[" + std::to_string(k) + "]");
+      require_in(e.box_size[k], ranges::kEmitterSize, sys + ": emitter.box_size[" + std::to_string(k) + "]");
   } else if (e.shape == EmitterShape::cube) {
-    positive(e.cube_size, sys + ": emitter.cube_size");
+    require_in(e.cube_size, ranges::kEmitterSize, sys + ": emitter.cube_size");
   } else if (e.shape == EmitterShape::mesh) {
     validate_mesh(e, sys);
   } else if (e.shape != EmitterShape::point) {
@@ -426,11 +422,7 @@ void validate(const ParticleSystemDef& def) {
       !(e.transform.rotation.norm() > 1e-12))
     fail(sys + ": emitter.transform must be finite with a non-zero rotation quaternion");
   validate(e.path, sys + ": emitter.path");
-  if (!std::isfinite(e.rate) || e.rate < 0.0) {
-    std::ostringstream m;
-    m << sys << ": emitter.rate must be >= 0 and finite (got " << e.rate << ")";
-    fail(m.str());
-  }
+  require_in(e.rate, ranges::kEmitterRate, sys + ": emitter.rate");
   if (std::isnan(e.start_time) || std::isnan(e.stop_time) || !std::isfinite(e.start_time))
     fail(sys + ": emitter.start_time must be finite and stop_time not NaN");
   if (e.stop_time < e.start_time) {
@@ -461,45 +453,36 @@ void validate(const ParticleSystemDef& def) {
     for (float v : c.rgba)
       if (!std::isfinite(v)) fail(where.str() + ".rgba must be finite");
   }
-  if (e.max_particles == 0) fail(sys + ": emitter.max_particles must be >= 1");
+  require_in((long long)e.max_particles, ranges::kEmitterMaxParticles, sys + ": emitter.max_particles");
   for (std::size_t k = 0; k < e.bursts.size(); ++k) {
     const Burst& b = e.bursts[k];
     const std::string where = sys + ": emitter.bursts[" + std::to_string(k) + "]";
-    if (!std::isfinite(b.time) || b.time < 0.0) fail(where + ".time must be >= 0 and finite");
-    if (!std::isfinite(b.repeat_interval) || b.repeat_interval < 0.0)
-      fail(where + ".repeat_interval must be >= 0 and finite");
+    require_in(b.time, ranges::kBurstTime, where + ".time");
+    require_in(b.repeat_interval, ranges::kBurstRepeatInterval, where + ".repeat_interval");
     if (b.cycles == 0 && !(b.repeat_interval > 0.0))
       fail(where + ": cycles = 0 (forever) needs repeat_interval > 0");
   }
   for (std::size_t k = 0; k < e.size_over_lifetime.size(); ++k) {
     const SizeKey& key = e.size_over_lifetime[k];
     const std::string where = sys + ": emitter.size_over_lifetime[" + std::to_string(k) + "]";
-    if (!(key.t >= 0.0 && key.t <= 1.0)) fail(where + ".t must be in [0, 1]");
+    require_in(key.t, ranges::kSizeKeyT, where + ".t");
     if (k > 0 && key.t < e.size_over_lifetime[k - 1].t)
       fail(where + ".t must not decrease along the curve");
-    if (!(key.size >= 0.0) || !std::isfinite(key.size))
-      fail(where + ".size must be >= 0 and finite");
+    require_in(key.size, ranges::kSizeKeySize, where + ".size");
   }
-  if (!(e.color_deviation >= 0.0) || !std::isfinite(e.color_deviation))
-    fail(sys + ": emitter.color_deviation must be >= 0 and finite");
-  if (!(e.inherit_velocity >= 0.0 && e.inherit_velocity <= 1.0))
-    fail(sys + ": emitter.inherit_velocity must be in [0, 1]");
+  require_in(e.color_deviation, ranges::kEmitterColorDeviation, sys + ": emitter.color_deviation");
+  require_in(e.inherit_velocity, ranges::kEmitterInheritVelocity, sys + ": emitter.inherit_velocity");
   const SplitDef& sp = e.split;
   if (sp.enabled) {
     const std::string where = sys + ": emitter.split.";
-    if (sp.children < 1 || sp.children > 1000000)
-      fail(where + "children must be in [1, 1000000]");
-    if (!(sp.age >= 0.0) || !std::isfinite(sp.age)) fail(where + "age must be >= 0 and finite");
-    if (sp.delay_steps < 1) fail(where + "delay_steps must be >= 1");
-    if (sp.depth < 1 || sp.depth > 32) fail(where + "depth must be in [1, 32]");
-    if (!(sp.velocity_fraction >= 0.0) || !std::isfinite(sp.velocity_fraction))
-      fail(where + "velocity_fraction must be >= 0 and finite");
-    if (!(sp.direction_deviation_deg >= 0.0 && sp.direction_deviation_deg <= 180.0))
-      fail(where + "direction_deviation_deg must be in [0, 180]");
-    if (!(sp.size_fraction > 0.0) || !std::isfinite(sp.size_fraction))
-      fail(where + "size_fraction must be > 0 and finite");
-    if (!(sp.lifetime_deviation >= 0.0) || !std::isfinite(sp.lifetime_deviation))
-      fail(where + "lifetime_deviation must be >= 0 and finite");
+    require_in((long long)sp.children, ranges::kSplitChildren, where + "children");
+    require_in(sp.age, ranges::kSplitAge, where + "age");
+    require_in((long long)sp.delay_steps, ranges::kSplitDelaySteps, where + "delay_steps");
+    require_in((long long)sp.depth, ranges::kSplitDepth, where + "depth");
+    require_in(sp.velocity_fraction, ranges::kSplitVelocityFraction, where + "velocity_fraction");
+    require_in(sp.direction_deviation_deg, ranges::kSplitDirectionDeviationDeg, where + "direction_deviation_deg");
+    require_in(sp.size_fraction, ranges::kSplitSizeFraction, where + "size_fraction");
+    require_in(sp.lifetime_deviation, ranges::kSplitLifetimeDeviation, where + "lifetime_deviation");
   }
 }
 

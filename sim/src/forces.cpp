@@ -11,6 +11,7 @@
 
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/random.hpp"
+#include "simreel/sim/ranges.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -378,7 +379,7 @@ void validate_forces(const ParticleSystemDef& def) {
     default:
       bad(p + "integrator", "one of the Integrator values", double(int(def.integrator)));
   }
-  check_pos(p + "tolerance", def.tolerance);
+  require_in(def.tolerance, ranges::kSystemTolerance, p + "tolerance");
   if (def.initial_particles.size() > def.emitter.max_particles)
     bad(p + "initial_particles.size()", "<= emitter.max_particles",
         double(def.initial_particles.size()));
@@ -398,23 +399,23 @@ void validate_forces(const ParticleSystemDef& def) {
     if (s.a >= def.initial_particles.size()) bad(f + "a", "an index < initial_particles.size() = " + std::to_string(def.initial_particles.size()), double(s.a));
     if (s.b >= def.initial_particles.size() || s.b == s.a)
       bad(f + "b", "an index < " + std::to_string(std::size_t(n)) + " other than a", double(s.b));
-    check_nonneg(f + "stiffness", s.stiffness);
-    check_nonneg(f + "damping", s.damping);
+    require_in(s.stiffness, ranges::kSpringStiffness, f + "stiffness");
+    require_in(s.damping, ranges::kSpringDamping, f + "damping");
     if (!std::isfinite(s.rest_length)) bad(f + "rest_length", "finite (< 0 = initial distance)", s.rest_length);
   }
-  check_nonneg(p + "pair_forces.gravitational_G", def.pair_forces.gravitational_G);
-  check_nonneg(p + "pair_forces.coulomb_K", def.pair_forces.coulomb_K);
-  check_nonneg(p + "pair_forces.softening", def.pair_forces.softening);
-  if (def.pair_forces.enabled()) check_pos(p + "pair_forces.cutoff", def.pair_forces.cutoff);
+  require_in(def.pair_forces.gravitational_G, ranges::kPairG, p + "pair_forces.gravitational_G");
+  require_in(def.pair_forces.coulomb_K, ranges::kPairK, p + "pair_forces.coulomb_K");
+  require_in(def.pair_forces.softening, ranges::kPairSoftening, p + "pair_forces.softening");
+  if (def.pair_forces.enabled()) require_in(def.pair_forces.cutoff, ranges::kPairCutoff, p + "pair_forces.cutoff");
   if (!std::isfinite(def.charge.mean)) bad(p + "charge.mean", "finite", def.charge.mean);
   check_nonneg(p + "charge.deviation", def.charge.deviation);
 }
 
 void validate(const ForceFieldDef& def) {
   const std::string p = "ForceFieldDef.";
-  if (def.shape == RegionShape::sphere) check_pos(p + "radius", def.radius);
+  if (def.shape == RegionShape::sphere) require_in(def.radius, ranges::kFieldRadius, p + "radius");
   if (def.shape == RegionShape::box)
-    for (int k = 0; k < 3; ++k) check_pos(p + "half_extents", def.half_extents[k]);
+    for (int k = 0; k < 3; ++k) require_in(def.half_extents[k], ranges::kFieldHalfExtent, p + "half_extents");
   check_vec(p + "acceleration", def.acceleration);
   check_vec(p + "force", def.force);
   check_vec(p + "scroll", def.scroll);
@@ -425,15 +426,15 @@ void validate(const ForceFieldDef& def) {
   if (def.kind == FieldKind::vortex && !(def.axis.norm() > 1e-12))
     bad(p + "axis", "a non-zero vector", def.axis.norm());
   if (def.kind == FieldKind::curl_noise) {
-    check_pos(p + "frequency", def.frequency);
-    check_nonneg(p + "amplitude", def.amplitude);
-    check_nonneg(p + "drag", def.drag);
+    require_in(def.frequency, ranges::kFieldFrequency, p + "frequency");
+    require_in(def.amplitude, ranges::kFieldAmplitude, p + "amplitude");
+    require_in(def.drag, ranges::kFieldDrag, p + "drag");
   }
 }
 
 void validate(const AttractorSpringDef& def) {
-  check_nonneg("AttractorSpringDef.stiffness", def.stiffness);
-  check_nonneg("AttractorSpringDef.damping", def.damping);
+  require_in(def.stiffness, ranges::kAttractorStiffness, "AttractorSpringDef.stiffness");
+  require_in(def.damping, ranges::kAttractorDamping, "AttractorSpringDef.damping");
   check_vec("AttractorSpringDef.anchor", def.anchor);
 }
 

@@ -121,6 +121,7 @@ void validate(const KeyframePath& path, const std::string& what) {
     where << what << ".keys[" << i << "]";
     if (!std::isfinite(k.time) || !k.position.allFinite() || !k.rotation.coeffs().allFinite())
       throw std::invalid_argument(where.str() + ": time, position and rotation must be finite");
+    require_in(k.time, ranges::kKeyframeTime, where.str() + ".time");
     if (!(k.rotation.norm() > 1e-12))
       throw std::invalid_argument(where.str() + ": rotation quaternion has zero length");
     if (i > 0 && !(k.time > path.keys[i - 1].time)) {

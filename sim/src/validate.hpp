@@ -7,6 +7,7 @@
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/keyframes.hpp"
 #include "simreel/sim/particle_system.hpp"
+#include "simreel/sim/ranges.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace simreel::sim::detail {

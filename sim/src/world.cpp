@@ -25,16 +25,8 @@ namespace simreel::sim {
 namespace detail {
 
 void validate(const WorldDef& def) {
-  if (!(def.max_step > 0.0) || !std::isfinite(def.max_step)) {
-    std::ostringstream m;
-    m << "WorldDef.max_step must be > 0 and finite (got " << def.max_step << ")";
-    throw std::invalid_argument(m.str());
-  }
-  if (!(def.contact_speed >= 0.0) || !std::isfinite(def.contact_speed)) {
-    std::ostringstream m;
-    m << "WorldDef.contact_speed must be >= 0 and finite (got " << def.contact_speed << ")";
-    throw std::invalid_argument(m.str());
-  }
+  require_in(def.max_step, ranges::kWorldMaxStep, "WorldDef.max_step");
+  require_in(def.contact_speed, ranges::kWorldContactSpeed, "WorldDef.contact_speed");
 }
 
 /// One particle system's model (definition) and state (particles, emitter).

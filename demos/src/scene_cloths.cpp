@@ -1,0 +1,109 @@
+// cloths[i] (Coutinho §3.9.2; README "cloths[i]").
+#include <algorithm>
+
+#include "scene_read.hpp"
+
+namespace simreel::app::scene_read {
+
+namespace {
+
+sim::SpringParams spring_params(ObjectReader& r, const std::string& key, sim::SpringParams fallback) {
+  const json* v = object_member(r, key);
+  if (!v) return fallback;
+  ObjectReader o(*v, r.pointer(key), r.file(), r.errors());
+  fallback.stiffness = o.number("stiffness", fallback.stiffness, ranges::kClothStiffness);
+  fallback.damping = o.number("damping", fallback.damping, ranges::kClothSpringDamping);
+  o.finish();
+  return fallback;
+}
+
+}  // namespace
+
+ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
+                 std::vector<std::string>& errors, std::size_t index, const sim::Vec3& gravity) {
+  ClothScene c;
+  sim::ClothDef& d = c.def;
+  ObjectReader r(j, ptr, file, errors);
+  d.name = r.string("name", "cloth" + std::to_string(index));
+  d.rows = std::size_t(r.integer("rows", 16, ranges::kClothGrid));
+  d.columns = std::size_t(r.integer("columns", 16, ranges::kClothGrid));
+  if (d.rows * d.columns < 2) r.error_at(r.pointer("rows"), "expected rows * columns >= 2");
+  const auto size = r.numbers("size_m", {1.0, 1.0}, 2, ranges::kClothSize);
+  d.width = size[0];
+  d.height = size[1];
+  if (r.has("mass") && r.has("areal_density"))
+    r.error_at(r.pointer("areal_density"), "expected either \"mass\" or \"areal_density\", not both");
+  if (r.has("areal_density"))
+    d.mass = r.number("areal_density", 0.2, 0.0, kInf, true) * d.width * d.height;
+  else
+    d.mass = r.number("mass", 0.2, ranges::kClothMass);
+  d.transform.translation = to_vec(r.vec3("position", {0, 0, 1}));
+  d.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
+  if (const json* pins = r.get("pins")) {
+    if (pins->is_string()) {
+      const std::string preset = r.choice("pins", "", {"top_edge", "two_corners", "left_edge", "none"});
+      if (preset == "top_edge")
+        for (std::size_t col = 0; col < d.columns; ++col) d.pins.push_back({0, col, {}});
+      else if (preset == "two_corners")
+        d.pins = {{0, 0, {}}, {0, d.columns - 1, {}}};
+      else if (preset == "left_edge")
+        for (std::size_t row = 0; row < d.rows; ++row) d.pins.push_back({row, 0, {}});
+    } else if (pins->is_array()) {
+      for (std::size_t i = 0; i < pins->size(); ++i) {
+        const std::string pp = r.pointer("pins") + "/" + std::to_string(i);
+        if (!(*pins)[i].is_object()) {
+          r.error_at(pp, "expected an object {\"row\", \"column\", \"path\"?}, found " + describe((*pins)[i]));
+          continue;
+        }
+        ObjectReader pr((*pins)[i], pp, file, errors);
+        sim::ClothPin pin;
+        if (!pr.has("row") || !pr.has("column")) pr.error_at(pp, "expected \"row\" and \"column\"");
+        pin.row = std::size_t(pr.integer("row", 0, 0, std::max<long long>(0, (long long)d.rows - 1)));
+        pin.column = std::size_t(pr.integer("column", 0, 0, std::max<long long>(0, (long long)d.columns - 1)));
+        pin.path = keyframe_path(pr, "path");
+        pr.finish();
+        d.pins.push_back(pin);
+      }
+    } else {
+      r.error("pins", "an array of {\"row\", \"column\", \"path\"?} or one of \"top_edge\", "
+                      "\"two_corners\", \"left_edge\", \"none\"", *pins);
+    }
+  }
+  d.stretch = spring_params(r, "stretch", d.stretch);
+  d.shear = spring_params(r, "shear", d.shear);
+  d.bend = spring_params(r, "bend", d.bend);
+  d.max_strain = r.number("max_strain", d.max_strain, ranges::kClothMaxStrain);
+  const std::string integ = r.choice("integrator", "implicit_euler",
+                                     {"implicit_euler", "semi_implicit_euler", "explicit_euler"});
+  d.integrator = integ == "semi_implicit_euler" ? sim::ClothIntegrator::semi_implicit_euler
+                 : integ == "explicit_euler"    ? sim::ClothIntegrator::explicit_euler
+                                                : sim::ClothIntegrator::implicit_euler;
+  d.damping = r.number("damping", d.damping, ranges::kClothDamping);
+  if (const json* w = object_member(r, "wind")) {
+    ObjectReader o(*w, r.pointer("wind"), file, errors);
+    d.wind.velocity = to_vec(o.vec3("velocity", {0, 0, 0}));
+    d.wind.gust_amplitude = o.number("gust_amplitude", d.wind.gust_amplitude, ranges::kClothGustAmplitude);
+    d.wind.gust_frequency = o.number("gust_frequency", d.wind.gust_frequency, ranges::kClothGustFrequency);
+    o.finish();
+  }
+  if (const json* a = object_member(r, "aero")) {
+    ObjectReader o(*a, r.pointer("aero"), file, errors);
+    d.aero.drag_coefficient = o.number("drag_coefficient", d.aero.drag_coefficient, ranges::kClothAero);
+    d.aero.lift_coefficient = o.number("lift_coefficient", d.aero.lift_coefficient, ranges::kClothAero);
+    d.aero.air_density = o.number("air_density", d.aero.air_density, ranges::kClothAero);
+    o.finish();
+  }
+  d.thickness = r.number("thickness", d.thickness, ranges::kClothThickness);
+  d.friction = r.number("friction", d.friction, ranges::kClothFriction);
+  d.collide = r.boolean("collide", d.collide);
+  d.collide_particles = r.boolean("collide_particles", d.collide_particles);
+  d.restitution = r.number("restitution", d.restitution, ranges::kClothRestitution);
+  d.gravity = gravity;
+  const auto color = r.color("color", {0.75, 0.12, 0.12, 1});
+  c.color = {float(color[0]), float(color[1]), float(color[2]), float(color[3])};
+  c.checker_m = float(r.number("checker_m", 0.0, 0.0, kInf));
+  r.finish();
+  return c;
+}
+
+}  // namespace simreel::app::scene_read

@@ -1,0 +1,150 @@
+#include "scene_list_builder.hpp"
+
+#include "simreel/render/camera_path.hpp"
+#include "simreel/render/mesh.hpp"
+
+namespace simreel::app {
+
+namespace {
+
+/// Renderer material of a collider drawn in its scene colour.
+render::Material collider_material(const ColliderScene& c) {
+  render::Material m;
+  m.base_color = c.color;
+  m.checker_m = c.checker_m;
+  return m;
+}
+
+/// A collider's drawable description (plane, box or mesh).
+std::variant<render::PlaneDesc, render::BoxDesc, render::MeshDesc> collider_desc(const ColliderScene& c) {
+  switch (c.type) {
+    case ColliderScene::Type::plane: {
+      render::PlaneDesc d;
+      d.point = c.plane.point.cast<float>();
+      d.normal = c.plane.normal.normalized().cast<float>();
+      d.half_size = c.draw_half_size;
+      d.color = c.color;
+      d.checker_m = c.checker_m;
+      return d;
+    }
+    case ColliderScene::Type::box: {
+      render::BoxDesc d;
+      d.half_extents = c.box.half_extents.cast<float>();
+      d.color = c.color;
+      return d;
+    }
+    case ColliderScene::Type::sphere: {
+      render::MeshDesc d = render::make_sphere_mesh(float(c.sphere.radius), 48);
+      d.material = collider_material(c);
+      return d;
+    }
+    case ColliderScene::Type::cylinder: {
+      render::MeshDesc d = render::make_cylinder_mesh(float(c.cylinder.radius), float(c.cylinder.half_height), 48);
+      d.material = collider_material(c);
+      return d;
+    }
+    case ColliderScene::Type::mesh: break;
+  }
+  return mesh_desc(c);
+}
+
+/// A cloth as a dynamic two-sided mesh in the world frame; its vertices are replaced every frame.
+render::MeshDesc cloth_desc(const ClothScene& cloth, const sim::ClothView& v) {
+  render::MeshDesc d;
+  d.positions.assign(v.positions, v.positions + 3 * v.vertex_count);
+  d.normals.assign(v.normals, v.normals + 3 * v.vertex_count);
+  // UVs in metres, so checker_m is a cell size on the cloth.
+  d.uvs.resize(2 * v.vertex_count);
+  for (std::size_t k = 0; k < v.vertex_count; ++k) {
+    d.uvs[2 * k] = v.uvs[2 * k] * float(cloth.def.width);
+    d.uvs[2 * k + 1] = v.uvs[2 * k + 1] * float(cloth.def.height);
+  }
+  d.indices.assign(v.triangles, v.triangles + 3 * v.triangle_count);
+  d.material.base_color = cloth.color;
+  d.material.checker_m = cloth.checker_m;
+  d.material.double_sided = true;
+  d.material.specular = 0.08f;
+  d.dynamic = true;
+  return d;
+}
+
+}  // namespace
+
+render::MeshDesc mesh_desc(const ColliderScene& c) {
+  render::MeshDesc d;
+  const assets::TriangleMesh& m = *c.mesh_asset;
+  d.positions.reserve(3 * m.positions.size());
+  d.normals.reserve(3 * m.normals.size());
+  for (const auto& p : m.positions)
+    for (int k = 0; k < 3; ++k) d.positions.push_back(p[k] * float(c.mesh_scale[std::size_t(k)]));
+  // Non-uniform scale: normals transform by the inverse scale (then renormalise).
+  for (const auto& n0 : m.normals) {
+    Eigen::Vector3f n(n0.x() / float(c.mesh_scale[0]), n0.y() / float(c.mesh_scale[1]),
+                      n0.z() / float(c.mesh_scale[2]));
+    n.normalize();
+    d.normals.insert(d.normals.end(), {n.x(), n.y(), n.z()});
+  }
+  for (const auto& uv : m.uvs) d.uvs.insert(d.uvs.end(), {uv.x(), uv.y()});
+  for (const auto& t : m.triangles) d.indices.insert(d.indices.end(), t.begin(), t.end());
+  d.material = collider_material(c);
+  if (!m.materials.empty() && !m.materials[0].texture.empty() && m.materials[0].texture.string()[0] != '*')
+    d.material.texture_path = m.materials[0].texture.string();
+  // Open meshes (a ramp's underside, stairs seen from behind) show their inside faces too.
+  d.material.double_sided = true;
+  return d;
+}
+
+render::SceneList initial_scene_list(const Scene& scene, const SceneWorld& sw) {
+  render::SceneList list;
+  list.added.reserve(scene.colliders.size() + sw.cloths.size());
+  for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
+    const ColliderScene& c = scene.colliders[i];
+    render::SceneList::Added& a = list.added.emplace_back();
+    a.key = sw.colliders[i].id.packed();
+    a.desc = collider_desc(c);
+    if (c.type == ColliderScene::Type::plane) {
+      a.has_transform = false;  // a plane's drawable is already in the world frame
+      continue;
+    }
+    const sim::MovedObject pose = sw.world.pose(sw.colliders[i]);
+    a.translation = pose.translation.cast<float>();
+    a.rotation = pose.rotation.cast<float>();
+  }
+  for (std::size_t i = 0; i < sw.cloths.size(); ++i) {
+    render::SceneList::Added& a = list.added.emplace_back();
+    a.key = sw.cloths[i].id.packed();
+    a.desc = cloth_desc(scene.cloths[i], sw.world.cloth(sw.cloths[i]));
+    a.has_transform = false;  // vertices are given in the world frame
+  }
+  return list;
+}
+
+void append_moved(std::span<const sim::MovedObject> moved, render::SceneList& out) {
+  for (const sim::MovedObject& m : moved) {
+    // removed: enable at merge, once sim::MovedObject has `removed` (the drawable is dropped):
+    // if (m.removed) { out.removed.push_back(m.handle.packed()); continue; }
+    out.moved.push_back({m.handle.packed(), m.translation.cast<float>(), m.rotation.cast<float>()});
+  }
+}
+
+void append_frame(const Scene& scene, const SceneWorld& sw, double t, render::SceneList& out) {
+  for (std::size_t i = 0; i < sw.systems.size(); ++i) {
+    const sim::ParticleView v = sw.world.particles(sw.systems[i]);
+    render::SceneList::Particles& p = out.particles.emplace_back();
+    p.key = sw.systems[i].id.packed();
+    p.batch.count = v.count;
+    p.batch.position = v.position;
+    p.batch.velocity = v.velocity;
+    p.batch.color = v.color;
+    p.batch.radius = v.radius;
+    p.batch.style = scene.emitters[i].style;
+    p.batch.streak_s = scene.emitters[i].streak_s;
+  }
+  for (const sim::ClothHandle& h : sw.cloths) {
+    const sim::ClothView v = sw.world.cloth(h);
+    out.meshes.push_back({h.id.packed(), {v.positions, 3 * v.vertex_count}, {v.normals, 3 * v.vertex_count}});
+  }
+  out.camera = render::camera_at(scene.camera_motion, t);
+}
+
+}  // namespace simreel::app

@@ -1,0 +1,100 @@
+#pragma once
+/// @file scene_read.hpp
+/// The scene loader's readers, one file per object kind (private to demos/; scene.hpp is the
+/// API). Each reader takes the object's JSON, its pointer and the file, appends every problem to
+/// `errors` (file, JSON pointer, found, expected) and returns the object read with defaults.
+///   scene_values.cpp     shared value readers: distributions (Coutinho §3.8), keyframe paths
+///   scene_camera.cpp     "render", "camera" (path / orbit), "light"
+///   scene_colliders.cpp  "colliders" and their response materials (§3.6.1, §3.6.3)
+///   scene_emitters.cpp   "emitters" (§3.8-3.9.1): shape, rate, distributions, colours, split
+///   scene_forces.cpp     per-system forces and integrators, "force_fields", "attractor_springs"
+///                        (§3.3, App. B)
+///   scene_cloths.cpp     "cloths" (§3.9.2)
+///   scene.cpp            scene_from_json (the top level, in file order), load_scene, build_world
+
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "json_reader.hpp"
+#include "scene.hpp"
+
+namespace simreel::app::scene_read {
+
+/// The ranges written once for the loader and the engine (simreel/sim/ranges.hpp).
+namespace ranges = sim::ranges;
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+inline constexpr double kDeg = std::numbers::pi / 180.0;
+
+inline sim::Vec3 to_vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+inline render::Vec3f to_vec3f(const std::array<double, 3>& a) { return {float(a[0]), float(a[1]), float(a[2])}; }
+inline render::Vec3f to_vec3f(const std::array<double, 4>& a) { return {float(a[0]), float(a[1]), float(a[2])}; }
+
+/// rotation_deg = [rx, ry, rz]: rotations about the world x, then y, then z axes (R = Rz Ry Rx).
+sim::Quat rotation_from_deg(const std::array<double, 3>& r);
+
+/// Reads an object member; reports and returns nullptr if present but not an object.
+const json* object_member(ObjectReader& r, const std::string& key);
+
+/// A parameter given as a number (no deviation), {"mean", "deviation", "min", "max"} (Coutinho
+/// §3.8: mean + deviation, drawn from a normal distribution, clamped to [min, max]) or
+/// {"min", "max"} alone: uniform on [min, max]. `unit` is named in messages.
+sim::Distribution distribution(ObjectReader& r, const std::string& key, sim::Distribution fallback,
+                               double min, double max, const std::string& unit);
+
+/// {"loop", "smooth", "keys": [{"time" (s), "position" (m), "rotation_deg"}]}; empty if absent.
+sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key);
+
+/// Calls each(object, pointer, index) for every element of the array r[key]; reports non-arrays
+/// and non-object elements.
+template <class F>
+void object_array(ObjectReader& r, const std::string& key, F&& each) {
+  const json* a = r.get(key);
+  if (!a) return;
+  if (!a->is_array()) {
+    r.error(key, "an array of objects", *a);
+    return;
+  }
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const std::string p = r.pointer(key) + "/" + std::to_string(i);
+    if (!(*a)[i].is_object()) {
+      r.error_at(p, "expected an object, found " + describe((*a)[i]));
+      continue;
+    }
+    each((*a)[i], p, i);
+  }
+}
+
+// scene_camera.cpp: the top-level "render", "camera" and "light" objects, into `scene`.
+void render_settings(ObjectReader& r, Scene& scene);
+void camera(ObjectReader& r, Scene& scene);
+void light(ObjectReader& r, Scene& scene);
+
+// scene_colliders.cpp
+ColliderScene collider(const json& j, const std::string& ptr, const std::string& file,
+                       std::vector<std::string>& errors, std::size_t index);
+/// An emitter's own "on_hit" and its droplets "on_hit_split" (the emitter's "split" key is the
+/// §3.9.1 particle split).
+sim::Material material_hit(ObjectReader& r);
+
+// scene_emitters.cpp; `gravity` (m/s²) is the scene's, the default of the emitter's own.
+EmitterScene emitter(const json& j, const std::string& ptr, const std::string& file,
+                     std::vector<std::string>& errors, std::size_t index, const sim::Vec3& gravity);
+
+// scene_forces.cpp
+/// The emitter-object keys of the force and integrator half of a particle system.
+void particle_forces(ObjectReader& r, sim::ParticleSystemDef& s);
+ForceFieldScene force_field(const json& j, const std::string& ptr, const std::string& file,
+                            std::vector<std::string>& errors);
+AttractorSpringScene attractor_spring(const json& j, const std::string& ptr, const std::string& file,
+                                      std::vector<std::string>& errors);
+
+// scene_cloths.cpp
+ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
+                 std::vector<std::string>& errors, std::size_t index, const sim::Vec3& gravity);
+
+}  // namespace simreel::app::scene_read

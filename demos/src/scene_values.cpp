@@ -1,0 +1,99 @@
+// Value readers shared by the scene loader's readers: rotations, distributions, keyframe paths.
+#include <cmath>
+
+#include "scene_read.hpp"
+
+namespace simreel::app::scene_read {
+
+sim::Quat rotation_from_deg(const std::array<double, 3>& r) {
+  return sim::Quat(Eigen::AngleAxisd(r[2] * kDeg, sim::Vec3::UnitZ()) *
+                   Eigen::AngleAxisd(r[1] * kDeg, sim::Vec3::UnitY()) *
+                   Eigen::AngleAxisd(r[0] * kDeg, sim::Vec3::UnitX()));
+}
+
+const json* object_member(ObjectReader& r, const std::string& key) {
+  const json* v = r.get(key);
+  if (v && !v->is_object()) {
+    r.error(key, "an object", *v);
+    return nullptr;
+  }
+  return v;
+}
+
+sim::Distribution distribution(ObjectReader& r, const std::string& key, sim::Distribution fallback,
+                               double min, double max, const std::string& unit) {
+  const json* v = r.get(key);
+  if (!v) return fallback;
+  const std::string range = std::string(" in [") + (std::isfinite(min) ? std::to_string(min) : "-inf") + ", " +
+                            (std::isfinite(max) ? std::to_string(max) : "inf") + "]";
+  if (v->is_number()) {
+    const double x = r.number(key, fallback.mean, min, max);
+    fallback.mean = x;
+    fallback.deviation = 0.0;
+    return fallback;
+  }
+  if (!v->is_object()) {
+    r.error(key, "a number (" + unit + ") or {\"mean\": ..., \"deviation\": ...}", *v);
+    return fallback;
+  }
+  ObjectReader o(*v, r.pointer(key), r.file(), r.errors());
+  sim::Distribution d = fallback;
+  if (!o.has("mean") && !o.has("deviation") && o.has("min") && o.has("max")) {
+    d.uniform = true;
+    d.min = o.number("min", min, min, max);
+    d.max = o.number("max", max, min, max);
+    if (!std::isfinite(d.min) || !std::isfinite(d.max)) o.error_at(o.pointer(), "expected finite min and max");
+    if (d.min > d.max) o.error_at(o.pointer("min"), "expected min <= max");
+    d.mean = 0.5 * (d.min + d.max);
+    d.deviation = 0.0;
+    o.finish();
+    return d;
+  }
+  if (!o.has("mean"))
+    o.error_at(o.pointer(), "expected a \"mean\" (" + unit +
+                                ") in the distribution, or \"min\" and \"max\" alone for a uniform one");
+  d.mean = o.number("mean", fallback.mean, min, max);
+  d.deviation = o.number("deviation", 0.0, 0.0, kInf);
+  d.min = o.number("min", std::max(min, fallback.min), min, max);
+  d.max = o.number("max", std::min(max, fallback.max), min, max);
+  if (d.min > d.max) o.error_at(o.pointer("min"), "expected min <= max");
+  o.finish();
+  return d;
+}
+
+sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key) {
+  sim::KeyframePath path;
+  const json* v = object_member(r, key);
+  if (!v) return path;
+  ObjectReader o(*v, r.pointer(key), r.file(), r.errors());
+  path.loop = o.boolean("loop", false);
+  path.smooth = o.boolean("smooth", true);
+  const json* keys = o.get("keys");
+  if (!keys || !keys->is_array() || keys->empty()) {
+    o.error("keys", "a non-empty array of {\"time\", \"position\", \"rotation_deg\"}", keys ? *keys : json());
+  } else {
+    for (std::size_t i = 0; i < keys->size(); ++i) {
+      const json& k = (*keys)[i];
+      const std::string kp = o.pointer("keys") + "/" + std::to_string(i);
+      if (!k.is_object()) {
+        o.error_at(kp, "expected an object, found " + describe(k));
+        continue;
+      }
+      ObjectReader kr(k, kp, r.file(), r.errors());
+      sim::Keyframe kf;
+      if (!kr.has("time")) kr.error_at(kp, "expected a \"time\" (s)");
+      kf.time = kr.number("time", 0.0, ranges::kKeyframeTime);
+      kf.position = to_vec(kr.vec3("position", {0, 0, 0}));
+      kf.rotation = rotation_from_deg(kr.vec3("rotation_deg", {0, 0, 0}));
+      kr.finish();
+      if (!path.keys.empty() && !(kf.time > path.keys.back().time))
+        kr.error_at(kr.pointer("time"), "expected times strictly increasing, found " + describe(k.value("time", json())) +
+                                            " after " + describe(json(path.keys.back().time)));
+      path.keys.push_back(kf);
+    }
+  }
+  o.finish();
+  return path;
+}
+
+}  // namespace simreel::app::scene_read
