@@ -4,19 +4,15 @@
 #include <png.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <csetjmp>
 #include <cstdio>
-#include <functional>
-#include <thread>
-#include <string>
+#include <cstring>
 #include <stdexcept>
-#include <system_error>
+#include <string>
 #include <utility>
 #include <vector>
 
-#include <unistd.h>
+#include "simreel/render/atomic_file.hpp"
 
 namespace simreel::render {
 
@@ -74,35 +70,10 @@ void write_png(const fs::path& path, const Image& image, int compression) {
       image.rgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4) {
     throw IoError("cannot write " + path.string() + ": image is empty or its size does not match");
   }
-  // Same directory as the target, so the final rename cannot cross file systems; a dot name so
-  // a half-written file never looks like a frame. The thread id keeps names apart when several
-  // writer threads write into one directory.
-  std::string tmp_name = ".";  // built piecewise: GCC 12 warns falsely on "." + string&&
-  tmp_name += path.filename().string();
-  tmp_name += ".tmp-";
-  tmp_name += std::to_string(static_cast<long>(::getpid()));
-  tmp_name += "-";
-  tmp_name += std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()) % 1000000);
-  const fs::path tmp = path.parent_path() / tmp_name;
-  std::FILE* file = std::fopen(tmp.c_str(), "wb");
-  if (file == nullptr) throw IoError("cannot write " + path.string() + ": " + std::strerror(errno));
-  std::string error = encode_png(file, image, std::clamp(compression, 0, 9));
-  const bool flushed = std::fflush(file) == 0;
-  const int err = errno;
-  if (std::fclose(file) != 0 || !flushed) {
-    if (error.empty()) error = err != 0 ? std::strerror(err) : "write failed";
-  }
-  std::error_code ec;
-  if (!error.empty()) {
-    fs::remove(tmp, ec);
-    throw IoError("cannot write " + path.string() + ": " + error);
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw IoError("cannot write " + path.string() + ": " + ec.message());
-  }
+  AtomicFile file(path);  // a half-written PNG never appears under the final name
+  const std::string error = encode_png(file.file(), image, std::clamp(compression, 0, 9));
+  if (!error.empty()) throw IoError("cannot write " + path.string() + ": " + error);  // discarded
+  file.commit();
 }
 
 Image read_image(const fs::path& path) {
