@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "box_resample.hpp"
 #include "simreel/render/atomic_file.hpp"
 
 namespace simreel::render {
@@ -97,44 +98,13 @@ Image resize_box(const Image& image, int width, int height) {
       image.rgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4) {
     throw std::invalid_argument("resize_box: empty image or target size");
   }
-  // Area weights in units of 1/(dst) source pixels, as in the hashes: exact integers.
-  auto weights = [](int src, int dst) {
-    auto w = std::vector<std::vector<std::pair<int, std::uint32_t>>>(static_cast<std::size_t>(dst));
-    for (int i = 0; i < dst; ++i) {
-      const std::int64_t a = std::int64_t(i) * src;
-      const std::int64_t b = std::int64_t(i + 1) * src;
-      for (int j = int(a / dst); j < src && std::int64_t(j) * dst < b; ++j) {
-        const std::int64_t overlap =
-            std::min(b, std::int64_t(j + 1) * dst) - std::max(a, std::int64_t(j) * dst);
-        if (overlap > 0) w[std::size_t(i)].emplace_back(j, std::uint32_t(overlap));
-      }
-    }
-    return w;
-  };
-  const auto wx = weights(image.width, width);
-  const auto wy = weights(image.height, height);
-  std::vector<std::uint64_t> rows(std::size_t(image.height) * std::size_t(width) * 4, 0);
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      std::uint64_t* out = &rows[(std::size_t(y) * width + x) * 4];
-      for (const auto& [j, w] : wx[std::size_t(x)]) {
-        const std::uint8_t* p = image.pixel(j, y);
-        for (int c = 0; c < 4; ++c) out[c] += std::uint64_t(w) * p[c];
-      }
-    }
-  }
+  // Exact area sums (box_resample.hpp, as for the hashes), rounded to nearest once.
+  const std::vector<std::int64_t> sums =
+      detail::box_resample(image.rgba.data(), image.width, image.height, 4, width, height);
   Image result(width, height);
-  const std::uint64_t area = std::uint64_t(image.width) * std::uint64_t(image.height);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      std::uint64_t sum[4] = {0, 0, 0, 0};
-      for (const auto& [j, w] : wy[std::size_t(y)]) {
-        const std::uint64_t* r = &rows[(std::size_t(j) * width + x) * 4];
-        for (int c = 0; c < 4; ++c) sum[c] += std::uint64_t(w) * r[c];
-      }
-      std::uint8_t* p = result.pixel(x, y);
-      for (int c = 0; c < 4; ++c) p[c] = std::uint8_t((sum[c] + area / 2) / area);
-    }
+  const std::int64_t area = std::int64_t(image.width) * std::int64_t(image.height);
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    result.rgba[i] = std::uint8_t((sums[i] + area / 2) / area);
   }
   return result;
 }
