@@ -1,10 +1,6 @@
 #include "golden.hpp"
 
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <utility>
 
@@ -160,26 +156,6 @@ HashRecord read_hash_record(const fs::path& path) {
   top.finish();
   if (!errors.empty()) throw SceneError(errors);
   return r;
-}
-
-void write_file_atomic(const fs::path& path, const std::string& text) {
-  const fs::path dir = path.parent_path();
-  std::error_code ec;
-  if (!dir.empty()) fs::create_directories(dir, ec);
-  std::string tmp_name = ".";
-  tmp_name += path.filename().string();
-  tmp_name += ".tmp-";
-  tmp_name += std::to_string(long(::getpid()));
-  const fs::path tmp = dir / tmp_name;
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) throw render::IoError("cannot write " + path.string() + ": " + std::strerror(errno));
-  bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  ok = (std::fclose(f) == 0) && ok;
-  if (ok) fs::rename(tmp, path, ec);
-  if (!ok || ec) {
-    fs::remove(tmp, ec);
-    throw render::IoError("cannot write " + path.string() + ": " + (ok ? ec.message() : "write failed (disk full?)"));
-  }
 }
 
 namespace {

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "simreel/render/atomic_file.hpp"
 #include "simreel/render/frame_sink.hpp"
 #include "simreel/render/image.hpp"
 
@@ -64,9 +65,9 @@ nlohmann::ordered_json to_json(const HashRecord& record);
 /// Reads a hash record / golden, checking every key like a scene file.
 /// @throws SceneError (exit 2) naming the file and JSON pointer.
 HashRecord read_hash_record(const std::filesystem::path& path);
-/// Writes `text` to `path` through a temporary name in the same directory and a rename.
+/// The one atomic-write helper (render/atomic_file.hpp): temporary name, fsync, rename.
 /// @throws render::IoError naming the path.
-void write_file_atomic(const std::filesystem::path& path, const std::string& text);
+using render::write_file_atomic;
 
 /// A FrameSink that hashes the frames `record` selects and, on finish(), writes the record
 /// with them to `path` atomically. abort() writes nothing.

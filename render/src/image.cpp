@@ -4,19 +4,16 @@
 #include <png.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <csetjmp>
 #include <cstdio>
-#include <functional>
-#include <thread>
-#include <string>
+#include <cstring>
 #include <stdexcept>
-#include <system_error>
+#include <string>
 #include <utility>
 #include <vector>
 
-#include <unistd.h>
+#include "box_resample.hpp"
+#include "simreel/render/atomic_file.hpp"
 
 namespace simreel::render {
 
@@ -74,35 +71,10 @@ void write_png(const fs::path& path, const Image& image, int compression) {
       image.rgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4) {
     throw IoError("cannot write " + path.string() + ": image is empty or its size does not match");
   }
-  // Same directory as the target, so the final rename cannot cross file systems; a dot name so
-  // a half-written file never looks like a frame. The thread id keeps names apart when several
-  // writer threads write into one directory.
-  std::string tmp_name = ".";  // built piecewise: GCC 12 warns falsely on "." + string&&
-  tmp_name += path.filename().string();
-  tmp_name += ".tmp-";
-  tmp_name += std::to_string(static_cast<long>(::getpid()));
-  tmp_name += "-";
-  tmp_name += std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()) % 1000000);
-  const fs::path tmp = path.parent_path() / tmp_name;
-  std::FILE* file = std::fopen(tmp.c_str(), "wb");
-  if (file == nullptr) throw IoError("cannot write " + path.string() + ": " + std::strerror(errno));
-  std::string error = encode_png(file, image, std::clamp(compression, 0, 9));
-  const bool flushed = std::fflush(file) == 0;
-  const int err = errno;
-  if (std::fclose(file) != 0 || !flushed) {
-    if (error.empty()) error = err != 0 ? std::strerror(err) : "write failed";
-  }
-  std::error_code ec;
-  if (!error.empty()) {
-    fs::remove(tmp, ec);
-    throw IoError("cannot write " + path.string() + ": " + error);
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw IoError("cannot write " + path.string() + ": " + ec.message());
-  }
+  AtomicFile file(path);  // a half-written PNG never appears under the final name
+  const std::string error = encode_png(file.file(), image, std::clamp(compression, 0, 9));
+  if (!error.empty()) throw IoError("cannot write " + path.string() + ": " + error);  // discarded
+  file.commit();
 }
 
 Image read_image(const fs::path& path) {
@@ -126,44 +98,13 @@ Image resize_box(const Image& image, int width, int height) {
       image.rgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4) {
     throw std::invalid_argument("resize_box: empty image or target size");
   }
-  // Area weights in units of 1/(dst) source pixels, as in the hashes: exact integers.
-  auto weights = [](int src, int dst) {
-    auto w = std::vector<std::vector<std::pair<int, std::uint32_t>>>(static_cast<std::size_t>(dst));
-    for (int i = 0; i < dst; ++i) {
-      const std::int64_t a = std::int64_t(i) * src;
-      const std::int64_t b = std::int64_t(i + 1) * src;
-      for (int j = int(a / dst); j < src && std::int64_t(j) * dst < b; ++j) {
-        const std::int64_t overlap =
-            std::min(b, std::int64_t(j + 1) * dst) - std::max(a, std::int64_t(j) * dst);
-        if (overlap > 0) w[std::size_t(i)].emplace_back(j, std::uint32_t(overlap));
-      }
-    }
-    return w;
-  };
-  const auto wx = weights(image.width, width);
-  const auto wy = weights(image.height, height);
-  std::vector<std::uint64_t> rows(std::size_t(image.height) * std::size_t(width) * 4, 0);
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      std::uint64_t* out = &rows[(std::size_t(y) * width + x) * 4];
-      for (const auto& [j, w] : wx[std::size_t(x)]) {
-        const std::uint8_t* p = image.pixel(j, y);
-        for (int c = 0; c < 4; ++c) out[c] += std::uint64_t(w) * p[c];
-      }
-    }
-  }
+  // Exact area sums (box_resample.hpp, as for the hashes), rounded to nearest once.
+  const std::vector<std::int64_t> sums =
+      detail::box_resample(image.rgba.data(), image.width, image.height, 4, width, height);
   Image result(width, height);
-  const std::uint64_t area = std::uint64_t(image.width) * std::uint64_t(image.height);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      std::uint64_t sum[4] = {0, 0, 0, 0};
-      for (const auto& [j, w] : wy[std::size_t(y)]) {
-        const std::uint64_t* r = &rows[(std::size_t(j) * width + x) * 4];
-        for (int c = 0; c < 4; ++c) sum[c] += std::uint64_t(w) * r[c];
-      }
-      std::uint8_t* p = result.pixel(x, y);
-      for (int c = 0; c < 4; ++c) p[c] = std::uint8_t((sum[c] + area / 2) / area);
-    }
+  const std::int64_t area = std::int64_t(image.width) * std::int64_t(image.height);
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    result.rgba[i] = std::uint8_t((sums[i] + area / 2) / area);
   }
   return result;
 }

@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "box_resample.hpp"
+
 namespace simreel::render {
 namespace {
 
@@ -27,55 +29,13 @@ std::vector<std::int64_t> luma(const Image& image) {
   return y;
 }
 
-/// Integer area weights of a 1-D box resample from `src` to `dst` samples: output i covers
-/// [i*src, (i+1)*src) and source j covers [j*dst, (j+1)*dst) in units of 1/dst source pixels,
-/// so every overlap is an integer and each output's weights sum to `src`.
-std::vector<std::vector<std::pair<int, std::int64_t>>> box_weights(int src, int dst) {
-  std::vector<std::vector<std::pair<int, std::int64_t>>> weights(static_cast<std::size_t>(dst));
-  for (int i = 0; i < dst; ++i) {
-    const std::int64_t a = std::int64_t(i) * src;
-    const std::int64_t b = std::int64_t(i + 1) * src;
-    for (int j = int(a / dst); j < src && std::int64_t(j) * dst < b; ++j) {
-      const std::int64_t overlap =
-          std::min(b, std::int64_t(j + 1) * dst) - std::max(a, std::int64_t(j) * dst);
-      if (overlap > 0) weights[std::size_t(i)].emplace_back(j, overlap);
-    }
-  }
-  return weights;
-}
-
-/// Box-resamples a (sh x sw) plane to (dh x dw) in exact integer arithmetic: every result is
-/// the area mean times sw*sh, so equal areas compare equal (a flat image has no "edges"
-/// made of rounding noise).
-std::vector<std::int64_t> box_resample(const std::vector<std::int64_t>& src, int sw, int sh,
-                                       int dw, int dh) {
-  const auto wx = box_weights(sw, dw);
-  const auto wy = box_weights(sh, dh);
-  std::vector<std::int64_t> rows(std::size_t(sh) * std::size_t(dw), 0);
-  for (int y = 0; y < sh; ++y) {
-    for (int x = 0; x < dw; ++x) {
-      std::int64_t sum = 0;
-      for (const auto& [j, w] : wx[std::size_t(x)]) sum += w * src[std::size_t(y) * sw + j];
-      rows[std::size_t(y) * dw + x] = sum;
-    }
-  }
-  std::vector<std::int64_t> out(std::size_t(dh) * std::size_t(dw), 0);
-  for (int y = 0; y < dh; ++y) {
-    for (int x = 0; x < dw; ++x) {
-      std::int64_t sum = 0;
-      for (const auto& [j, w] : wy[std::size_t(y)]) sum += w * rows[std::size_t(j) * dw + x];
-      out[std::size_t(y) * dw + x] = sum;
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 std::uint64_t phash(const Image& image) {
   constexpr int kN = 32;
   constexpr int kK = 8;
-  const std::vector<std::int64_t> sums = box_resample(luma(image), image.width, image.height, kN, kN);
+  const std::vector<std::int64_t> sums =
+      detail::box_resample(luma(image).data(), image.width, image.height, 1, kN, kN);
   const double scale = 1.0 / (10000.0 * double(image.width) * double(image.height));
   std::vector<double> f(sums.size());
   for (std::size_t i = 0; i < f.size(); ++i) f[i] = double(sums[i]) * scale;
@@ -120,7 +80,8 @@ std::uint64_t phash(const Image& image) {
 }
 
 std::uint64_t dhash(const Image& image) {
-  const std::vector<std::int64_t> g = box_resample(luma(image), image.width, image.height, 9, 8);
+  const std::vector<std::int64_t> g =
+      detail::box_resample(luma(image).data(), image.width, image.height, 1, 9, 8);
   std::uint64_t h = 0;
   for (int y = 0; y < 8; ++y) {
     for (int x = 0; x < 8; ++x) {
@@ -148,8 +109,10 @@ std::uint64_t chash(const Image& image) {
     yb[i] = std::int64_t(p[0]) + std::int64_t(p[1]) - 2 * std::int64_t(p[2]);
   }
   constexpr int kGrid = 4;
-  const std::vector<std::int64_t> mean_rg = box_resample(rg, image.width, image.height, kGrid, kGrid);
-  const std::vector<std::int64_t> mean_yb = box_resample(yb, image.width, image.height, kGrid, kGrid);
+  const std::vector<std::int64_t> mean_rg =
+      detail::box_resample(rg.data(), image.width, image.height, 1, kGrid, kGrid);
+  const std::vector<std::int64_t> mean_yb =
+      detail::box_resample(yb.data(), image.width, image.height, 1, kGrid, kGrid);
   // Each sum is the cell mean times width*height, on a scale where 510 is full saturation.
   // Levels: below -T, within +-T (grey-ish), above +T, thermometer-coded in two bits so that
   // the Hamming distance counts level steps; T = 24/510 (about 5% of the axis).

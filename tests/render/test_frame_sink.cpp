@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <string>
 
@@ -175,6 +176,32 @@ TEST(RenderVideo, FfmpegFailureCarriesItsMessageAndLeavesNoFile) {
   EXPECT_NE(message.find("fake failure: no encoder here"), std::string::npos) << message;
   EXPECT_NE(message.find("x.mp4"), std::string::npos) << message;
   EXPECT_EQ(dir.entries(), 0);
+}
+
+TEST(RenderVideo, AFailedEncodeKeepsThePreviousVideoAndASuccessfulOneReplacesIt) {
+  // ffmpeg writes AtomicFile's temporary: the final name changes only when ffmpeg exited 0.
+  const test::TempDir dir("replace");
+  const fs::path out = dir.path() / "x.mp4";
+  std::ofstream(out) << "previous video";
+  {
+    const test::TempDir bin("fakebin-replace");
+    const fs::path fake = bin.path() / "ffmpeg";
+    std::ofstream(fake) << "#!/bin/sh\ncat > /dev/null\necho 'fake failure' >&2\nexit 1\n";
+    fs::permissions(fake, fs::perms::owner_all);
+    const ScopedPath path(bin.path().string() + ":/usr/bin:/bin");
+    auto sink = make_video(out, 32, 32, VideoOptions{});
+    sink->write(frame(32, 32, 0), 0);
+    EXPECT_THROW(sink->finish(), IoError);
+  }
+  std::ifstream in(out);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "previous video");
+  EXPECT_EQ(dir.entries(), 1);
+  ASSERT_TRUE(ffmpeg_available());
+  auto sink = make_video(out, 32, 32, VideoOptions{});
+  for (int i = 0; i < 3; ++i) sink->write(frame(32, 32, i), i);
+  sink->finish();
+  EXPECT_GT(fs::file_size(out), 100u);
+  EXPECT_EQ(dir.entries(), 1);
 }
 
 TEST(RenderVideo, WebmIsVp9WhenTheEncoderExists) {

@@ -54,17 +54,22 @@ TEST(RenderImage, WritePngReplacesAnExistingFile) {
   EXPECT_EQ(dir.entries(), 1);
 }
 
-TEST(RenderImage, WritingIntoAMissingDirectoryNamesThePath) {
+TEST(RenderImage, WritingIntoAnUncreatableDirectoryNamesThePath) {
+  // Missing directories are created (AtomicFile); one that cannot be, under a regular file,
+  // fails with the path and leaves nothing.
   const test::TempDir dir("png-missing");
+  write_png(dir.path() / "new" / "dir" / "frame.png", pattern(4, 4));
+  EXPECT_TRUE(fs::exists(dir.path() / "new" / "dir" / "frame.png"));
+  std::ofstream(dir.path() / "no") << "a file";
   const fs::path path = dir.path() / "no" / "such" / "frame.png";
   try {
     write_png(path, pattern(4, 4));
-    FAIL() << "write_png succeeded into a missing directory";
+    FAIL() << "write_png succeeded into a directory that cannot exist";
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
   }
-  EXPECT_FALSE(fs::exists(dir.path() / "no"));
-  EXPECT_EQ(dir.entries(), 0);
+  EXPECT_TRUE(fs::is_regular_file(dir.path() / "no"));
+  EXPECT_EQ(dir.entries(), 2);
 }
 
 TEST(RenderImage, FailedRenameLeavesNoTemporaryFile) {

@@ -36,7 +36,9 @@ AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
   name += "-";
   name += std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()) % 1000000);
   tmp_ = dir / name;
-  file_ = std::fopen(tmp_.c_str(), "wb");
+  // "e" (glibc: O_CLOEXEC): a child spawned meanwhile (ffmpeg, another sink's) must not keep
+  // the temporary open.
+  file_ = std::fopen(tmp_.c_str(), "wbe");
   if (file_ == nullptr) fail(path_, std::strerror(errno));
 }
 

@@ -17,7 +17,8 @@ namespace simreel::render {
 /// not committed removes the temporary; the final name is never touched.
 class AtomicFile {
  public:
-  /// Creates the parent directory if missing and opens the temporary for writing.
+  /// Creates the parent directory if missing and opens the temporary for writing (close-on-exec,
+  /// so child processes such as ffmpeg do not inherit it).
   /// @throws IoError naming `path` and the system's reason.
   explicit AtomicFile(std::filesystem::path path);
   ~AtomicFile();
@@ -32,12 +33,12 @@ class AtomicFile {
 
   /// Appends bytes. @throws IoError naming the final path (e.g. disk full).
   void write(std::string_view bytes);
-  /// Flushes, fsyncs and closes the temporary, then renames it to the final name.
+  /// Flushes, fsyncs and closes the temporary, then renames it to the final name. For a
+  /// temporary written by another process (ffmpeg), call it after that process exited: the
+  /// fsync covers the file's data whoever wrote it.
   /// @throws IoError naming the final path; the temporary is removed.
   void commit();
-  /// For a temporary written by another process (ffmpeg): call commit() after it exited; the
-  /// FILE* this object opened is closed first.
-  /// Removes the temporary; never throws.
+  /// Closes and removes the temporary; the final name is untouched. Never throws.
   void discard() noexcept;
 
  private:

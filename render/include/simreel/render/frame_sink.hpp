@@ -2,7 +2,8 @@
 /// @file frame_sink.hpp
 /// Where rendered frames go: a PNG sequence, a video through an ffmpeg child process, a contact
 /// sheet; and FrameWriter, which feeds sinks from writer threads through a bounded queue.
-/// Every file appears under its final name only when complete (temporary name, then rename).
+/// Every file appears under its final name only when complete: each is written through
+/// AtomicFile (atomic_file.hpp: temporary name, fsync, rename).
 
 #include <condition_variable>
 #include <cstddef>

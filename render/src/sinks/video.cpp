@@ -1,13 +1,13 @@
-#include "simreel/render/frame_sink.hpp"
-
+// The video sink (frame_sink.hpp): raw RGBA frames piped to an ffmpeg child process, which
+// writes an AtomicFile's temporary; committed only when ffmpeg exits 0.
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -15,10 +15,13 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
-#include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
+
+#include "ffmpeg.hpp"
+#include "simreel/render/atomic_file.hpp"
+#include "simreel/render/frame_sink.hpp"
 
 extern char** environ;
 
@@ -28,57 +31,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// PNG sequence
-
-class PngSequenceSink final : public FrameSink {
- public:
-  PngSequenceSink(fs::path dir, int compression) : dir_(std::move(dir)), compression_(compression) {
-    std::error_code ec;
-    fs::create_directories(dir_, ec);
-    if (ec) throw IoError("cannot create directory " + dir_.string() + ": " + ec.message());
-  }
-
-  void write(const Image& frame, int index) override {
-    if (index < 0) throw IoError("cannot write frame " + std::to_string(index) + " to " + describe());
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%05d.png", index);
-    write_png(dir_ / name, frame, compression_);
-  }
-  // Every frame is complete on its own once written, so there is nothing to close or discard.
-  void finish() override {}
-  void abort() noexcept override {}
-  [[nodiscard]] std::string describe() const override {
-    return (dir_ / "frame_%05d.png").string();
-  }
-
- private:
-  fs::path dir_;
-  int compression_;
-};
-
-// ---------------------------------------------------------------------------------------------
-// Video through an ffmpeg child process
-
-/// Searches PATH the way execvp does (an empty entry means the current directory).
-fs::path find_on_path(const std::string& program) {
-  const char* env = std::getenv("PATH");
-  const std::string path = env != nullptr ? env : "/usr/local/bin:/usr/bin:/bin";
-  std::size_t start = 0;
-  while (start <= path.size()) {
-    std::size_t end = path.find(':', start);
-    if (end == std::string::npos) end = path.size();
-    const std::string dir = path.substr(start, end - start);
-    const fs::path candidate = fs::path(dir.empty() ? "." : dir) / program;
-    struct stat st {};
-    if (::stat(candidate.c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
-        ::access(candidate.c_str(), X_OK) == 0) {
-      return candidate;
-    }
-    start = end + 1;
-  }
-  return {};
-}
+using detail::find_on_path;
 
 /// A write to a pipe whose reader died raises SIGPIPE, which would kill the program. Blocking
 /// it on this thread (instead of changing the process-wide disposition) turns it into EPIPE;
@@ -168,11 +121,9 @@ class VideoSink final : public FrameSink {
       fs::create_directories(dir, ec);
       if (ec) fail("cannot create directory " + dir.string() + ": " + ec.message());
     }
-    std::string tmp_name = ".";  // built piecewise: GCC 12 warns falsely on "." + string&&
-    tmp_name += path.filename().string();
-    tmp_name += ".tmp-";
-    tmp_name += std::to_string(long(::getpid()));
-    tmp_ = dir / tmp_name;
+    // ffmpeg writes the temporary (-y overwrites the empty file AtomicFile opened); finish()
+    // renames it only after ffmpeg exited 0, so a failed or cut video never appears.
+    file_.emplace(path);
 
     std::vector<std::string> args = {ffmpeg.string(), "-hide_banner", "-nostdin", "-loglevel",
                                      "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgba", "-s",
@@ -197,7 +148,7 @@ class VideoSink final : public FrameSink {
       args.insert(args.end(),
                   {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-f", "gif"});
     }
-    args.push_back(tmp_.string());
+    args.push_back(file_->temporary().string());
     spawn(ffmpeg, args);
   }
 
@@ -247,14 +198,9 @@ class VideoSink final : public FrameSink {
       cleanup();
       fail("ffmpeg failed (" + describe_status(status) + ")" + (log.empty() ? "" : ": " + log));
     }
-    std::error_code ec;
-    fs::rename(tmp_, path_, ec);
-    if (ec) {
-      cleanup();
-      fail(ec.message());
-    }
-    tmp_.clear();
     close_stderr();
+    file_->commit();  // IoError naming the path; the temporary is removed
+    file_.reset();
   }
 
   void abort() noexcept override {
@@ -391,14 +337,11 @@ class VideoSink final : public FrameSink {
 
   void cleanup() noexcept {
     close_stderr();
-    if (!tmp_.empty()) {
-      std::error_code ec;
-      fs::remove(tmp_, ec);
-    }
+    if (file_) file_->discard();
   }
 
   fs::path path_;
-  fs::path tmp_;
+  std::optional<AtomicFile> file_;  // engaged once the checks passed
   int width_;
   int height_;
   pid_t pid_ = -1;
@@ -408,61 +351,9 @@ class VideoSink final : public FrameSink {
 
 }  // namespace
 
-std::unique_ptr<FrameSink> make_png_sequence(const fs::path& dir, int compression) {
-  return std::make_unique<PngSequenceSink>(dir, compression);
-}
-
 std::unique_ptr<FrameSink> make_video(const fs::path& path, int width, int height,
                                       const VideoOptions& options) {
   return std::make_unique<VideoSink>(path, width, height, options);
-}
-
-bool ffmpeg_available() { return !find_on_path("ffmpeg").empty(); }
-
-bool ffmpeg_has_encoder(const std::string& name) {
-  const fs::path ffmpeg = find_on_path("ffmpeg");
-  if (ffmpeg.empty()) return false;
-  // The list is read through a pipe with no shell in between.
-  int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) return false;
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  const std::string program = ffmpeg.string();
-  std::vector<std::string> args = {program, "-hide_banner", "-encoders"};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = ::posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(fds[1]);
-  std::string text;
-  if (rc == 0) {
-    char buf[4096];
-    for (;;) {
-      const ssize_t n = ::read(fds[0], buf, sizeof buf);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      text.append(buf, std::size_t(n));
-    }
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-  }
-  ::close(fds[0]);
-  // Lines look like " V....D libvpx-vp9           libvpx VP9 (codec vp9)".
-  std::size_t pos = 0;
-  while ((pos = text.find(name, pos)) != std::string::npos) {
-    const bool starts = pos > 0 && text[pos - 1] == ' ';
-    const std::size_t end = pos + name.size();
-    const bool ends = end < text.size() && std::isspace(static_cast<unsigned char>(text[end])) != 0;
-    if (starts && ends) return true;
-    pos = end;
-  }
-  return false;
 }
 
 }  // namespace simreel::render

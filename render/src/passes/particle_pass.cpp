@@ -1,0 +1,223 @@
+// The particle passes (passes/particle_pass.hpp).
+#include "particle_pass.hpp"
+
+#include <initializer_list>
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+#include "common_glsl.hpp"
+#include "particle_shaders.hpp"
+#include "shadow_shaders.hpp"
+
+namespace simreel::render::detail {
+
+void ParticlePass::create(const GlTable& gl) {
+  gl_ = &gl;
+  // Particles are drawn as indexed quads, four vertices per particle each carrying the
+  // particle's data, not instanced: llvmpipe runs an instanced draw as one small draw per
+  // instance, several times slower for 100k sprites. The index buffer is shared.
+  gl.GenBuffers(1, &quad_ebo_);
+  streaks_.floats = kStreakFloats;
+  for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_}) {
+    gl.GenVertexArrays(1, &stream->vao);
+    gl.BindVertexArray(stream->vao);
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, quad_ebo_);
+    gl.GenBuffers(1, &stream->instances);
+    gl.BindBuffer(GL_ARRAY_BUFFER, stream->instances);
+    const GLsizei stride = GLsizei(stream->floats * sizeof(float));
+    for (GLuint attribute = 1; 4 * (attribute - 1) < stream->floats; ++attribute) {
+      gl.EnableVertexAttribArray(attribute);
+      gl.VertexAttribPointer(attribute, 4, GL_FLOAT, GL_FALSE, stride,
+                             reinterpret_cast<const void*>(4 * (attribute - 1) * sizeof(float)));
+    }
+  }
+  gl.BindVertexArray(0);
+  gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void ParticlePass::destroy() noexcept {
+  if (gl_ == nullptr) return;
+  const GlTable& gl = *gl_;
+  for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_}) {
+    if (stream->vao != 0) gl.DeleteVertexArrays(1, &stream->vao);
+    if (stream->instances != 0) gl.DeleteBuffers(1, &stream->instances);
+    *stream = Stream{};
+  }
+  if (quad_ebo_ != 0) gl.DeleteBuffers(1, &quad_ebo_);
+  quad_ebo_ = 0;
+  quad_capacity_ = 0;
+  for (auto& by_taps : programs_) {
+    for (Program& p : by_taps) p = Program();
+  }
+}
+
+void ParticlePass::gather(const DrawableTable& table, const Camera& camera) {
+  // Soft particles of every batch are merged and sorted back to front, so two overlapping
+  // batches blend correctly; additive ones, droplets (opaque) and thin streaks need no order.
+  soft_.staging.clear();  // unsorted; upload() takes the particles in sorted order
+  additive_.staging.clear();
+  droplets_.staging.clear();
+  streaks_.staging.clear();
+  table.for_each([&](const Drawable& d) {
+    if (d.kind != DrawableKind::particles) return;
+    std::vector<float>* dst = &soft_.staging;
+    if (d.style == ParticleStyle::additive) dst = &additive_.staging;
+    if (d.style == ParticleStyle::droplet) dst = &droplets_.staging;
+    if (d.style == ParticleStyle::streak) dst = &streaks_.staging;
+    dst->insert(dst->end(), d.instances.begin(), d.instances.end());
+  });
+
+  const std::size_t n = soft_.staging.size() / kInstanceFloats;
+  const std::uint32_t* order = nullptr;
+  if (n > 0) {
+    const Vec3f forward = (camera.target - camera.position).normalized();
+    sort_depth_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const float* c = &soft_.staging[i * kInstanceFloats];
+      sort_depth_[i] = (Vec3f(c[0], c[1], c[2]) - camera.position).dot(forward);
+    }
+    order = sort_.sort(sort_depth_).data();
+  }
+  upload(soft_, order);
+  for (Stream* stream : {&additive_, &droplets_, &streaks_}) upload(*stream);
+}
+
+void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
+  const GlTable& gl = *gl_;
+  stream.count = stream.staging.size() / stream.floats;
+  if (stream.count == 0) return;
+  if (stream.count > quad_capacity_) {
+    quad_capacity_ = std::max(stream.count, quad_capacity_ + quad_capacity_ / 2);
+    std::vector<GLuint> indices(6 * quad_capacity_);
+    for (std::size_t i = 0; i < quad_capacity_; ++i) {
+      const auto base = GLuint(4 * i);
+      const GLuint quad[6] = {base, base + 1, base + 2, base + 2, base + 1, base + 3};
+      std::memcpy(&indices[6 * i], quad, sizeof quad);
+    }
+    gl.BindBuffer(GL_COPY_WRITE_BUFFER, quad_ebo_);
+    gl.BufferData(GL_COPY_WRITE_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)), indices.data(),
+                  GL_STATIC_DRAW);
+  }
+  // Four copies of each particle's data, one per corner (the shader derives the corner from
+  // gl_VertexID).
+  const std::size_t f = stream.floats;
+  stream.expanded.resize(4 * stream.staging.size());
+  float* dst = stream.expanded.data();
+  for (std::size_t i = 0; i < stream.count; ++i) {
+    const float* src = &stream.staging[(order != nullptr ? order[i] : i) * f];
+    for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
+  }
+  gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
+  const GLsizeiptr bytes = GLsizeiptr(stream.expanded.size() * sizeof(float));
+  if (stream.count > stream.capacity) {
+    stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(4 * stream.capacity * f * sizeof(float)), nullptr,
+                  GL_STREAM_DRAW);
+  }
+  gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.expanded.data());
+}
+
+void ParticlePass::set_uniforms(const Program& p, const FrameView& frame,
+                                const ShadowView& shadow) const {
+  const RenderSettings& settings = frame.settings;
+  const Light& light = frame.light;
+  const Eigen::Matrix4f& view = frame.view;
+  const Eigen::Matrix4f& proj = frame.proj;
+  const Vec3f to_sun = light.direction.squaredNorm() > 0.f ? Vec3f(-light.direction.normalized())
+                                                           : Vec3f(0.f, 0.f, 1.f);
+  const Mat3f view_rotation = view.block<3, 3>(0, 0);
+  const Vec3f to_sun_view = view_rotation * to_sun;
+  p.use();
+  p.set("u_view", view);
+  p.set("u_proj", proj);
+  p.set("u_up_view", Vec3f(view_rotation * Vec3f::UnitZ()));
+  p.set("u_pixels_per_unit", proj(1, 1) * 0.5f * float(settings.height));
+  p.set("u_viewport", float(settings.width), float(settings.height));
+  p.set("u_near", frame.camera.near_m);
+  p.set("u_light_view", to_sun_view);
+  const Vec3f half = to_sun_view + Vec3f::UnitZ();  // zero only with the sun dead behind
+  p.set("u_half_view", half.squaredNorm() > 1e-12f ? Vec3f(half.normalized()) : Vec3f::UnitZ());
+  p.set("u_light_color", light.color);
+  p.set("u_ambient", light.ambient);
+  p.set("u_ground_ambient", light.ground_ambient);
+  p.set("u_to_sun", to_sun);
+  p.set("u_sun_offset", settings.particle_shadows ? 1.5f : 0.f);
+  p.set("u_opaque", 0);
+  p.set("u_shadow_map", 1);
+  p.set("u_scene_depth", 3);
+  p.set("u_depth_params", proj(2, 2), proj(2, 3));
+  p.set("u_shadow_enabled", shadow.enabled ? 1 : 0);
+  p.set("u_light_view_proj", shadow.light_view_proj);
+  p.set("u_shadow_bias", shadow.bias);
+  p.set("u_shadow_offset", 0.f);
+  p.set("u_shadow_radius", shadow.radius);
+}
+
+const Program& ParticlePass::program(Style style, const RenderSettings& settings,
+                                     const ShadowView& shadow) {
+  const int variant = !shadow.enabled ? 0 : settings.particle_shadows ? 2 : 1;
+  Program& p = programs_[style][variant];
+  if (!p.valid()) {
+    const GlTable& gl = *gl_;
+    // The fragment stages see SUN_TAPS too: without a shadow map v_sun is the constant 1.
+    const char* taps = variant == 0 ? "#define SUN_TAPS 0\n" : variant == 1 ? "#define SUN_TAPS 1\n"
+                                                                         : "#define SUN_TAPS 4\n";
+    static constexpr const char* kNames[] = {"soft particle", "additive particle",
+                                             "droplet particle", "streak particle"};
+    static constexpr const char* kSphereFs[] = {kParticleSoftFs, kParticleAddFs, kParticleDropletFs};
+    const bool streak = style == streak_style;
+    const std::string vs = glsl_source({taps, kShadowGlsl, streak ? kStreakVs : kParticleVs});
+    // Sprites stand for spheres and take their depth; a streak is a flat capsule.
+    const std::string fs =
+        streak ? glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, kStreakFs})
+               : glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kSphereFs[style]});
+    p = Program(gl, kNames[style], vs, fs);
+  }
+  return p;
+}
+
+void ParticlePass::draw_droplets(const FrameView& frame, const ShadowView& shadow, int samples) {
+  if (droplets_.count == 0) return;
+  const GlTable& gl = *gl_;
+  // Opaque: drawn before the scene depth is copied, so soft particles fade against them too.
+  const Program& p = program(droplet_style, frame.settings, shadow);
+  set_uniforms(p, frame, shadow);
+  p.set("u_opaque", 1);
+  if (samples > 0) gl.Enable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+  gl.BindVertexArray(droplets_.vao);
+  gl.DrawElements(GL_TRIANGLES, GLsizei(6 * droplets_.count), GL_UNSIGNED_INT, nullptr);
+  gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+}
+
+void ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow,
+                                SceneTarget& target, bool opaque_drawables) {
+  if (soft_.count == 0 && additive_.count == 0 && streaks_.count == 0) return;
+  const GlTable& gl = *gl_;
+  target.copy_depth(opaque_drawables || droplets_.count > 0);
+  gl.Enable(GL_BLEND);
+  gl.DepthMask(GL_FALSE);
+  struct Layer {
+    const Stream* stream;
+    const Program* program;
+    bool premultiplied;
+  };
+  const RenderSettings& s = frame.settings;
+  for (const Layer& layer : {Layer{&soft_, &program(soft_style, s, shadow), true},
+                             Layer{&streaks_, &program(streak_style, s, shadow), true},
+                             Layer{&additive_, &program(additive_style, s, shadow), false}}) {
+    if (layer.stream->count == 0) continue;
+    set_uniforms(*layer.program, frame, shadow);
+    if (layer.premultiplied) {
+      gl.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    } else {
+      gl.BlendFunc(GL_ONE, GL_ONE);
+    }
+    gl.BindVertexArray(layer.stream->vao);
+    gl.DrawElements(GL_TRIANGLES, GLsizei(6 * layer.stream->count), GL_UNSIGNED_INT, nullptr);
+  }
+  gl.DepthMask(GL_TRUE);
+  gl.Disable(GL_BLEND);
+}
+
+}  // namespace simreel::render::detail

@@ -1,0 +1,69 @@
+#pragma once
+// Private: the particle passes. Every batch's particles are merged by style into one stream
+// each (soft ones sorted back to front across batches, so overlapping batches blend correctly)
+// and drawn as indexed quads: droplets with the opaque geometry, then soft, streak and additive
+// sprites blended over it, faded against a copy of the opaque depth.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "drawables.hpp"
+#include "frame.hpp"
+#include "gl/program.hpp"
+#include "gl/scene_target.hpp"
+#include "particle_sort.hpp"
+
+namespace simreel::render::detail {
+
+class ParticlePass {
+ public:
+  /// Creates the shared quad index buffer and one vertex array per stream.
+  void create(const GlTable& gl);
+  void destroy() noexcept;
+
+  /// Merges the particle drawables of `table` by style (in key order), sorts the soft ones back
+  /// to front as seen from `camera` and uploads all four streams.
+  void gather(const DrawableTable& table, const Camera& camera);
+  /// The uploaded soft and droplet particles (the shadow pass draws them as casters).
+  [[nodiscard]] QuadBatch soft() const { return {soft_.vao, soft_.count}; }
+  [[nodiscard]] QuadBatch droplets() const { return {droplets_.vao, droplets_.count}; }
+
+  /// Draws the droplets (opaque lit spheres) into the bound scene framebuffer; `samples` > 0
+  /// turns on alpha-to-coverage.
+  void draw_droplets(const FrameView& frame, const ShadowView& shadow, int samples);
+  /// Draws soft, streak and additive particles, blended; first copies the scene depth
+  /// (`opaque_drawables`: a plane, box or mesh was drawn). Nothing to draw: no GL call.
+  void draw_blended(const FrameView& frame, const ShadowView& shadow, SceneTarget& target,
+                    bool opaque_drawables);
+
+ private:
+  /// One particle stream: a growing vertex buffer of quads (four vertices per particle).
+  struct Stream {
+    std::size_t floats = kInstanceFloats;  // per instance
+    GLuint vao = 0;
+    GLuint instances = 0;
+    std::size_t capacity = 0;     // particles the GL buffer holds
+    std::vector<float> staging;   // per particle
+    std::vector<float> expanded;  // per vertex: four copies of each particle
+    std::size_t count = 0;
+  };
+  // Particle programs by style and by sun taps per vertex (0: no shadow map this frame, 1, or
+  // 4 with particle casters), compiled on first use: llvmpipe runs a vertex shader's texture
+  // lookups even when a uniform branch skips them, so each variant samples only what it needs.
+  enum Style { soft_style, additive_style, droplet_style, streak_style };
+
+  void upload(Stream& stream, const std::uint32_t* order = nullptr);
+  const Program& program(Style style, const RenderSettings& settings, const ShadowView& shadow);
+  void set_uniforms(const Program& p, const FrameView& frame, const ShadowView& shadow) const;
+
+  const GlTable* gl_ = nullptr;
+  GLuint quad_ebo_ = 0;
+  std::size_t quad_capacity_ = 0;  // particles quad_ebo_ indexes
+  Stream soft_, additive_, droplets_, streaks_;
+  Program programs_[4][3];
+  std::vector<float> sort_depth_;
+  BackToFrontSort sort_;
+};
+
+}  // namespace simreel::render::detail

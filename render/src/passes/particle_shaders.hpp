@@ -1,0 +1,225 @@
+#pragma once
+// Private: GLSL of the particle passes: soft, additive, droplet sprites and streaks.
+namespace simreel::render::detail {
+
+/// The opaque scene's depth (a resolved copy) for soft particles, as view distance (m).
+inline constexpr char kSceneDepthGlsl[] = R"(
+uniform sampler2D u_scene_depth;
+uniform vec2 u_depth_params;  // (A, B) of the projection: distance = B / (ndc_z + A)
+float view_distance(float window_z) { return u_depth_params.y / (window_z * 2.0 - 1.0 + u_depth_params.x); }
+float scene_distance() { return view_distance(texelFetch(u_scene_depth, ivec2(gl_FragCoord.xy), 0).r); }
+)";
+
+inline constexpr char kParticleVs[] = R"(
+layout(location = 1) in vec4 a_center_radius; // per instance: world position (m), radius (m)
+layout(location = 2) in vec4 a_color;         // per instance: linear RGBA
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform float u_pixels_per_unit; // projected pixels per metre at unit depth
+uniform vec3 u_to_sun;           // world frame; the sun is sampled this side of the centre
+uniform float u_sun_offset;      // radii towards the sun: a casting particle must not shadow itself
+uniform int u_opaque;            // droplets: alpha only carries sub-pixel coverage
+out vec2 v_corner;
+out vec4 v_color;
+out float v_sun;
+flat out vec4 v_center_view;  // sprite centre, view frame (m), and drawn radius (m)
+void main() {
+  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
+  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
+  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
+  vec4 c = u_view * vec4(a_center_radius.xyz, 1.0);
+  float depth = max(-c.z, 1e-4);
+  // A sprite under a pixel would flicker in and out of the sample grid: draw it one pixel
+  // wide and fainter instead, keeping its coverage.
+  float r = a_center_radius.w;
+  float px = r * u_pixels_per_unit / depth;
+  float grow = px < 1.0 ? 1.0 / max(px, 1e-3) : 1.0;
+  v_center_view = vec4(c.xyz, r * grow);
+  c.xy += a_corner * (r * grow);
+  v_corner = a_corner;
+  v_color = vec4(a_color.rgb, (u_opaque != 0 ? 1.0 : a_color.a) / (grow * grow));
+  v_sun = sun_visibility_fast(a_center_radius.xyz + u_to_sun * (u_sun_offset * r));
+  gl_Position = u_proj * c;
+}
+)";
+
+/// Particle fragments take the depth of the sphere they stand for, not of the flat sprite, so a
+/// droplet resting on the ground or touching a box meets it along a round outline.
+inline constexpr char kSphereDepthGlsl[] = R"(
+in vec2 v_corner;
+in vec4 v_color;
+#if SUN_TAPS == 0
+const float v_sun = 1.0;  // no shadow map this frame: the vertex stage's v_sun is 1
+#else
+in float v_sun;
+#endif
+flat in vec4 v_center_view;
+uniform vec3 u_up_view;  // world +z in the view frame: a view-frame normal's world z is dot(n, u_up_view)
+// Writes the depth of the sphere's front surface at this fragment; h is the half chord
+// sqrt(1 - r2) in radii. A perspective projection's depth depends on view z alone.
+void write_sphere_depth(float h) {
+  float z = v_center_view.z + v_center_view.w * h;
+  gl_FragDepth = clamp(0.5 * (u_depth_params.x * z + u_depth_params.y) / (-z) + 0.5, 0.0, 1.0);
+}
+// Fraction of the sphere's chord through this fragment that lies in front of the opaque
+// scene: 1 in open air, falling smoothly to 0 where the sphere sinks into a surface (no hard
+// intersection line: soft particles).
+float visible_fraction(float h) {
+  float front = -(v_center_view.z + v_center_view.w * h);
+  float chord = 2.0 * v_center_view.w * h;
+  return clamp((scene_distance() - front) / max(chord, 1e-6), 0.0, 1.0);
+}
+)";
+
+inline constexpr char kParticleSoftFs[] = R"(
+out vec4 o_color;
+uniform vec3 u_light_view;   // towards the sun, view frame
+uniform vec3 u_half_view;    // half vector between the sun and the viewer, view frame
+uniform vec3 u_light_color;
+void main() {
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  float h = sqrt(1.0 - r2);
+  write_sphere_depth(h);
+  float visible = visible_fraction(h);
+  if (visible <= 0.0) discard;
+  float r = sqrt(r2);
+  float aa = fwidth(r);
+  // Beer-Lambert through the sphere: the centre has the given opacity, thinner chords less,
+  // and only the part of the chord in front of the scene counts. Optical depth ~ h^e: e = 1
+  // for a uniform sphere (dense droplets keep a crisp rim), rising to 3 for a density that
+  // falls off as 1 - r^2 (thin smoke puffs blur into each other).
+  float a = min(v_color.a, 0.999);
+  float e = 3.0 - 2.0 * a;
+  float alpha = (1.0 - exp2(log2(1.0 - a) * exp2(e * log2(max(h, 1e-6))) * visible)) *
+                (1.0 - smoothstep(1.0 - aa, 1.0, r));
+  // A sphere's normal from the sprite coordinates, in the view frame: the side away from the
+  // sun is darker, which is what makes a cloud of sprites read as a volume.
+  vec3 n = vec3(v_corner, h);
+  float wrap = max((dot(n, u_light_view) + 0.25) / 1.25, 0.0);
+  float s8 = max(dot(n, u_half_view), 0.0);
+  s8 *= s8; s8 *= s8; s8 *= s8;
+  float s32 = s8 * s8; s32 *= s32;
+  float spec = 0.35 * a * s32 * s8;  // exponent 40 by squaring: pow() is costly on llvmpipe
+  vec3 ambient = hemisphere(dot(n, u_up_view));
+  vec3 color = v_color.rgb * (ambient + u_light_color * (wrap * v_sun)) + u_light_color * (spec * v_sun);
+  o_color = vec4(color * alpha, alpha);  // premultiplied
+}
+)";
+
+/// Small opaque spheres; sub-pixel ones and the rim reach the multisample coverage through
+/// alpha-to-coverage.
+inline constexpr char kParticleDropletFs[] = R"(
+out vec4 o_color;
+uniform vec3 u_light_view;
+uniform vec3 u_half_view;
+uniform vec3 u_light_color;
+void main() {
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  float h = sqrt(1.0 - r2);
+  write_sphere_depth(h);
+  float r = sqrt(r2);
+  float aa = fwidth(r);
+  vec3 n = vec3(v_corner, h);
+  float ndl = max(dot(n, u_light_view), 0.0);
+  float s8 = max(dot(n, u_half_view), 0.0);
+  s8 *= s8; s8 *= s8; s8 *= s8;
+  float s32 = s8 * s8; s32 *= s32;
+  float spec = 0.5 * s32 * s32;
+  vec3 ambient = hemisphere(dot(n, u_up_view));
+  vec3 color = v_color.rgb * (ambient + u_light_color * (ndl * v_sun)) + u_light_color * (spec * v_sun);
+  o_color = vec4(color, v_color.a * (1.0 - smoothstep(1.0 - aa, 1.0, r)));
+}
+)";
+
+/// Rain: a capsule from the head back along the screen-space velocity, built in pixels so its
+/// width never drops under a pixel (thin streaks get fainter instead).
+inline constexpr char kStreakVs[] = R"(
+layout(location = 1) in vec4 a_center_radius; // head position (m), radius (m)
+layout(location = 2) in vec4 a_color;
+layout(location = 3) in vec3 a_trail;         // head to tail, world frame (m)
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform float u_pixels_per_unit;
+uniform vec2 u_viewport;
+uniform float u_near;
+uniform vec3 u_to_sun;
+uniform float u_sun_offset;
+noperspective out vec2 v_local;  // (along from the head, across), in half-widths
+flat out float v_length;         // head-to-tail length in half-widths
+out vec4 v_color;
+out float v_sun;
+out float v_distance;            // view distance (m)
+flat out float v_radius;
+void main() {
+  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
+  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
+  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
+  vec3 head = (u_view * vec4(a_center_radius.xyz, 1.0)).xyz;
+  vec3 tail = head + mat3(u_view) * a_trail;
+  float limit = -1.001 * u_near;
+  if (tail.z > limit && head.z < limit) tail = mix(head, tail, (limit - head.z) / (tail.z - head.z));
+  vec4 ch = u_proj * vec4(head, 1.0);
+  vec4 ct = u_proj * vec4(tail, 1.0);
+  vec2 half_vp = 0.5 * u_viewport;
+  vec2 d = (ct.xy / ct.w - ch.xy / ch.w) * half_vp;
+  float len = length(d);
+  vec2 u = len > 1e-3 ? d / len : vec2(1.0, 0.0);
+  vec2 w = vec2(-u.y, u.x);
+  float r = a_center_radius.w;
+  float width = r * u_pixels_per_unit / max(-head.z, 1e-4);  // half-width (pixels)
+  float hw = max(width, 0.75);
+  float s = 0.5 * a_corner.x + 0.5;
+  vec4 base = mix(ch, ct, s);
+  base.xy += (u * (a_corner.x * hw) + w * (a_corner.y * hw)) / half_vp * base.w;
+  v_local = vec2(s * len / hw + a_corner.x, a_corner.y);
+  v_length = len / hw;
+  v_color = vec4(a_color.rgb, a_color.a * min(width / hw, 1.0));
+  v_sun = sun_visibility_fast(a_center_radius.xyz + u_to_sun * (u_sun_offset * r));
+  v_distance = -mix(head.z, tail.z, s);
+  v_radius = r;
+  gl_Position = base;
+}
+)";
+
+inline constexpr char kStreakFs[] = R"(
+noperspective in vec2 v_local;
+flat in float v_length;
+in vec4 v_color;
+#if SUN_TAPS == 0
+const float v_sun = 1.0;  // no shadow map this frame: the vertex stage's v_sun is 1
+#else
+in float v_sun;
+#endif
+in float v_distance;
+flat in float v_radius;
+out vec4 o_color;
+uniform vec3 u_light_color;
+void main() {
+  vec2 q = vec2(v_local.x - clamp(v_local.x, 0.0, v_length), v_local.y);
+  float d = length(q);
+  if (d >= 1.0) discard;
+  float fade = clamp((scene_distance() - v_distance) / (2.0 * v_radius), 0.0, 1.0);
+  float taper = 1.0 - 0.6 * clamp(v_local.x, 0.0, v_length) / max(v_length, 1.0);
+  float alpha = v_color.a * (1.0 - smoothstep(0.35, 1.0, d)) * taper * fade;
+  vec3 color = v_color.rgb * (hemisphere(0.0) + u_light_color * (0.5 * v_sun));
+  o_color = vec4(color * alpha, alpha);
+}
+)";
+
+inline constexpr char kParticleAddFs[] = R"(
+out vec4 o_color;
+void main() {
+  float r2 = dot(v_corner, v_corner);
+  if (r2 >= 1.0) discard;
+  float h = sqrt(1.0 - r2);
+  write_sphere_depth(h);
+  // Bright core with a long falloff; exactly zero at the rim so quads leave no edges.
+  float falloff = (1.0 - r2) * (1.0 - r2);
+  float glow = falloff * (0.35 + 0.65 * exp(-6.0 * r2)) * visible_fraction(h);
+  o_color = vec4(v_color.rgb * (v_color.a * glow), 0.0);
+}
+)";
+
+}  // namespace simreel::render::detail
