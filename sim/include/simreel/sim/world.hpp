@@ -14,28 +14,12 @@
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/forces.hpp"
 #include "simreel/sim/handle.hpp"
+#include "simreel/sim/moved_object.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/types.hpp"
+#include "simreel/sim/world_def.hpp"
 
 namespace simreel::sim {
-
-struct WorldDef {
-  double max_step = 1.0 / 240.0;  ///< (s) largest internal step; advance() splits each sampling
-                                  ///< time into ceil(T / max_step) equal steps
-  std::uint64_t seed = 0;         ///< scene seed; emitter i draws from Rng(seed, i)
-  double contact_speed = 0.05;    ///< (m/s) normal speed under which a collision becomes a
-                                  ///< resting contact (§3.6.3)
-  int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
-                                  ///< 0 = the hardware's count. Results are bit-identical at any
-                                  ///< count (static partitioning, per-particle gathers)
-};
-
-/// One entry of the moved list: the object's pose at the end of advance().
-struct MovedObject {
-  Handle handle;
-  Vec3 translation = Vec3::Zero();      ///< (m), world frame
-  Mat3 rotation = Mat3::Identity();     ///< local-to-world rotation
-};
 
 /// Thrown when the state stops being finite: names the object, step and time.
 class NonFiniteState : public std::runtime_error {

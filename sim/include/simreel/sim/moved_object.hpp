@@ -1,0 +1,19 @@
+#pragma once
+/// @file moved_object.hpp
+/// MovedObject: one entry of the list World::advance() returns (Coutinho §1.4.1, the interface
+/// with the rendering engine). Its own header so the engine's lower layers need not include
+/// world.hpp.
+
+#include "simreel/sim/handle.hpp"
+#include "simreel/sim/types.hpp"
+
+namespace simreel::sim {
+
+/// One entry of the moved list: the object's pose at the end of advance().
+struct MovedObject {
+  Handle handle;
+  Vec3 translation = Vec3::Zero();      ///< (m), world frame
+  Mat3 rotation = Mat3::Identity();     ///< local-to-world rotation
+};
+
+}  // namespace simreel::sim
