@@ -32,7 +32,6 @@ struct MeshShape {
 struct Collider {
   enum class Shape : std::uint8_t { plane, box, sphere, cylinder, mesh };
   Shape shape = Shape::plane;
-  std::uint16_t generation = 1;
   Material material;
 
   // plane

@@ -124,6 +124,35 @@ void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colli
   }
 }
 
+void ParticleCollider::forget_collider(std::uint32_t removed, std::uint32_t moved_from) {
+  constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  for (WarmCache& c : caches_) {
+    std::size_t keep = 0;
+    for (std::size_t q = 0; q < c.ki.size(); ++q) {
+      std::uint64_t kj = c.kj[q];
+      if (kj == (kWall | removed)) continue;
+      if (kj == (kWall | moved_from)) kj = kWall | removed;
+      c.ki[keep] = c.ki[q];
+      c.kj[keep] = kj;
+      c.n[keep] = c.n[q];
+      c.pt[keep] = c.pt[q];
+      c.pn[keep] = c.pn[q];
+      ++keep;
+    }
+    c.ki.resize(keep);
+    c.kj.resize(keep);
+    c.n.resize(keep);
+    c.pt.resize(keep);
+    c.pn.resize(keep);
+  }
+}
+
+void ParticleCollider::forget_system(std::uint32_t serial) {
+  caches_.erase(std::remove_if(caches_.begin(), caches_.end(),
+                               [serial](const WarmCache& c) { return c.group == serial; }),
+                caches_.end());
+}
+
 void ParticleCollider::load_warm_start(const WarmCache& c) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
   std::size_t cursor = 0;

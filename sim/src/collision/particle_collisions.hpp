@@ -44,7 +44,8 @@ struct ParticleGroupMember {
   double restitution = 0.5;
   double friction = 0.1;
   bool collide = true;  ///< the system collides with colliders (its corrections are swept)
-  std::uint32_t system = 0;  ///< index of the system in the world: warm-start key
+  std::uint32_t system = 0;  ///< registration serial of the system: warm-start key (stable
+                             ///< when other systems are removed)
 };
 
 class ParticleCollider {
@@ -108,6 +109,14 @@ class ParticleCollider {
   void project_positions();
   double cell_size = 0.0;  ///< (m) of the last find_contacts(), at its finest level
   int levels = 1;          ///< grid levels of the last find_contacts() (1: uniform grid)
+
+  /// A collider was swap-removed from the world's dense array: warm-start entries against
+  /// `removed` are dropped, those against `moved_from` (the old last index, now at `removed`)
+  /// follow it. Equal indices: the removed one was last.
+  void forget_collider(std::uint32_t removed, std::uint32_t moved_from);
+  /// A system was removed: its group's cache is dropped (entries of its particles in other
+  /// groups' caches never match again: serials are not reused).
+  void forget_system(std::uint32_t serial);
 
  private:
   /// Previous step's resting impulses of one group (keyed by its first system).
