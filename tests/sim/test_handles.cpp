@@ -43,6 +43,32 @@ void expect_same(const ParticleView& a, const ParticleView& b) {
   EXPECT_EQ(std::memcmp(a.id, b.id, a.count * sizeof(std::uint64_t)), 0);
 }
 
+/// One object of every kind (the attractor spring pulls the system).
+struct OneOfEach {
+  ParticleSystemHandle ps;
+  ColliderHandle box;
+  ClothHandle cloth;
+  ForceFieldHandle field;
+  AttractorSpringHandle spring;
+
+  explicit OneOfEach(World& world)
+      : ps(world.add_particle_system(test::spawn_only_system())),
+        box(world.add_box({})),
+        cloth(world.add_cloth(small_cloth(1.0))),
+        field(world.add_force_field({})) {
+    AttractorSpringDef a;
+    a.system = ps;
+    spring = world.add_attractor_spring(a);
+  }
+  void remove_from(World& world) const {
+    world.remove(spring);
+    world.remove(field);
+    world.remove(cloth);
+    world.remove(box);
+    world.remove(ps);
+  }
+};
+
 TEST(IdPool, ReusesFreedSlotsWithABumpedGeneration) {
   detail::IdPool pool;
   const auto a = pool.alloc(), b = pool.alloc();
@@ -63,14 +89,8 @@ TEST(IdPool, ReusesFreedSlotsWithABumpedGeneration) {
 TEST(Handles, AddRemoveReAddEveryKind) {
   World world;
   for (int round = 0; round < 3; ++round) {
-    const auto ps = world.add_particle_system(test::spawn_only_system());
-    const auto box = world.add_box({});
-    const auto cloth = world.add_cloth(small_cloth(1.0));
-    const auto field = world.add_force_field({});
-    AttractorSpringDef a;
-    a.system = ps;
-    const auto spring = world.add_attractor_spring(a);
-    for (const Handle& h : {ps.id, box.id, cloth.id, field.id, spring.id}) {
+    const OneOfEach o(world);
+    for (const Handle& h : {o.ps.id, o.box.id, o.cloth.id, o.field.id, o.spring.id}) {
       EXPECT_EQ(h.index, 0u);  // the one slot of each kind is reused
       EXPECT_EQ(h.generation, round + 1);
     }
@@ -78,11 +98,7 @@ TEST(Handles, AddRemoveReAddEveryKind) {
     EXPECT_EQ(world.colliders().size(), 1u);
     EXPECT_EQ(world.cloths().size(), 1u);
     world.advance(1.0 / 60);
-    world.remove(spring);
-    world.remove(field);
-    world.remove(cloth);
-    world.remove(box);
-    world.remove(ps);
+    o.remove_from(world);
     EXPECT_TRUE(world.particle_systems().empty());
     EXPECT_TRUE(world.colliders().empty());
     EXPECT_TRUE(world.cloths().empty());
@@ -91,25 +107,12 @@ TEST(Handles, AddRemoveReAddEveryKind) {
 
 TEST(Handles, StaleAndNullHandlesAreRejectedEverywhere) {
   World world;
-  const auto ps = world.add_particle_system(test::spawn_only_system());
-  const auto box = world.add_box({});
-  const auto cloth = world.add_cloth(small_cloth(1.0));
-  const auto field = world.add_force_field({});
-  AttractorSpringDef a;
-  a.system = ps;
-  const auto spring = world.add_attractor_spring(a);
-  world.remove(spring);
-  world.remove(field);
-  world.remove(cloth);
-  world.remove(box);
-  world.remove(ps);
+  const OneOfEach old(world);
+  old.remove_from(world);
   // Reuse every slot: the old handles must stay stale (generation bumped), not alias the new.
-  const auto ps2 = world.add_particle_system(test::spawn_only_system());
-  const auto box2 = world.add_box({});
-  const auto cloth2 = world.add_cloth(small_cloth(1.0));
-  const auto field2 = world.add_force_field({});
-  a.system = ps2;
-  const auto spring2 = world.add_attractor_spring(a);
+  const OneOfEach fresh(world);
+  const auto [ps, box, cloth, field, spring] = old;
+  const auto [ps2, box2, cloth2, field2, spring2] = fresh;
   EXPECT_EQ(ps2.id.index, ps.id.index);
   EXPECT_NE(ps2, ps);
   EXPECT_NE(box2, box);
