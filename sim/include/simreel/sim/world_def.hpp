@@ -10,7 +10,7 @@ namespace simreel::sim {
 struct WorldDef {
   double max_step = 1.0 / 240.0;  ///< (s) largest internal step; advance() splits each sampling
                                   ///< time into ceil(T / max_step) equal steps
-  std::uint64_t seed = 0;         ///< scene seed; emitter i draws from Rng(seed, i)
+  std::uint64_t seed = 0;         ///< scene seed; the i-th system ever added draws from Rng(seed, i)
   double contact_speed = 0.05;    ///< (m/s) normal speed under which a collision becomes a
                                   ///< resting contact (§3.6.3)
   int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
