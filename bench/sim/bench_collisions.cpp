@@ -15,9 +15,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "bvh.hpp"
-#include "narrow_phase.hpp"
-#include "particle_collisions.hpp"
+#include "collision/bvh.hpp"
+#include "collision/narrow_phase.hpp"
+#include "collision/particle_collisions.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/world.hpp"
 

@@ -116,7 +116,7 @@ Scene load_scene(const std::filesystem::path& path, const std::vector<std::strin
 SceneWorld build_world(const Scene& scene) {
   sim::WorldDef def = scene.world;
   def.seed = scene.seed;
-  SceneWorld out{sim::World(def), {}, {}, {}};
+  SceneWorld out{sim::World(def), {}, {}, {}, {}, {}};
   try {
     for (const auto& c : scene.colliders) {
       switch (c.type) {
@@ -131,12 +131,12 @@ SceneWorld build_world(const Scene& scene) {
     for (const auto& f : scene.force_fields) {
       sim::ForceFieldDef def = f.def;
       for (const auto& name : f.systems) def.systems.push_back(out.systems.at(system_index(scene, name)));
-      out.world.add_force_field(def);
+      out.force_fields.push_back(out.world.add_force_field(def));
     }
     for (const auto& a : scene.attractor_springs) {
       sim::AttractorSpringDef def = a.def;
       def.system = out.systems.at(system_index(scene, a.system));
-      out.world.add_attractor_spring(def);
+      out.attractor_springs.push_back(out.world.add_attractor_spring(def));
     }
     for (const auto& c : scene.cloths) out.cloths.push_back(out.world.add_cloth(c.def));
   } catch (const std::invalid_argument& e) {

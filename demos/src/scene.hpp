@@ -93,6 +93,8 @@ struct SceneWorld {
   std::vector<sim::ColliderHandle> colliders;
   std::vector<sim::ParticleSystemHandle> systems;
   std::vector<sim::ClothHandle> cloths;
+  std::vector<sim::ForceFieldHandle> force_fields;            ///< scene order
+  std::vector<sim::AttractorSpringHandle> attractor_springs;  ///< scene order
 };
 
 /// @throws SceneError if the engine rejects a definition (should not happen after checking).

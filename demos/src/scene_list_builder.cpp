@@ -121,8 +121,14 @@ render::SceneList initial_scene_list(const Scene& scene, const SceneWorld& sw) {
 
 void append_moved(std::span<const sim::MovedObject> moved, render::SceneList& out) {
   for (const sim::MovedObject& m : moved) {
-    // removed: enable at merge, once sim::MovedObject has `removed` (the drawable is dropped):
-    // if (m.removed) { out.removed.push_back(m.handle.packed()); continue; }
+    if (m.removed) {
+      // Force fields and attractor springs are reported too but have no drawable.
+      const sim::ObjectKind k = m.handle.kind;
+      if (k == sim::ObjectKind::body || k == sim::ObjectKind::particle_system ||
+          k == sim::ObjectKind::cloth)
+        out.removed.push_back(m.handle.packed());
+      continue;
+    }
     out.moved.push_back({m.handle.packed(), m.translation.cast<float>(), m.rotation.cast<float>()});
   }
 }

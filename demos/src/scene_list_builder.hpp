@@ -35,7 +35,9 @@ render::MeshDesc mesh_desc(const ColliderScene& c);
 render::SceneList initial_scene_list(const Scene& scene, const SceneWorld& sw);
 
 /// Appends what one World::advance() reported: each entry becomes a `moved` pose (float copy
-/// of translation (m, world frame) and rotation (local-to-world)), in the engine's order.
+/// of translation (m, world frame) and rotation (local-to-world)), in the engine's order; an
+/// entry with `removed` set becomes a `removed` key (bodies, particle systems and cloths: the
+/// renderer drops the drawable; removed force fields and springs have none and are skipped).
 void append_moved(std::span<const sim::MovedObject> moved, render::SceneList& out);
 
 /// Appends the state drawn at time `t` (s): one particle batch per system in emitter order

@@ -180,3 +180,45 @@ TEST(SceneList, FrameListViewsTheWorldsParticlesAndClothsAndFollowsTheCamera) {
   EXPECT_TRUE(list.added.empty());
   EXPECT_TRUE(list.moved.empty());
 }
+
+TEST(SceneList, RemovalsReachTheListOnceAndOnlyForDrawnKinds) {
+  Scene scene = scene_of(R"({
+    "colliders": [
+      {"type": "plane"},
+      {"type": "box", "position": [0, 0, 1], "half_extents": [0.5, 0.5, 0.5],
+       "path": {"keys": [{"time": 0, "position": [0, 0, 1]}, {"time": 2, "position": [1, 0, 1]}]}}
+    ],
+    "emitters": [{"name": "a", "rate": 10}],
+    "force_fields": [{"type": "uniform", "acceleration": [1, 0, 0]}],
+    "cloths": [{"rows": 3, "columns": 3, "position": [0, 0, 2]}]
+  })");
+  SceneWorld sw = build_world(scene);
+  ASSERT_EQ(sw.force_fields.size(), 1u);
+  const std::uint64_t box = sw.colliders[1].id.packed();
+  const std::uint64_t cloth = sw.cloths[0].id.packed();
+
+  // Advance once: the kinematic box moves and nothing is removed.
+  render::SceneList list;
+  append_moved(sw.world.advance(1.0 / 30), list);
+  ASSERT_EQ(list.moved.size(), 1u);
+  EXPECT_EQ(list.moved[0].key, box);
+  EXPECT_TRUE(list.removed.empty());
+
+  // Remove the box, the cloth and the field between advances: the next advance reports the two
+  // drawn objects as removals (the field has no drawable), and no pose for the box.
+  sw.world.remove(sw.colliders[1]);
+  sw.world.remove(sw.cloths[0]);
+  sw.world.remove(sw.force_fields[0]);
+  list.clear();
+  append_moved(sw.world.advance(1.0 / 30), list);
+  EXPECT_TRUE(list.moved.empty());
+  ASSERT_EQ(list.removed.size(), 2u);
+  EXPECT_EQ(list.removed[0], box);
+  EXPECT_EQ(list.removed[1], cloth);
+
+  // Reported once: the advance after that has nothing to remove.
+  list.clear();
+  append_moved(sw.world.advance(1.0 / 30), list);
+  EXPECT_TRUE(list.removed.empty());
+  EXPECT_TRUE(list.moved.empty());
+}

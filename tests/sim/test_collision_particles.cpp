@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "particle_collisions.hpp"
+#include "collision/particle_collisions.hpp"
 #include "sim_test_util.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/world.hpp"

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "bvh.hpp"
-#include "collider_impl.hpp"
-#include "narrow_phase.hpp"
+#include "collision/bvh.hpp"
+#include "collision/collider_impl.hpp"
+#include "collision/narrow_phase.hpp"
 #include "sim_test_util.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/world.hpp"

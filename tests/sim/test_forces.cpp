@@ -8,7 +8,7 @@
 #include <numbers>
 #include <vector>
 
-#include "forces.hpp"  // private: curl noise is checked directly
+#include "particles/forces.hpp"  // private: curl noise is checked directly
 #include "sim_test_util.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/world.hpp"

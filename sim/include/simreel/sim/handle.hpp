@@ -8,11 +8,25 @@
 
 namespace simreel::sim {
 
-/// What kind of object a handle names. Zero is never a valid kind.
-enum class ObjectKind : std::uint8_t { none = 0, collider = 1, particle_system = 2, cloth = 3 };
+/// What kind of object a handle names. Zero is never a valid kind. A collider of the scene format
+/// is a static or kinematic body: `collider` and `body` are the same kind.
+enum class ObjectKind : std::uint8_t {
+  none = 0,
+  body = 1,
+  collider = body,
+  particle_system = 2,
+  cloth = 3,
+  force_field = 4,
+  attractor_spring = 5,
+};
 
-/// A small value naming one registered object: slot index + generation. A default-constructed
-/// handle is null (generation 0). Stale handles (the slot was reused) are rejected by World.
+/// A small value naming one registered object: slot index + generation (Box2D v3's id pool). The
+/// index names a slot of the world's table of that kind; the slot points into dense arrays that
+/// are compacted by swap-remove, so a handle stays valid while others are removed. A
+/// default-constructed handle is null (generation 0). Removing an object bumps its slot's
+/// generation, so its handle is stale at once and stays stale when the slot is reused; World
+/// rejects stale and null handles with std::out_of_range. Handles of a world without removals
+/// are {registration index of that kind, generation 1}.
 struct Handle {
   std::uint32_t index = 0;       ///< slot index in the world's table of that kind
   std::uint16_t generation = 0;  ///< incremented each time the slot is reused; 0 = null
@@ -35,8 +49,12 @@ struct TypedHandle {
   friend constexpr bool operator==(const TypedHandle&, const TypedHandle&) = default;
 };
 
-using ColliderHandle = TypedHandle<ObjectKind::collider>;
+using BodyHandle = TypedHandle<ObjectKind::body>;
+/// A collider is a static or kinematic body with one shape: the same handle type.
+using ColliderHandle = BodyHandle;
 using ParticleSystemHandle = TypedHandle<ObjectKind::particle_system>;
 using ClothHandle = TypedHandle<ObjectKind::cloth>;
+using ForceFieldHandle = TypedHandle<ObjectKind::force_field>;
+using AttractorSpringHandle = TypedHandle<ObjectKind::attractor_spring>;
 
 }  // namespace simreel::sim

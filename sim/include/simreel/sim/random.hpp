@@ -28,6 +28,14 @@ class Rng {
     return deviation == 0.0 ? mean : mean + deviation * normal();
   }
 
+ /// The generator's complete state, for World::state_hash() and snapshots.
+  struct State {
+    std::uint64_t s[4];
+    double cached;
+    bool has_cached;
+  };
+  [[nodiscard]] State state() const { return {{s_[0], s_[1], s_[2], s_[3]}, cached_, has_cached_}; }
+
  private:
   std::uint64_t s_[4];
   double cached_ = 0.0;

@@ -14,28 +14,12 @@
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/forces.hpp"
 #include "simreel/sim/handle.hpp"
+#include "simreel/sim/moved_object.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/types.hpp"
+#include "simreel/sim/world_def.hpp"
 
 namespace simreel::sim {
-
-struct WorldDef {
-  double max_step = 1.0 / 240.0;  ///< (s) largest internal step; advance() splits each sampling
-                                  ///< time into ceil(T / max_step) equal steps
-  std::uint64_t seed = 0;         ///< scene seed; emitter i draws from Rng(seed, i)
-  double contact_speed = 0.05;    ///< (m/s) normal speed under which a collision becomes a
-                                  ///< resting contact (§3.6.3)
-  int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
-                                  ///< 0 = the hardware's count. Results are bit-identical at any
-                                  ///< count (static partitioning, per-particle gathers)
-};
-
-/// One entry of the moved list: the object's pose at the end of advance().
-struct MovedObject {
-  Handle handle;
-  Vec3 translation = Vec3::Zero();      ///< (m), world frame
-  Mat3 rotation = Mat3::Identity();     ///< local-to-world rotation
-};
 
 /// Thrown when the state stops being finite: names the object, step and time.
 class NonFiniteState : public std::runtime_error {
@@ -75,14 +59,16 @@ class World {
                                double mass, double radius, double lifetime);
 
   /// Adds a force field (Coutinho §3.3) acting from the next step on the systems it names (all
-  /// when its list is empty). Returns its index (registration order).
+  /// when its list is empty, including systems added later). Its curl noise is seeded from
+  /// (WorldDef::seed, count of fields ever added before it).
   /// @throws std::invalid_argument on a non-positive radius/half extent/frequency, a zero vortex
-  ///         axis, a negative drag, a non-finite value or a stale system handle.
-  std::size_t add_force_field(const ForceFieldDef& def);
-  /// Adds an animated zero-rest-length attractor spring (§3.3.5). Returns its index.
+  ///         axis, a negative drag or a non-finite value; std::out_of_range on a stale system
+  ///         handle.
+  ForceFieldHandle add_force_field(const ForceFieldDef& def);
+  /// Adds an animated zero-rest-length attractor spring (§3.3.5) on one system.
   /// @throws std::invalid_argument on negative stiffness/damping; std::out_of_range on a stale
   ///         handle.
-  std::size_t add_attractor_spring(const AttractorSpringDef& def);
+  AttractorSpringHandle add_attractor_spring(const AttractorSpringDef& def);
   /// Connects two live particles of a system, named by id, with a damped spring (eq. 3.6); a
   /// negative rest length takes their current distance. The spring is dropped when either dies.
   /// @throws std::invalid_argument if an id is not alive, a == b, or k_s/k_d < 0;
@@ -95,7 +81,8 @@ class World {
 
   /// Advances the simulation by `sampling_time` (s, > 0) in internal steps of at most
   /// WorldDef::max_step. Returns the objects whose pose changed since the last call (kinematic
-  /// colliders), in registration order. The reference stays valid until the next call.
+  /// colliders; registration order until a removal), then the objects removed since the last call
+  /// (MovedObject::removed). The reference stays valid until the next call.
   ///
   /// Each internal step (Coutinho §1.3): kinematic colliders move to their end-of-step pose; per
   /// system, particles are integrated (gravity + drag, §3.3), collided as swept spheres against
@@ -116,6 +103,39 @@ class World {
   ///         the particle id, the internal step number (1-based, as step_count() would count it)
   ///         and the time. The world is then left mid-advance and should be discarded.
   const std::vector<MovedObject>& advance(double sampling_time);
+
+  // --- Removal -------------------------------------------------------------------------------
+  /// Removes a registered object. Its handle (and every copy) is stale at once: every accessor
+  /// and remove() reject it with std::out_of_range, also after its slot is reused by a later
+  /// registration (the slot's generation is bumped). The next advance() reports the removal once
+  /// in its list (MovedObject::removed), after the moved entries. The other objects keep their
+  /// handles; the order of the lists (colliders(), particle_systems(), cloths(), the moved list)
+  /// may change, since the engine's arrays are compacted by swap-remove.
+  /// - a body/collider: warm-start data of resting contacts against it are dropped;
+  /// - a particle system: the attractor springs that pull it are removed with it (not reported
+  ///   separately) and force fields forget it (a field left with no system acts on none);
+  /// - a force field or attractor spring: it stops acting from the next step.
+  /// Random streams are keyed by each kind's registration count, so removing an object does not
+  /// change the draws of the others: a system independent of the removed object (no shared
+  /// particle-particle group) goes on exactly as in a world that never held it.
+  /// @throws std::out_of_range if the handle is null or stale.
+  void remove(BodyHandle h);
+  void remove(ParticleSystemHandle h);
+  void remove(ClothHandle h);
+  void remove(ForceFieldHandle h);
+  void remove(AttractorSpringHandle h);
+
+  /// FNV-1a 64 hash of the complete simulation state, in a fixed order: time and step count;
+  /// for every particle system (in the order of particle_systems()) its live particle count, all
+  /// SoA attributes of its live particles (positions, velocities, start-of-step positions when
+  /// kept, colours, radii, masses, ages, lifetimes, ids, charges when kept, base radii, tints,
+  /// split generations and countdowns), next id, emitter schedule and the states of its four
+  /// random generators (emitter, split, charge, splash); for every cloth its vertex positions
+  /// and velocities; for every body its pose (centre, rotation quaternion). Equal on the same
+  /// build for the same scene, seed and number of advance() calls at any thread count; any
+  /// change of one bit of that state changes it with overwhelming probability. Cost: linear in
+  /// the state size. Definitions (model) are not hashed.
+  [[nodiscard]] std::uint64_t state_hash() const;
 
   /// Current pose of a collider (for the initial render list): a box's centre and rotation; a
   /// plane's reference point and a rotation taking local +z to its normal.

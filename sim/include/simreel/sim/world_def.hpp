@@ -1,0 +1,21 @@
+#pragma once
+/// @file world_def.hpp
+/// WorldDef: the settings a World is created with (step size, seed, contact speed, threads).
+/// Its own header so the engine's lower layers can read it without including world.hpp.
+
+#include <cstdint>
+
+namespace simreel::sim {
+
+struct WorldDef {
+  double max_step = 1.0 / 240.0;  ///< (s) largest internal step; advance() splits each sampling
+                                  ///< time into ceil(T / max_step) equal steps
+  std::uint64_t seed = 0;         ///< scene seed; the i-th system ever added draws from Rng(seed, i)
+  double contact_speed = 0.05;    ///< (m/s) normal speed under which a collision becomes a
+                                  ///< resting contact (§3.6.3)
+  int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
+                                  ///< 0 = the hardware's count. Results are bit-identical at any
+                                  ///< count (static partitioning, per-particle gathers)
+};
+
+}  // namespace simreel::sim

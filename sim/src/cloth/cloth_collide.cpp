@@ -1,0 +1,193 @@
+// Cloth vertices against colliders: projection with inelastic normal response and Coulomb
+// friction (Coutinho §3.4, §3.6.1, §3.9.2).
+#include "cloth/cloth_collide.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "collision/narrow_phase.hpp"
+
+namespace simreel::sim::detail {
+
+namespace {
+
+/// Removes the inward normal velocity relative to the collider (normal n points out) and applies
+/// Coulomb friction to the tangential part.
+void respond(Vec3& v, const Vec3& n, const Vec3& collider_velocity, double friction) {
+  Vec3 rel = v - collider_velocity;
+  const double vn = rel.dot(n);
+  if (vn >= 0.0) return;  // already leaving
+  rel -= vn * n;          // normal part removed: |Δv_n| = -vn
+  const double vt = rel.norm();
+  const double cut = friction * -vn;
+  rel *= vt > cut ? (vt - cut) / vt : 0.0;
+  v = collider_velocity + rel;
+}
+
+/// Returns true and the outward normal if x was projected out of the plane's grown half-space.
+bool plane(const Collider& c, Vec3& x, double thickness, Vec3& n) {
+  const double d = c.normal.dot(x - c.point) - thickness;
+  if (d >= 0.0) return false;
+  x -= d * c.normal;
+  n = c.normal;
+  return true;
+}
+
+/// Box grown by `thickness` (square edges). If x ends inside, it leaves through the face the
+/// segment x_start -> x entered by (slab method in the box frame), or the nearest face when
+/// x_start was already inside (the box moved onto it).
+bool box(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Vec3& n) {
+  const Vec3 e = c.half_extents + Vec3::Constant(thickness);
+  Vec3 q = c.R.transpose() * (x - c.center);
+  for (int k = 0; k < 3; ++k)
+    if (!(std::abs(q[k]) < e[k])) return false;
+  const Vec3 q0 = c.R.transpose() * (x_start - c.center);
+  int axis = -1;
+  bool start_outside = false;
+  for (int k = 0; k < 3; ++k) start_outside |= !(std::abs(q0[k]) < e[k]);
+  if (start_outside) {
+    // Entry time of the segment into each slab; the face entered last is the one crossed.
+    double best = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      const double dq = q[k] - q0[k];
+      if (std::abs(q0[k]) < e[k] || dq == 0.0) continue;  // inside this slab from the start
+      const double t_enter = (std::copysign(e[k], q0[k]) - q0[k]) / dq;
+      if (t_enter > best) {
+        best = t_enter;
+        axis = k;
+      }
+    }
+  }
+  double sign = 0.0;
+  if (axis < 0) {
+    double depth = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      const double dk = e[k] - std::abs(q[k]);
+      if (dk < depth) {
+        depth = dk;
+        axis = k;
+      }
+    }
+    sign = q[axis] >= 0.0 ? 1.0 : -1.0;
+  } else {
+    sign = q0[axis] >= 0.0 ? 1.0 : -1.0;
+  }
+  q[axis] = sign * e[axis];
+  x = c.center + c.R * q;
+  n = sign * c.R.col(axis);
+  return true;
+}
+
+constexpr int kMaxSlides = 3;  // contacts followed per vertex per collider (wedges, concave meshes)
+
+/// Could the vertex's path x_start -> x come within `thickness` of the solid? World AABB test,
+/// the solid's box grown by its own motion over the step (kinematic colliders) and the thickness.
+bool near_solid(const Collider& c, const Vec3& x_start, const Vec3& x, double thickness) {
+  const double motion =
+      (c.center - c.prev_center).norm() +
+      (c.R - c.prev_R).norm() * ((c.aabb_center - c.center).norm() + c.aabb_half.norm());
+  const Vec3 grow = c.aabb_half + Vec3::Constant(thickness + motion);
+  const Vec3 lo = x_start.cwiseMin(x), hi = x_start.cwiseMax(x);
+  return ((lo - c.aabb_center).array() <= grow.array()).all() &&
+         ((c.aabb_center - hi).array() <= grow.array()).all();
+}
+
+/// Sphere, cylinder and triangle mesh (static or kinematic). The vertex's path x_start -> x is
+/// swept as a sphere of radius `thickness` with the particle pass's closed forms and AABB-tree
+/// query (sweep_collider, Coutinho §3.4, §2.2), along the motion relative to a kinematic body, so
+/// a fast vertex cannot tunnel. At the first contact the vertex stops on the grown surface and the
+/// rest of its displacement, less its normal part, slides on along the tangent plane and is
+/// swept again (up to kMaxSlides contacts; after the last one it stays at the contact point).
+/// A vertex that ends inside the sphere or cylinder grown by `thickness` without a swept contact
+/// (it started inside the solid: a collider moved onto it) goes out to the nearest point of the
+/// grown surface. For meshes the sweep alone keeps vertices out: a vertex that somehow started
+/// deep inside a mesh is not pushed out.
+bool solid(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Vec3& n) {
+  if (!near_solid(c, x_start, x, thickness)) return false;
+  bool touched = false;
+  Vec3 a = x_start, b = x;
+  for (int k = 0; k < kMaxSlides; ++k) {
+    SweepHit h;
+    if (!sweep_collider(c, a, b, thickness, k == 0, h)) break;
+    touched = true;
+    n = h.normal;
+    if (k == kMaxSlides - 1) {
+      b = h.point;
+      break;
+    }
+    Vec3 rest = (1.0 - h.s) * (b - a);
+    rest -= std::min(0.0, rest.dot(n)) * n;
+    a = h.point;
+    b = h.point + rest;
+  }
+  x = b;
+  if (c.shape == Collider::Shape::sphere) {
+    const Vec3 off = x - c.center;
+    const double rg = c.radius + thickness, d = off.norm();
+    if (d < rg && d > 0.0) {
+      n = off / d;
+      x = c.center + rg * n;
+      touched = true;
+    }
+  } else if (c.shape == Collider::Shape::cylinder) {
+    Vec3 q = c.R.transpose() * (x - c.center);
+    const double rg = c.radius + thickness, hg = c.half_height + thickness;
+    const double rho = q.head<2>().norm();
+    if (rho < rg && std::abs(q.z()) < hg) {
+      Vec3 ln;
+      if (rg - rho < hg - std::abs(q.z()) && rho > 0.0) {
+        ln = Vec3(q.x() / rho, q.y() / rho, 0.0);
+        q.head<2>() = rg * ln.head<2>();
+      } else {
+        ln = Vec3(0.0, 0.0, q.z() >= 0.0 ? 1.0 : -1.0);
+        q.z() = hg * ln.z();
+      }
+      x = c.center + c.R * q;
+      n = c.R * ln;
+      touched = true;
+    }
+  }
+  return touched;
+}
+
+}  // namespace
+
+void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
+                   const std::vector<std::uint8_t>& free, const std::vector<Collider>& colliders,
+                   double thickness, double friction, std::vector<std::uint8_t>& hit) {
+  const std::size_t n = x.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!free[i]) continue;
+    // Two sweeps so a vertex pushed from one collider into another (a box on the ground) ends
+    // clear of both in ordinary stacked configurations.
+    for (int sweep = 0; sweep < 2; ++sweep) {
+      bool moved = false;
+      for (const Collider& c : colliders) {
+        Vec3 normal;
+        bool touched = false;
+        switch (c.shape) {
+          case Collider::Shape::plane:
+            touched = plane(c, x[i], thickness, normal);
+            break;
+          case Collider::Shape::box:
+            touched = box(c, x_start[i], x[i], thickness, normal);
+            break;
+          case Collider::Shape::sphere:
+          case Collider::Shape::cylinder:
+          case Collider::Shape::mesh:
+            touched = solid(c, x_start[i], x[i], thickness, normal);
+            break;
+        }
+        if (touched) {
+          respond(v[i], normal, c.point_velocity(x[i]), friction);
+          hit[i] = 1;
+          moved = true;
+        }
+      }
+      if (!moved) break;
+    }
+  }
+}
+
+}  // namespace simreel::sim::detail

@@ -1,0 +1,78 @@
+#pragma once
+// The per-instance state of a Cloth (private to cloth/): positions, velocities, pins and the
+// workspaces of the implicit solver and the maximum-deformation pass (Coutinho §3.9.2). The
+// topology (ClothTopology) is the shared model; this is the state.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "cloth/sym3.hpp"
+#include "simreel/sim/cloth.hpp"
+
+namespace simreel::sim {
+
+using detail::Sym3;
+
+struct Cloth::State {
+  ClothDef def;
+  std::shared_ptr<const ClothTopology> topo;
+  std::uint64_t noise_key = 0;
+  std::size_t n = 0;
+  double vertex_mass = 0.0;
+  std::vector<Vec3> x, v;            // current state
+  std::vector<Vec3> x_start;         // start of the step (the paths of the §3.9.2 pass begin here)
+  std::vector<Vec3> f;               // force accumulator
+  std::vector<std::uint8_t> free;    // 0 for pinned vertices
+  std::vector<int> pin_of;           // index into def.pins or -1
+  std::vector<Vec3> pin_rest;        // fixed pins: initial world position
+  // Implicit Euler workspace (n or spring_count entries; allocated once).
+  std::vector<double> ks, kds;       // per spring: k_s, k_d of its family
+  std::vector<double> spring_length; // per spring: current length (m), set by forces()
+  std::vector<Vec3> spring_dir;      // per spring: unit a -> b, set by forces()
+  std::vector<Sym3> S;               // per spring: h k_d nnᵀ + h² ∂f/∂x block
+  std::vector<Sym3> precond;         // per vertex: inverse of the diagonal block (0 if pinned)
+  std::vector<Sym3> aero_damping;    // per vertex: -∂f_aero/∂v, lumped (implicit Euler only)
+  std::vector<std::uint32_t> pinned;  // pinned vertex indices
+  bool aero_active = false;
+  std::vector<Vec3> dv, b, r, z, p, Ap;
+  // Maximum-deformation pass workspace.
+  std::vector<double> t, t_next;
+  std::vector<std::int32_t> changed_in;  // per vertex: last pass that changed its t (-1: none)
+  std::vector<Vec3> origin, path;
+  std::vector<std::uint8_t> hit;
+  std::vector<Vec3> nacc;            // vertex normal accumulator
+  // Float copies for views.
+  std::vector<float> fpos, fnor, fvel;
+  std::size_t cg_iterations = 0, strain_passes = 0;
+
+  [[nodiscard]] double k_of(std::size_t s) const {
+    switch (topo->kind[s]) {
+      case SpringKind::stretch: return def.stretch.stiffness;
+      case SpringKind::shear: return def.shear.stiffness;
+      case SpringKind::bend: return def.bend.stiffness;
+    }
+    return 0.0;
+  }
+  [[nodiscard]] double kd_of(std::size_t s) const {
+    switch (topo->kind[s]) {
+      case SpringKind::stretch: return def.stretch.damping;
+      case SpringKind::shear: return def.shear.damping;
+      case SpringKind::bend: return def.bend.damping;
+    }
+    return 0.0;
+  }
+  [[nodiscard]] Vec3 pin_target(std::size_t i, double t1) const {
+    const ClothPin& pin = def.pins[std::size_t(pin_of[i])];
+    return pin.path.empty() ? pin_rest[i] : pin.path.sample(t1).translation;
+  }
+
+  void forces(double t);
+  void integrate_implicit(double h, double t1);
+  void integrate_explicit(double h, double t1, bool semi);
+  void max_deformation_pass();
+  void refresh_views();
+  Vec3 wind(const Vec3& p, double t) const;
+};
+
+}  // namespace simreel::sim

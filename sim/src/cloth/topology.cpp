@@ -1,0 +1,80 @@
+// Cloth topology (Coutinho §3.9.2, fig. 3.45): the grid's stretch, shear and bend springs and
+// the vertex adjacency, built once and shared by every instance of the same grid.
+#include <algorithm>
+#include <cstdint>
+
+#include "simreel/sim/cloth.hpp"
+
+namespace simreel::sim {
+
+ClothTopology::ClothTopology(std::size_t rows_, std::size_t columns_, double width_,
+                             double height_)
+    : rows(rows_), columns(columns_), width(width_), height(height_) {
+  if (rows < 1 || columns < 1 || rows * columns < 2)
+    throw std::invalid_argument("ClothTopology: rows, columns >= 1 and rows * columns >= 2");
+  if ((columns > 1 && (!(width > 0.0) || !std::isfinite(width))) ||
+      (rows > 1 && (!(height > 0.0) || !std::isfinite(height))))
+    throw std::invalid_argument("ClothTopology: width and height must be > 0 and finite");
+  const std::size_t n = rows * columns;
+  const double dx = columns > 1 ? width / double(columns - 1) : 0.0;
+  const double dy = rows > 1 ? height / double(rows - 1) : 0.0;
+  local_rest.resize(n);
+  uvs.resize(2 * n);
+  auto id = [this](std::size_t r, std::size_t c) { return std::uint32_t(r * columns + c); };
+  for (std::size_t r = 0; r < rows; ++r)
+    for (std::size_t c = 0; c < columns; ++c) {
+      const std::size_t i = id(r, c);
+      local_rest[i] = Vec3(columns > 1 ? -0.5 * width + double(c) * dx : 0.0,
+                           rows > 1 ? 0.5 * height - double(r) * dy : 0.0, 0.0);
+      uvs[2 * i] = columns > 1 ? float(double(c) / double(columns - 1)) : 0.5f;
+      uvs[2 * i + 1] = rows > 1 ? float(double(r) / double(rows - 1)) : 0.5f;
+    }
+  auto add = [&](std::uint32_t a, std::uint32_t b, SpringKind k) {
+    spring_a.push_back(std::min(a, b));
+    spring_b.push_back(std::max(a, b));
+    rest_length.push_back((local_rest[a] - local_rest[b]).norm());
+    kind.push_back(k);
+  };
+  for (std::size_t r = 0; r < rows; ++r)
+    for (std::size_t c = 0; c < columns; ++c) {
+      if (r + 1 < rows) add(id(r, c), id(r + 1, c), SpringKind::stretch);
+      if (c + 1 < columns) add(id(r, c), id(r, c + 1), SpringKind::stretch);
+    }
+  for (std::size_t r = 0; r + 1 < rows; ++r)
+    for (std::size_t c = 0; c + 1 < columns; ++c) {
+      add(id(r, c), id(r + 1, c + 1), SpringKind::shear);
+      add(id(r + 1, c), id(r, c + 1), SpringKind::shear);
+    }
+  limited_count = spring_a.size();
+  for (std::size_t r = 0; r < rows; ++r)
+    for (std::size_t c = 0; c < columns; ++c) {
+      if (r + 2 < rows) add(id(r, c), id(r + 2, c), SpringKind::bend);
+      if (c + 2 < columns) add(id(r, c), id(r, c + 2), SpringKind::bend);
+    }
+  // Triangles: each cell split along (r, c)-(r+1, c+1) as in §3.9.2; counter-clockwise seen from
+  // local +z (row index grows towards -y).
+  for (std::size_t r = 0; r + 1 < rows; ++r)
+    for (std::size_t c = 0; c + 1 < columns; ++c) {
+      const std::uint32_t a = id(r, c), b = id(r, c + 1), cc = id(r + 1, c), d = id(r + 1, c + 1);
+      triangles.insert(triangles.end(), {a, cc, d, a, d, b});
+    }
+  // Adjacency in CSR form, springs of each vertex in spring order (a fixed summation order).
+  adj_start.assign(n + 1, 0);
+  for (std::size_t s = 0; s < spring_a.size(); ++s) {
+    ++adj_start[spring_a[s] + 1];
+    ++adj_start[spring_b[s] + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) adj_start[i + 1] += adj_start[i];
+  adj_spring.resize(adj_start[n]);
+  adj_other.resize(adj_start[n]);
+  std::vector<std::uint32_t> fill(adj_start.begin(), adj_start.end() - 1);
+  for (std::size_t s = 0; s < spring_a.size(); ++s) {
+    const std::uint32_t a = spring_a[s], b = spring_b[s];
+    adj_spring[fill[a]] = std::uint32_t(s);
+    adj_other[fill[a]++] = b;
+    adj_spring[fill[b]] = std::uint32_t(s);
+    adj_other[fill[b]++] = a;
+  }
+}
+
+}  // namespace simreel::sim

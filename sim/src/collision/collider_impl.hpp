@@ -1,0 +1,140 @@
+#pragma once
+// Colliders at run time and the particle collision pass (private).
+// Coutinho §2.1–2.2 (local-frame queries, AABB tree), §3.4 (swept spheres, collider fixed at its
+// end-of-step pose), §3.4.2 (particles inside a body are removed), §3.6.1 (impulse with
+// restitution and Coulomb friction, critical friction), §3.6.3 (resting contact).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "collision/bvh.hpp"
+#include "collision/narrow_phase.hpp"
+#include "particles/particle_store.hpp"
+#include "simreel/sim/collider.hpp"
+#include "simreel/sim/random.hpp"
+#include "simreel/sim/moved_object.hpp"
+
+namespace simreel::sim::detail {
+
+/// A mesh collider's geometry in its local frame, shared and immutable after registration.
+struct MeshShape {
+  std::vector<Triangle> triangles;
+  Bvh bvh;
+  bool closed = false;  ///< every edge shared by exactly two triangles
+  Vec3 local_center = Vec3::Zero();  ///< of the local AABB
+  Vec3 local_half = Vec3::Zero();
+  /// Parity of crossings of a fixed, slightly oblique ray from p (local frame): inside a closed mesh.
+  [[nodiscard]] bool contains(const Vec3& p) const;
+};
+
+struct Collider {
+  enum class Shape : std::uint8_t { plane, box, sphere, cylinder, mesh };
+  Shape shape = Shape::plane;
+  Material material;
+
+  // plane
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();  ///< unit
+
+  // solids: definition
+  Vec3 half_extents = Vec3::Zero();  ///< box
+  double radius = 0.0;               ///< sphere, cylinder
+  double half_height = 0.0;          ///< cylinder
+  std::shared_ptr<const MeshShape> mesh;
+  KeyframePath path;  ///< empty: static
+  // solids: pose at the end of the current step (Coutinho §3.4: the body is taken as fixed there)
+  Vec3 center = Vec3::Zero();  ///< origin of the local frame, world
+  Quat rotation = Quat::Identity();
+  Mat3 R = Mat3::Identity();     ///< local -> world
+  Vec3 velocity = Vec3::Zero();  ///< (m/s) of the centre, from the path
+  Vec3 angular_velocity = Vec3::Zero();  ///< (rad/s), world frame
+  /// Pose at the start of the current step (kinematic solids; equal to the pose when static):
+  /// the first sweep of a step runs in the body's frame from the particle's start point in the
+  /// start pose to its end point in the end pose, i.e. along the relative motion (§2.1, §3.7).
+  Vec3 prev_center = Vec3::Zero();
+  Mat3 prev_R = Mat3::Identity();
+  Vec3 aabb_center = Vec3::Zero();  ///< world AABB of the solid (unexpanded)
+  Vec3 aabb_half = Vec3::Zero();
+
+  // what the moved list last reported
+  Vec3 reported_translation = Vec3::Zero();
+  Quat reported_rotation = Quat::Identity();
+
+  [[nodiscard]] bool kinematic() const { return shape != Shape::plane && !path.empty(); }
+  void set_pose(const Transform& t);
+  /// Moves a kinematic collider to its pose and velocities at time t.
+  void update(double t);
+  /// Velocity (m/s) of the collider's material point at world position p.
+  [[nodiscard]] Vec3 point_velocity(const Vec3& p) const {
+    return shape == Shape::plane ? Vec3::Zero() : Vec3(velocity + angular_velocity.cross(p - center));
+  }
+  [[nodiscard]] MovedObject pose() const;
+};
+
+Collider make_collider(const PlaneDef& def);
+Collider make_collider(const BoxDef& def, double time);
+Collider make_collider(const SphereDef& def, double time);
+Collider make_collider(const CylinderDef& def, double time);
+Collider make_collider(const MeshDef& def, double time);
+
+/// A droplet requested by HitAction::split, appended to the system after the pass.
+struct SpawnRequest {
+  Vec3 position, velocity;
+  double radius, mass, lifetime;
+};
+
+/// Per-system inputs and outputs of a collision pass.
+struct CollisionContext {
+  double contact_speed = 0.05;
+  Rng* rng = nullptr;                      ///< splash directions
+  std::vector<SpawnRequest>* spawns = nullptr;
+  std::uint64_t removed_inside = 0;        ///< §3.4.2 removals this pass
+  /// The system's own hit action (ParticleSystemDef::on_hit), replacing the collider's.
+  const HitAction* on_hit = nullptr;
+  const SplitOnHit* on_hit_split = nullptr;
+};
+
+/// Collides particles [begin, end) of one system with every collider, after integration. Each
+/// particle's motion over the step is the segment from its start-of-step position to its
+/// position, travelled in min(age, h) seconds (a newborn moves only for its age).
+void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
+             const std::vector<Collider>& colliders, CollisionContext& ctx, const ForceParams& f);
+
+/// Moves particle i from `from` to its stored position as a swept sphere against the colliders
+/// and stops it at the first contact (its velocity is kept): displacements made outside the
+/// integrator (particle–particle overlap correction) cannot carry it through a surface.
+void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
+                            const std::vector<Collider>& colliders);
+
+/// First contact of a sphere of radius r moving a -> b (world) with one collider (Coutinho §3.4):
+/// the same closed forms and AABB-tree query the particle pass uses. `first`: the segment starts
+/// in the body's start-of-step pose (relative motion of a kinematic body, §2.1). On a contact
+/// earlier than hit.s, sets hit.s (fraction of the segment), hit.normal (unit, surface to the
+/// sphere) and hit.point (the centre there, exactly r from the surface) and returns true. A start
+/// point inside the solid itself is no contact (the caller decides: removal or push-out).
+bool sweep_collider(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                    SweepHit& hit);
+
+/// A sphere's contact with a collider's surface at the end of a step: the closest feature
+/// (face, edge or vertex), for the resting-contact constraints of the particle solve (§3.6.3).
+struct SurfaceContact {
+  Vec3 normal = Vec3::Zero();  ///< unit, world frame, from the surface towards the centre
+  double gap = 0.0;            ///< (m) surface to sphere distance; negative: overlap
+};
+
+/// Closest features of collider c to the sphere (centre p, radius r, world frame) with
+/// gap < margin, nearest first, at most max_out with normals apart by more than ~2.5 degrees (a
+/// particle in a mesh crease touches one facet per side; the facets sharing an edge or vertex
+/// give one contact). A centre inside a sphere, cylinder or closed mesh gives none (§3.4.2
+/// removes it); one inside a box gives the face it is least deep behind. Returns the count.
+int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
+                     SurfaceContact* out, int max_out);
+
+/// Impulse response of a particle against an immovable collider, see collider.cpp. Exposed for
+/// the tests of the critical-friction case.
+Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, double contact_speed,
+             const Vec3& kick);
+
+}  // namespace simreel::sim::detail

@@ -1,0 +1,142 @@
+#pragma once
+// Narrow phase: a sphere of radius r moving a -> a + d against one triangle (Coutinho §3.4 swept
+// spheres, §3.7 first contact with a face, edge or vertex and that feature's normal). Closed
+// forms: the face is a plane offset by r, an edge a cylinder of radius r, a vertex a sphere of
+// radius r; their union is the triangle grown by r, so the earliest of the three is the exact
+// time of contact. Triangles are two-sided: the face normal is taken on the side of the start
+// point. Private; header-only so the tests can check it against brute force.
+
+#include <cmath>
+
+#include "collision/bvh.hpp"
+
+namespace simreel::sim::detail {
+
+/// First contact found so far: fraction s of the segment, unit normal at contact (pointing from
+/// the surface to the particle) and the particle centre there, moved out to exactly r.
+struct SweepHit {
+  double s = std::numeric_limits<double>::infinity();
+  Vec3 normal = Vec3::Zero();
+  Vec3 point = Vec3::Zero();
+};
+
+namespace np {
+
+/// First time s in [0, 1] at which a point m + s d enters the ball |x| <= rho, given
+/// A = |d|², B = m·d, C = |m|² - rho² (the closed form of a swept sphere against a vertex,
+/// an edge's axis or a sphere, Coutinho §3.5). A start inside (C <= 0) counts at s = 0 when it
+/// moves further in. Returns false when there is no such entry.
+inline bool first_entry(double A, double B, double C, double& s) {
+  if (!(B < 0.0)) return false;
+  if (C <= 0.0) {
+    s = 0.0;
+    return true;
+  }
+  if (A == 0.0) return false;
+  const double disc = B * B - A * C;
+  if (disc < 0.0) return false;
+  s = (-B - std::sqrt(disc)) / A;
+  return s <= 1.0;
+}
+
+/// A start point inside the grown feature counts as a contact at s = 0 when it moves further in
+/// (the particle rests on, or was pushed a little into, the surface), and is put back on it.
+inline void sweep_vertex(const Vec3& v, const Vec3& a, const Vec3& d, double r, SweepHit& best) {
+  const Vec3 m = a - v;
+  const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - r * r;
+  double s;
+  if (!first_entry(A, B, C, s)) return;
+  if (!(s < best.s)) return;
+  const Vec3 p = a + s * d;
+  const Vec3 off = p - v;
+  const double len = off.norm();
+  if (!(len > 0.0)) return;
+  best.s = s;
+  best.normal = off / len;
+  best.point = v + best.normal * r;
+}
+
+inline void sweep_edge(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& d, double r,
+                       SweepHit& best) {
+  const Vec3 e = p1 - p0;
+  const double ee = e.squaredNorm();
+  if (!(ee > 0.0)) return;
+  const Vec3 m = a - p0;
+  const Vec3 mp = m - (m.dot(e) / ee) * e;
+  const Vec3 dp = d - (d.dot(e) / ee) * e;
+  const double A = dp.squaredNorm(), B = mp.dot(dp), C = mp.squaredNorm() - r * r;
+  double s;
+  if (!first_entry(A, B, C, s)) return;
+  if (!(s < best.s)) return;
+  const Vec3 p = a + s * d;
+  const double u = (p - p0).dot(e) / ee;
+  if (u < 0.0 || u > 1.0) return;  // the end vertices cover the rest
+  const Vec3 q = p0 + u * e;
+  const Vec3 off = p - q;
+  const double len = off.norm();
+  if (!(len > 0.0)) return;
+  best.s = s;
+  best.normal = off / len;
+  best.point = q + best.normal * r;
+}
+
+/// Is p (on the triangle's plane, or near it) inside the triangle's prism? Barycentric signs.
+inline bool in_prism(const Triangle& t, const Vec3& p) {
+  const Vec3& n = t.normal;
+  return n.dot((t.b - t.a).cross(p - t.a)) >= 0.0 && n.dot((t.c - t.b).cross(p - t.b)) >= 0.0 &&
+         n.dot((t.a - t.c).cross(p - t.c)) >= 0.0;
+}
+
+inline void sweep_face(const Triangle& t, const Vec3& a, const Vec3& d, double r, SweepHit& best) {
+  double d0 = t.normal.dot(a - t.a);
+  double dd = t.normal.dot(d);
+  Vec3 n = t.normal;
+  if (d0 < 0.0 || (d0 == 0.0 && dd > 0.0)) {  // the start point's side
+    n = -n;
+    d0 = -d0;
+    dd = -dd;
+  }
+  if (!(dd < 0.0)) return;  // not approaching
+  const double s = d0 > r ? (d0 - r) / -dd : 0.0;
+  if (s > 1.0 || !(s < best.s)) return;
+  Vec3 p = a + s * d;
+  if (!in_prism(t, p)) return;
+  p += (r - n.dot(p - t.a)) * n;
+  best.s = s;
+  best.normal = n;
+  best.point = p;
+}
+
+}  // namespace np
+
+/// Swept sphere against one triangle: updates `best` if this triangle is touched earlier.
+inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, double r,
+                           SweepHit& best) {
+  np::sweep_face(t, a, d, r, best);
+  np::sweep_edge(t.a, t.b, a, d, r, best);
+  np::sweep_edge(t.b, t.c, a, d, r, best);
+  np::sweep_edge(t.c, t.a, a, d, r, best);
+  np::sweep_vertex(t.a, a, d, r, best);
+  np::sweep_vertex(t.b, a, d, r, best);
+  np::sweep_vertex(t.c, a, d, r, best);
+}
+
+/// Does the ray from p along dir (unit) cross the triangle at a positive distance < len?
+/// (Möller–Trumbore; used by the parity test for points inside closed meshes.)
+inline bool ray_crosses(const Triangle& t, const Vec3& p, const Vec3& dir, double len) {
+  const Vec3 e1 = t.b - t.a, e2 = t.c - t.a;
+  const Vec3 q = dir.cross(e2);
+  const double det = e1.dot(q);
+  if (std::abs(det) < 1e-300) return false;
+  const double inv = 1.0 / det;
+  const Vec3 s = p - t.a;
+  const double u = s.dot(q) * inv;
+  if (u < 0.0 || u > 1.0) return false;
+  const Vec3 k = s.cross(e1);
+  const double v = dir.dot(k) * inv;
+  if (v < 0.0 || u + v > 1.0) return false;
+  const double dist = e2.dot(k) * inv;
+  return dist > 0.0 && dist < len;
+}
+
+}  // namespace simreel::sim::detail

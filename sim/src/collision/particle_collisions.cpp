@@ -1,0 +1,396 @@
+// Particle–particle collisions: hashed uniform grid (Coutinho §2.3.1) and sequential impulses
+// converging to the simultaneous-impulse solution of §3.6.2 with the pair response of §3.6.1.
+#include "collision/particle_collisions.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+namespace simreel::sim::detail {
+
+namespace {
+
+std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uint32_t level,
+                        std::uint32_t mask) {
+  // Teschner et al. 2003 spatial hash primes; the level (§2.3.2) is one more coordinate.
+  const auto h = std::uint64_t(x) * 73856093ull ^ std::uint64_t(y) * 19349663ull ^
+                 std::uint64_t(z) * 83492791ull ^ std::uint64_t(level) * 2654435761ull;
+  return std::uint32_t(h ^ (h >> 29)) & mask;
+}
+
+}  // namespace
+
+void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, double contact_speed,
+                           double h, const std::vector<Collider>* colliders) {
+  std::size_t n = 0;
+  for (const auto& m : members) n += m.store->count;
+  x.resize(n);
+  v.resize(n);
+  inv_mass.resize(n);
+  radius.resize(n);
+  restitution.resize(n);
+  friction.resize(n);
+  key.resize(n);
+  collides.resize(n);
+  std::size_t k = 0;
+  for (const auto& m : members) {
+    const ParticleStore& s = *m.store;
+    for (std::size_t i = 0; i < s.count; ++i, ++k) {
+      x[k] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
+      v[k] = Vec3(s.velocity[3 * i], s.velocity[3 * i + 1], s.velocity[3 * i + 2]);
+      inv_mass[k] = 1.0 / double(s.mass[i]);
+      radius[k] = s.radius[i];
+      restitution[k] = m.restitution;
+      friction[k] = m.friction;
+      key[k] = (std::uint64_t(m.system) << 40) | s.id[i];
+      collides[k] = m.collide ? 1 : 0;
+    }
+  }
+  x_before.clear();
+  if (n < 2) return;
+  find_contacts(contact_speed, h);
+  if (colliders != nullptr && !colliders->empty())
+    find_collider_contacts(*colliders, h, contact_speed);
+  WarmCache* cache = nullptr;
+  if (warm_start && !members.empty()) {
+    for (WarmCache& c : caches_)
+      if (c.group == members.front().system) cache = &c;
+    if (cache == nullptr) {
+      caches_.emplace_back();
+      cache = &caches_.back();
+      cache->group = members.front().system;
+    }
+    load_warm_start(*cache);
+  }
+  v_before_ = v;
+  solve();
+  if (cache != nullptr) store_warm_start(*cache);
+  if (contacts.empty()) return;
+  // The integrator moved each particle along its end-of-step velocity (x1 = x0 + dt v1, the
+  // semi-implicit Euler step; first order for the others), so the position follows the change
+  // the contact impulses made to it: a stack whose weight the solve cancels stays where it was
+  // instead of sinking g h^2 per step into overlaps the projection must undo.
+  x_before = x;
+  k = 0;
+  for (const auto& m : members) {
+    const ParticleStore& s = *m.store;
+    for (std::size_t i = 0; i < s.count; ++i, ++k)
+      x[k] += std::min(double(s.age[i]), h) * (v[k] - v_before_[k]);
+  }
+  project_positions();
+  k = 0;
+  for (const auto& m : members) {
+    ParticleStore& s = *m.store;
+    for (std::size_t i = 0; i < s.count; ++i, ++k)
+      for (int a = 0; a < 3; ++a) {
+        s.position[3 * i + std::size_t(a)] = float(x[k][a]);
+        s.velocity[3 * i + std::size_t(a)] = float(v[k][a]);
+      }
+  }
+}
+
+void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colliders, double h,
+                                              double contact_speed) {
+  constexpr int kMaxPerCollider = 3;
+  SurfaceContact found[kMaxPerCollider];
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    if (!collides.empty() && collides[p] == 0) continue;
+    const double r = radius[p];
+    for (std::size_t ci = 0; ci < colliders.size(); ++ci) {
+      const Collider& col = colliders[ci];
+      const HitAction act = col.material.on_hit;
+      if (act == HitAction::kill || act == HitAction::split) continue;  // the swept pass's job
+      const int m = surface_contacts(col, x[p], r, margin_fraction * r, found, kMaxPerCollider);
+      for (int q = 0; q < m; ++q) {
+        Contact c;
+        c.i = kCollider;
+        c.j = std::uint32_t(p);
+        c.collider = std::uint32_t(ci);
+        c.n = found[q].normal;
+        c.depth = -found[q].gap;
+        c.m_eff = 1.0 / inv_mass[p];
+        c.vc = col.point_velocity(x[p] - (r + found[q].gap) * c.n);
+        // Speculative while apart: the particle may still close the gap this step.
+        c.target = found[q].gap > 0.0 ? -found[q].gap / h : 0.0;
+        const Vec3 dv = v[p] - c.vc;
+        const Vec3 vt = dv - dv.dot(c.n) * c.n;
+        c.mu = act == HitAction::stick ? std::numeric_limits<double>::infinity()
+               : vt.norm() <= contact_speed ? col.material.static_mu()
+                                            : col.material.friction;
+        contacts.push_back(c);
+      }
+    }
+  }
+}
+
+void ParticleCollider::forget_collider(std::uint32_t removed, std::uint32_t moved_from) {
+  constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  for (WarmCache& c : caches_) {
+    std::size_t keep = 0;
+    for (std::size_t q = 0; q < c.ki.size(); ++q) {
+      std::uint64_t kj = c.kj[q];
+      if (kj == (kWall | removed)) continue;
+      if (kj == (kWall | moved_from)) kj = kWall | removed;
+      c.ki[keep] = c.ki[q];
+      c.kj[keep] = kj;
+      c.n[keep] = c.n[q];
+      c.pt[keep] = c.pt[q];
+      c.pn[keep] = c.pn[q];
+      ++keep;
+    }
+    c.ki.resize(keep);
+    c.kj.resize(keep);
+    c.n.resize(keep);
+    c.pt.resize(keep);
+    c.pn.resize(keep);
+  }
+}
+
+void ParticleCollider::forget_system(std::uint32_t serial) {
+  caches_.erase(std::remove_if(caches_.begin(), caches_.end(),
+                               [serial](const WarmCache& c) { return c.group == serial; }),
+                caches_.end());
+}
+
+void ParticleCollider::load_warm_start(const WarmCache& c) {
+  constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  std::size_t cursor = 0;
+  for (Contact& ct : contacts) {
+    ct.pn = 0.0;
+    ct.pt = Vec3::Zero();
+    // Only resting and speculative contacts (target <= 0): an impact's impulse is its own, the
+    // previous step's says nothing about it.
+    if (ct.target > 0.0) continue;
+    const bool wall = ct.i == kCollider;
+    const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
+    const std::uint64_t kj = wall ? (kWall | ct.collider) : key[ct.j];
+    // Contacts come in ascending particle order, mostly with ascending keys: walk a cursor,
+    // and search only when a key goes back.
+    if (cursor > 0 && (cursor > c.ki.size() || c.ki[cursor - 1] >= ki))
+      cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), ki) - c.ki.begin());
+    while (cursor < c.ki.size() && c.ki[cursor] < ki) ++cursor;
+    // A collider may give a particle several contacts: the one with the nearest normal.
+    std::size_t best = c.ki.size();
+    double best_dot = 0.99;
+    for (std::size_t q = cursor; q < c.ki.size() && c.ki[q] == ki; ++q) {
+      if (c.kj[q] != kj) continue;
+      const double dot = wall ? c.n[q].dot(ct.n) : 1.0;
+      if (dot < best_dot) continue;
+      best = q;
+      best_dot = dot;
+      if (!wall) break;
+    }
+    if (best == c.ki.size()) continue;
+    ct.pn = c.pn[best];
+    const Vec3 t = c.pt[best] - c.pt[best].dot(ct.n) * ct.n;  // onto the current tangent plane
+    const double bound = ct.mu * ct.pn, len = t.norm();
+    ct.pt = len > bound ? Vec3(t * (bound / len)) : t;
+  }
+}
+
+void ParticleCollider::store_warm_start(WarmCache& c) const {
+  constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  c.ki.clear();
+  c.kj.clear();
+  c.n.clear();
+  c.pt.clear();
+  c.pn.clear();
+  bool sorted = true;
+  for (const Contact& ct : contacts) {
+    if (!(ct.pn > 0.0)) continue;
+    const bool wall = ct.i == kCollider;
+    const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
+    sorted = sorted && (c.ki.empty() || c.ki.back() <= ki);
+    c.ki.push_back(ki);
+    c.kj.push_back(wall ? (kWall | ct.collider) : key[ct.j]);
+    c.n.push_back(ct.n);
+    c.pt.push_back(ct.pt);
+    c.pn.push_back(ct.pn);
+  }
+  if (sorted) return;
+  // Keys out of order (particles of several systems interleaved): sort by ki, ties in contact
+  // order, so lookups stay deterministic.
+  std::vector<std::size_t> order(c.ki.size());
+  for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return c.ki[a] < c.ki[b]; });
+  WarmCache s;
+  for (std::size_t q : order) {
+    s.ki.push_back(c.ki[q]);
+    s.kj.push_back(c.kj[q]);
+    s.n.push_back(c.n[q]);
+    s.pt.push_back(c.pt[q]);
+    s.pn.push_back(c.pn[q]);
+  }
+  s.group = c.group;
+  c = std::move(s);
+}
+
+void ParticleCollider::find_contacts(double contact_speed, double h) {
+  contacts.clear();
+  const std::size_t n = x.size();
+  if (n < 2) return;
+  double sum_r = 0.0, max_r = 0.0, min_r = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    sum_r += radius[i];
+    max_r = std::max(max_r, radius[i]);
+    min_r = std::min(min_r, radius[i]);
+  }
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const double reach_d = 2.0 + 2.0 * margin;  // a sphere's reach, times its radius
+  // Uniform grid (§2.3.1) unless sizes differ by about an order of magnitude or more; then the
+  // multi-level grid (§2.3.2): level l has cells 2 x 2^l the smallest reach, each particle
+  // lives in the finest level whose cells hold its reach.
+  levels = 1;
+  if (max_r > 8.0 * min_r) {
+    cell_size = 2.0 * reach_d * min_r;
+    while (std::ldexp(cell_size, levels - 1) < reach_d * max_r) ++levels;
+  } else {
+    cell_size = std::max(4.0 * sum_r / double(n), reach_d * max_r);
+  }
+  std::uint32_t table = 1;
+  while (table < 2 * n) table <<= 1;
+  const std::uint32_t mask = table - 1;
+  cell_xyz_.resize(3 * n);
+  cell_hash_.resize(n);
+  level_.resize(n);
+  bucket_start_.assign(std::size_t(table) + 1, 0);
+  sorted_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t l = 0;
+    while (int(l) + 1 < levels && std::ldexp(cell_size, int(l)) < reach_d * radius[i]) ++l;
+    level_[i] = std::uint8_t(l);
+    const double inv_cell = 1.0 / std::ldexp(cell_size, int(l));
+    for (int a = 0; a < 3; ++a)
+      cell_xyz_[3 * i + std::size_t(a)] = std::int64_t(std::floor(x[i][a] * inv_cell));
+    cell_hash_[i] = hash_cell(cell_xyz_[3 * i], cell_xyz_[3 * i + 1], cell_xyz_[3 * i + 2], l, mask);
+    ++bucket_start_[cell_hash_[i] + 1];
+  }
+  for (std::uint32_t b = 0; b < table; ++b) bucket_start_[b + 1] += bucket_start_[b];
+  // Counting sort, stable: each bucket lists its particles in ascending index.
+  cursor_.assign(bucket_start_.begin(), bucket_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) sorted_[cursor_[cell_hash_[i]]++] = std::uint32_t(i);
+  for (std::size_t i = 0; i < n; ++i) {
+    // Own level (pairs j > i), then every coarser one: a pair of different levels is found once,
+    // from its smaller particle, in the 27 cells of the larger one's level (its cells are at
+    // least both reaches).
+    for (int l = level_[i]; l < levels; ++l) {
+      std::int64_t cx = cell_xyz_[3 * i], cy = cell_xyz_[3 * i + 1], cz = cell_xyz_[3 * i + 2];
+      if (l != level_[i]) {
+        const double inv_cell = 1.0 / std::ldexp(cell_size, l);
+        cx = std::int64_t(std::floor(x[i][0] * inv_cell));
+        cy = std::int64_t(std::floor(x[i][1] * inv_cell));
+        cz = std::int64_t(std::floor(x[i][2] * inv_cell));
+      }
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const std::int64_t nx = cx + dx, ny = cy + dy, nz = cz + dz;
+            const std::uint32_t b = hash_cell(nx, ny, nz, std::uint32_t(l), mask);
+            for (std::uint32_t q = bucket_start_[b]; q < bucket_start_[b + 1]; ++q) {
+              const std::uint32_t j = sorted_[q];
+              if ((levels > 1 && level_[j] != l) || (l == level_[i] && j <= i)) continue;
+              // Another cell hashed into the same bucket: it is visited from its own offset.
+              if (cell_xyz_[3 * j] != nx || cell_xyz_[3 * j + 1] != ny ||
+                  cell_xyz_[3 * j + 2] != nz)
+                continue;
+              const Vec3 d = x[j] - x[i];
+              const double rr = radius[i] + radius[j];
+              const double reach = rr + margin * std::min(radius[i], radius[j]);
+              const double d2 = d.squaredNorm();
+              if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
+              const double dist = std::sqrt(d2);
+              const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
+              // Apart but within the margin: a speculative resting contact (it may close the gap
+              // this step, no more), so a pile's contacts hold without first overlapping. An
+              // impact is left until it overlaps, where it gets its restitution.
+              if (dist >= rr && -vn > contact_speed) continue;
+              Contact c;
+              c.i = std::uint32_t(i);
+              c.j = j;
+              c.n = d / dist;
+              c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
+              c.depth = rr - dist;
+              const double e = 0.5 * (restitution[i] + restitution[j]);
+              c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
+              c.mu = 0.5 * (friction[i] + friction[j]);
+              contacts.push_back(c);
+            }
+          }
+    }
+  }
+}
+
+void ParticleCollider::solve() {
+  for (Contact& c : contacts) {
+    const Vec3 p = c.pn * c.n + c.pt;
+    if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
+    v[c.j] += inv_mass[c.j] * p;
+  }
+  // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
+  const auto update = [&](Contact& c, auto wall_tag) {
+    constexpr bool wall = decltype(wall_tag)::value;
+    const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+    Vec3 dv = v[c.j] - (wall ? c.vc : v[c.i]);
+    // Normal: accumulated impulse clamped to push only.
+    const double vn = dv.dot(c.n);
+    const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
+    const double dpn = pn_new - c.pn;
+    c.pn = pn_new;
+    if (!wall) v[c.i] -= (dpn * wi) * c.n;
+    v[c.j] += (dpn * wj) * c.n;
+    // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
+    dv = v[c.j] - (wall ? c.vc : v[c.i]);
+    const Vec3 vt = dv - dv.dot(c.n) * c.n;
+    Vec3 pt_new = c.pt - c.m_eff * vt;
+    const double bound = c.mu * c.pn;
+    const double len = pt_new.norm();
+    if (len > bound) pt_new *= bound / len;
+    const Vec3 dpt = pt_new - c.pt;
+    c.pt = pt_new;
+    if (!wall) v[c.i] -= wi * dpt;
+    v[c.j] += wj * dpt;
+  };
+  for (int it = 0; it < iterations; ++it)
+    for (Contact& c : contacts) {
+      if (c.i == kCollider) {
+        update(c, std::true_type{});
+      } else {
+        update(c, std::false_type{});
+      }
+    }
+}
+
+void ParticleCollider::project_positions() {
+  if (x_before.size() != x.size()) x_before = x;
+  for (int it = 0; it < position_iterations; ++it) {
+    for (const Contact& c : contacts) {
+      const bool wall = c.i == kCollider;
+      double slop = 0.0, depth = 0.0;
+      Vec3 nn = c.n;
+      if (wall) {
+        // The surface as the plane of its closest feature at the start of the projection.
+        depth = c.depth - c.n.dot(x[c.j] - x_before[c.j]);
+      } else {
+        const Vec3 d = x[c.j] - x[c.i];
+        const double dist = d.norm();
+        if (!(dist > 0.0)) continue;
+        nn = d / dist;
+        depth = radius[c.i] + radius[c.j] - dist;
+        slop = slop_fraction * std::min(radius[c.i], radius[c.j]);
+      }
+      // Each contact aims at the same end depth in every sweep, so the sweeps converge to it.
+      // A collider contact may close its gap (goal 0) but not go deeper.
+      const double goal = wall ? (c.depth > 0.0 ? (1.0 - position_fraction) * c.depth : 0.0)
+                               : c.depth - position_fraction * std::max(0.0, c.depth - slop);
+      if (!(depth > goal)) continue;
+      const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+      const double corr = (depth - goal) / (wi + wj);
+      if (!wall) x[c.i] -= corr * wi * nn;
+      x[c.j] += corr * wj * nn;
+    }
+  }
+}
+
+}  // namespace simreel::sim::detail

@@ -1,0 +1,139 @@
+#pragma once
+// Particle–particle collisions (private): a hashed uniform grid finds the candidate pairs
+// (Coutinho §2.3.1, cell = 2 x mean diameter), and a sequential-impulse (projected Gauss–Seidel)
+// solver resolves all contacts of a step together. With the restitution target of each contact
+// fixed from the velocities before the solve, its fixed point is the solution of the §3.6.2
+// linear system of simultaneous impulses (when every impulse comes out compressive), and each
+// pair's impulse follows §3.6.1: equal and opposite (momentum is conserved exactly up to
+// rounding), normal part reaching v_n' = -e v_n, Coulomb friction clamped to mu P_n so sliding
+// stops when mu reaches the critical coefficient (eqs. 3.56–3.57). Contacts slower than the
+// contact speed are resting (e = 0, §3.6.3). Order is fixed (ascending particle, then fixed
+// neighbour-cell order), so results are deterministic.
+//
+// Resting contact with colliders (§3.6.3–3.6.4): impacts on colliders are resolved by the swept
+// pass (collider.cpp) before this solve, but a particle under a pile is pushed back into the
+// surface by the pair impulses of the particles above it. So the solve also holds one-body
+// constraints for every particle whose sphere is within a margin of a collider's closest feature
+// at the end of the step: inelastic (e = 0; the swept pass already gave the impacts their
+// restitution), speculative when there is a gap (the particle may still close it this step), and
+// with Coulomb friction at the static coefficient while not sliding. Resting impulses are warm
+// started from the previous step (keyed by particle id, the other particle's id or the collider
+// and its normal), so a stack's impulses m g h per layer carry over and do not have to travel
+// through the stack within one step's sweeps. Overlaps are then reduced by a position projection
+// over the same contacts (colliders immovable) that leaves a small slop and does not touch
+// velocities, so it neither injects energy nor pushes the bottom of a pile into a collider.
+//
+// Known limits: particle pairs are found at the end of the step, overlapping or (slow ones)
+// within the margin, not swept like particle vs collider. Particles are frictional points that
+// cannot roll and pairs have one (dynamic) coefficient, so the surface of a pile steeper than
+// atan(mu) still slides now and then.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "collision/collider_impl.hpp"
+#include "particles/particle_store.hpp"
+#include "simreel/sim/types.hpp"
+
+namespace simreel::sim::detail {
+
+/// One participating particle set (a system) and its surface parameters.
+struct ParticleGroupMember {
+  ParticleStore* store = nullptr;
+  double restitution = 0.5;
+  double friction = 0.1;
+  bool collide = true;  ///< the system collides with colliders (its corrections are swept)
+  std::uint32_t system = 0;  ///< registration serial of the system: warm-start key (stable
+                             ///< when other systems are removed)
+};
+
+class ParticleCollider {
+ public:
+  int iterations = 16;            ///< Gauss–Seidel sweeps per step
+  int position_iterations = 2;    ///< Gauss–Seidel sweeps of the overlap projection
+  double position_fraction = 0.8; ///< share of an overlap beyond the slop removed per step
+  double slop_fraction = 0.01;    ///< overlap of a pair left alone, times the smaller radius
+  double margin_fraction = 0.25;  ///< collider contacts within this gap, times the radius
+  double pair_margin_fraction = 0.05;  ///< pair contacts within this gap, times the smaller radius
+  bool warm_start = true;
+
+  /// Finds and resolves the contacts among all members' particles and, for members that
+  /// collide, with `colliders` (may be null) at their end-of-step pose; h (s) is the step.
+  /// Updates velocities and positions in place. Scratch buffers are kept between calls (no
+  /// per-step allocation once they have grown).
+  void run(const std::vector<ParticleGroupMember>& members, double contact_speed, double h,
+           const std::vector<Collider>* colliders);
+
+  // Flat working arrays, public for the solver test (set x, v, inv_mass, radius, e, mu, then
+  // find_contacts() and solve()).
+  std::vector<Vec3> x, v;
+  std::vector<Vec3> x_before;  ///< positions before the overlap correction (run() fills it)
+  std::vector<double> inv_mass, radius, restitution, friction;
+  std::vector<std::uint64_t> key;  ///< (system << 40) | id, for the warm start (run() fills it)
+  std::vector<std::uint8_t> collides;  ///< the particle collides with colliders
+  static constexpr std::uint32_t kCollider = 0xffffffffu;  ///< Contact::i of a collider contact
+  struct Contact {
+    std::uint32_t i, j;  ///< particles; i == kCollider: j against collider `collider`
+    Vec3 n;             ///< unit, from i to j (from the collider's surface to j)
+    double m_eff;       ///< 1 / (1/m_i + 1/m_j); m_j against a collider
+    double target;      ///< wanted separating normal speed after the solve
+    double depth;       ///< overlap (m); negative: gap to a collider
+    double mu;
+    double pn = 0.0;    ///< accumulated normal impulse (N s), >= 0; solve() starts from it
+                        ///< (the warm start: the previous step's impulse, else 0)
+    Vec3 pt = Vec3::Zero();  ///< accumulated friction impulse, likewise
+    Vec3 vc = Vec3::Zero();     ///< (m/s) velocity of the collider's surface point
+    std::uint32_t collider = 0;
+  };
+  std::vector<Contact> contacts;
+  /// Fills `contacts` from x/radius with the hashed grid. Cell size: 2 x the mean diameter, or
+  /// the largest diameter if that is bigger, so the 27 neighbouring cells hold every contact;
+  /// when the largest would need cells over 4 x those, a multi-level grid (Coutinho §2.3.2):
+  /// cells doubling per level, each particle in the finest level that holds its reach, pairs
+  /// across levels searched from the smaller particle in the larger one's level.
+  /// With h > 0 (s, the step), pairs up to pair_margin_fraction x the smaller radius apart and
+  /// not approaching faster than contact_speed are speculative resting contacts (target
+  /// -gap / h); with h = 0 only overlaps count.
+  void find_contacts(double contact_speed, double h = 0.0);
+  /// Appends the collider contacts (closest features within the margin) of particles with
+  /// `collides` set (all when it is empty), h (s) the step.
+  void find_collider_contacts(const std::vector<Collider>& colliders, double h,
+                              double contact_speed);
+  /// Sequential impulses over `contacts` for `iterations` sweeps, starting from (and applying)
+  /// the impulses the contacts hold: the warm start, zero as find_contacts() leaves them.
+  void solve();
+  /// Moves positions to remove position_fraction of each overlap beyond the slop (velocities
+  /// untouched); colliders do not move, their contacts' depths are measured from x_before
+  /// (set to x if it is not filled).
+  void project_positions();
+  double cell_size = 0.0;  ///< (m) of the last find_contacts(), at its finest level
+  int levels = 1;          ///< grid levels of the last find_contacts() (1: uniform grid)
+
+  /// A collider was swap-removed from the world's dense array: warm-start entries against
+  /// `removed` are dropped, those against `moved_from` (the old last index, now at `removed`)
+  /// follow it. Equal indices: the removed one was last.
+  void forget_collider(std::uint32_t removed, std::uint32_t moved_from);
+  /// A system was removed: its group's cache is dropped (entries of its particles in other
+  /// groups' caches never match again: serials are not reused).
+  void forget_system(std::uint32_t serial);
+
+ private:
+  /// Previous step's resting impulses of one group (keyed by its first system).
+  struct WarmCache {
+    std::uint32_t group = 0;
+    std::vector<std::uint64_t> ki, kj;  ///< kj: particle key, or collider index for walls
+    std::vector<Vec3> n, pt;
+    std::vector<double> pn;
+  };
+  std::vector<WarmCache> caches_;
+  std::vector<Vec3> v_before_;
+  void load_warm_start(const WarmCache& c);
+  void store_warm_start(WarmCache& c) const;
+
+  std::vector<std::uint32_t> bucket_start_, cursor_, sorted_, cell_hash_;
+  std::vector<std::int64_t> cell_xyz_;
+  std::vector<std::uint8_t> level_;
+};
+
+}  // namespace simreel::sim::detail

@@ -1,0 +1,242 @@
+// The particle collision pass against colliders: Coutinho §3.4 (swept spheres against a
+// collider fixed at its end-of-step pose), §3.4.2 (particles found inside a body are removed),
+// §3.6.1 (impulse with restitution and Coulomb friction, critical friction), §3.6.3 (resting
+// contact under a normal-speed threshold, static friction).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "collision/sweep.hpp"
+
+namespace simreel::sim::detail {
+
+/// Impulse response of a particle against an immovable collider (Coutinho §3.6.1 with the
+/// collider's mass taken as infinite): relative normal velocity v_n' = -e v_n, tangential
+/// velocity reduced by the Coulomb impulse mu (1 + e) |v_n| but never reversed — when
+/// mu >= |v_t| / ((1 + e) |v_n|), the critical coefficient of eqs. 3.56–3.57, sliding stops
+/// exactly. The tangent axes are taken along and across the relative sliding velocity, where
+/// the book's directional model (eqs. 3.37–3.40) with one coefficient for both axes reduces to
+/// this. Under the contact threshold (§3.6.3) the contact is resting: e = 0, so the normal
+/// velocity is cancelled and friction removes mu |v_n| — the contact friction force mu |N|
+/// times the step. A resting contact whose tangential speed is no more than this step's
+/// tangential push (it was not sliding) uses the static coefficient: it holds on an incline of
+/// angle theta when mu_s >= tan theta, and otherwise slides with a = g (sin theta - mu_d cos theta).
+/// `kick` is the velocity one step of acceleration adds (g h for a particle lying on the floor):
+/// its normal part is not counted as impact speed, so resting is recognised at any step size.
+Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, double contact_speed,
+             const Vec3& kick) {
+  const Vec3 vr = v - vc;
+  const double vn = vr.dot(n);
+  if (vn >= 0.0) return v;  // already separating
+  const double kick_n = std::max(0.0, -kick.dot(n));
+  const double kick_t = (kick - kick.dot(n) * n).norm();
+  const bool resting = -vn < contact_speed + kick_n;
+  double e = resting ? 0.0 : m.restitution;
+  const Vec3 vt = vr - vn * n;
+  const double vt_len = vt.norm();
+  double mu = resting && vt_len <= kick_t * (1.0 + 1e-6) + 1e-12 ? m.static_mu() : m.friction;
+  if (m.on_hit == HitAction::stick) {
+    e = 0.0;
+    mu = std::numeric_limits<double>::infinity();
+  }
+  const double dvt = std::min(vt_len, mu * (1.0 + e) * (-vn));
+  const Vec3 vt_new = vt_len > 0.0 ? Vec3(vt * (1.0 - dvt / vt_len)) : vt;
+  return vc + (-e * vn) * n + vt_new;
+}
+namespace {
+
+constexpr int kMaxContacts = 4;  // contacts resolved per particle per step (corners, wedges)
+
+
+/// A particle found inside a box (the box may have moved onto it) leaves through the face it is
+/// least deep behind and takes the box's velocity along that face's normal if it was moving in.
+/// (Coutinho §3.4.2 removes such particles; simreel keeps them for boxes, which suits pushing
+/// boxes; the other solids remove them.)
+void push_out(const Collider& c, Vec3& p, Vec3& v, double r) {
+  Vec3 l = c.R.transpose() * (p - c.center);
+  const Vec3 E = c.half_extents + Vec3::Constant(r);
+  const Vec3 depth = E - l.cwiseAbs();
+  int k = 0;
+  if (!(depth.minCoeff(&k) > surface_tol(p))) return;
+  const double sign = l[k] >= 0.0 ? 1.0 : -1.0;
+  l[k] = sign * E[k];
+  p = c.center + c.R * l;
+  const Vec3 n = sign * c.R.col(k);
+  const double vn = (v - c.point_velocity(p)).dot(n);
+  if (vn < 0.0) v -= vn * n;
+}
+
+/// Reads back a stored float position. The volatile read is deliberate: GCC 12 -O3 forwards the
+/// unrounded doubles to a reload after a vectorised float store (it folds the round trip
+/// cvtps2pd(cvtpd2ps(x)) into x), which made the check below pass on values never stored.
+Vec3 load_stored(const float* pf) {
+  const volatile float* v = pf;
+  return Vec3(v[0], v[1], v[2]);
+}
+
+/// Where particle i was at the start of its step: stored (RK4) or, for semi-implicit Euler,
+/// recovered from x1 = x0 + dt v1 (within float rounding of x1, which surface_tol absorbs).
+Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const Vec3& v1,
+                   double dt) {
+  if (s.track_prev) {
+    const float* q = &s.prev_position[3 * i];
+    return Vec3(q[0], q[1], q[2]);
+  }
+  return p1 - dt * v1;
+}
+
+/// Droplets of a split hit (HitAction::split): see SplitOnHit.
+void splash(const Material& m, const Vec3& contact, const Vec3& n, const Vec3& v_rel,
+            const Vec3& vc, double r, double mass, CollisionContext& ctx) {
+  const SplitOnHit& sp = m.split;
+  if (r < sp.min_radius || ctx.spawns == nullptr || ctx.rng == nullptr) return;
+  const double rd = r * sp.size_fraction;
+  const double speed = sp.speed_fraction * v_rel.norm();
+  const Vec3 t = n.unitOrthogonal();
+  const Vec3 k = n.cross(t);
+  const double cos_max = std::cos(sp.spread_deg * 3.14159265358979323846 / 180.0);
+  const Vec3 surface = contact - r * n;
+  for (int j = 0; j < sp.count; ++j) {
+    const double cz = 1.0 - ctx.rng->uniform() * (1.0 - cos_max);  // uniform over the cap
+    const double phi = 2.0 * 3.14159265358979323846 * ctx.rng->uniform();
+    const double sz = std::sqrt(std::max(0.0, 1.0 - cz * cz));
+    const Vec3 dir = cz * n + sz * (std::cos(phi) * t + std::sin(phi) * k);
+    ctx.spawns->push_back(SpawnRequest{Vec3(surface + 1.01 * rd * n), Vec3(vc + speed * dir), rd,
+                                       mass * sp.size_fraction * sp.size_fraction *
+                                           sp.size_fraction,
+                                       sp.lifetime});
+  }
+}
+
+/// The slow path for one particle that may touch something this step.
+void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Collider>& colliders,
+             CollisionContext& ctx, const ForceParams& f) {
+  float* pf = &s.position[3 * i];
+  float* vf = &s.velocity[3 * i];
+  Vec3 b(pf[0], pf[1], pf[2]);
+  Vec3 v(vf[0], vf[1], vf[2]);
+  Vec3 a = start_of_step(s, i, b, v, dt);
+  const double r = s.radius[i];
+  const double c_drag = double(f.drag) / double(s.mass[i]);
+  const Vec3 g(f.gravity[0], f.gravity[1], f.gravity[2]);
+  bool dead = false;
+
+  for (int contact = 0;; ++contact) {
+    Hit hit;
+    for (const Collider& c : colliders) sweep(c, a, b, r, contact == 0, hit);
+    if (hit.collider == nullptr) break;
+    Material mat = hit.collider->material;
+    if (ctx.on_hit != nullptr) {
+      mat.on_hit = *ctx.on_hit;
+      mat.split = *ctx.on_hit_split;
+    }
+    const Vec3 vc = hit.collider->point_velocity(hit.point);
+    if (mat.on_hit == HitAction::kill || mat.on_hit == HitAction::split) {
+      if (mat.on_hit == HitAction::split)
+        splash(mat, hit.point, hit.normal, v - vc, vc, r, s.mass[i], ctx);
+      dead = true;
+      b = hit.point;
+      break;
+    }
+    const Vec3 kick = (g - c_drag * v) * dt;
+    v = respond(v, vc, hit.normal, mat, ctx.contact_speed, kick);
+    // The rest of the step with the new velocity against the collider held at its end pose
+    // (§3.4), never back into the surface just left. (Not relative to a moving collider: a
+    // particle at rest on a box sliding under it must stay where it is, not slide backwards.)
+    const double rest = (1.0 - hit.s) * dt;
+    Vec3 disp = rest * v;
+    const double dn = disp.dot(hit.normal);
+    if (dn < 0.0) disp -= dn * hit.normal;
+    a = hit.point;
+    dt = rest;
+    if (contact + 1 == kMaxContacts) {
+      b = a;  // out of contacts: stay at the last one, which is outside everything hit so far
+      break;
+    }
+    b = a + disp;
+  }
+
+  if (!dead) {
+    for (const Collider& c : colliders)
+      if (c.shape == Collider::Shape::box) push_out(c, b, v, r);
+    for (const Collider& c : colliders) {
+      if (c.shape != Collider::Shape::plane) continue;
+      const double d = c.normal.dot(b - c.point) - r;
+      if (d < 0.0) {
+        b -= d * c.normal;
+        const double vn = v.dot(c.normal);
+        if (vn < 0.0) v -= vn * c.normal;
+      }
+    }
+    for (const Collider& c : colliders) {
+      if (c.shape == Collider::Shape::plane || c.shape == Collider::Shape::box) continue;
+      if (((b - c.aabb_center).cwiseAbs().array() > c.aabb_half.array()).any()) continue;
+      if (inside_solid(c, b)) {
+        dead = true;  // §3.4.2
+        ++ctx.removed_inside;
+        break;
+      }
+    }
+  }
+  if (dead) s.age[i] = s.lifetime[i];
+
+  for (int k = 0; k < 3; ++k) {
+    pf[k] = float(b[k]);
+    vf[k] = float(v[k]);
+  }
+  // The guarantee holds for the stored floats: rounding b to float may put the centre a hair
+  // inside a plane; step it out by growing amounts until it is not.
+  for (const Collider& c : colliders) {
+    if (c.shape != Collider::Shape::plane) continue;
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      const Vec3 p = load_stored(pf);
+      const double d = c.normal.dot(p - c.point) - r;
+      if (d >= 0.0) break;
+      const double extra = attempt == 0 ? 0.0 : std::ldexp(1.2e-7, attempt) * (1.0 + p.cwiseAbs().maxCoeff());
+      const Vec3 q = p + (extra - d) * c.normal;
+      for (int k = 0; k < 3; ++k) pf[k] = float(q[k]);
+    }
+  }
+}
+
+}  // namespace
+
+void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
+             const std::vector<Collider>& colliders, CollisionContext& ctx, const ForceParams& f) {
+  if (colliders.empty()) return;
+  const float* x = s.position.data();
+  const float* vel = s.velocity.data();
+  for (std::size_t i = begin; i < end; ++i) {
+    // Fast rejection: end point clear of every plane, swept bounds clear of every solid.
+    const Vec3 p1(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+    const double r = s.radius[i];
+    const double dt = std::min(double(s.age[i]), h);
+    bool near = false;
+    for (const Collider& c : colliders) {
+      if (c.shape == Collider::Shape::plane) {
+        near = c.normal.dot(p1 - c.point) - r < 0.0;
+      } else {
+        const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
+        const Vec3 p0 = start_of_step(s, i, p1, v1, dt);
+        const Vec3 lo = p0.cwiseMin(p1) - c.aabb_center;
+        const Vec3 hi = p0.cwiseMax(p1) - c.aabb_center;
+        const Vec3 ext = c.aabb_half + Vec3::Constant(r + surface_tol(p1));
+        near = (lo.array() <= ext.array()).all() && (hi.array() >= -ext.array()).all();
+      }
+      if (near) break;
+    }
+    if (near) resolve(s, i, dt, colliders, ctx, f);
+  }
+}
+
+void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
+                            const std::vector<Collider>& colliders) {
+  float* pf = &s.position[3 * i];
+  const Vec3 to(pf[0], pf[1], pf[2]);
+  Hit hit;
+  for (const Collider& c : colliders) sweep(c, from, to, s.radius[i], false, hit);
+  if (hit.collider == nullptr) return;
+  for (int k = 0; k < 3; ++k) pf[k] = float(hit.point[k]);
+}
+}  // namespace simreel::sim::detail

@@ -1,0 +1,53 @@
+// Stage "births and deaths" (stages.hpp): splits (§3.9.1), removal of the dead, the step's
+// newborns (each moves and collides only for its own age, so jets show no banding), colours and
+// sizes over lifetime (§3.8).
+#include "core/stages.hpp"
+#include "particles/split.hpp"
+
+namespace simreel::sim::detail {
+
+void stage_births_and_deaths(WorldState& w, double t0, double t1) {
+  const double h = t1 - t0;
+  const bool any_collider = !w.colliders.empty();
+  for (std::size_t index = 0; index < w.systems.size(); ++index) {
+    ParticleSystemState& ps = w.systems.at(index);
+    ParticleStore& st = ps.store;
+    // Particle split (§3.9.1): parents whose condition is met create their children.
+    split_particles(ps.def.emitter, ps.split_rng, st, ps.n_old, ps.next_id);
+    st.compact(0);
+
+    // Particles born in (t0, t1].
+    const std::size_t first_new = emit(ps.def.emitter, ps.emitter, st, t0, t1, ps.next_id);
+    if (st.has_charge)
+      for (std::size_t i = first_new; i < st.count; ++i)
+        st.charge[i] = float(ps.charge_rng.normal(ps.def.charge.mean, ps.def.charge.deviation));
+    bool bad = false;
+    if (ps.general && first_new < st.count) {
+      // A newborn moves alone for its partial step: external forces only (gravity, drag,
+      // fields); springs, pair forces and attractor springs act on it from the next step.
+      w.build_dynamics(index, false);
+      IntegratorState scratch;
+      for (std::size_t i = first_new; i < st.count; ++i)
+        bad |= integrate_system(st, i, i + 1, t1 - double(st.age[i]), double(st.age[i]),
+                                ps.dynamics, ps.def.integrator, ps.def.tolerance, scratch,
+                                ps.workspace, false);
+    } else {
+      for (std::size_t i = first_new; i < st.count; ++i)
+        bad |= integrate_one(st, i, st.age[i], ps.forces, ps.def.integrator);
+    }
+    if (bad) w.non_finite(index, first_new, st.count, t1);
+    if (ps.def.collide && any_collider) w.collide_system(index, first_new, st.count, h);
+    ps.gradient.apply(st, first_new, st.count);
+    st.compact(first_new);  // lifetimes shorter than the part of the step they lived
+
+    // Colour over lifetime.
+    if (!ps.gradient.constant()) ps.gradient.apply(st, 0, first_new);
+
+    // Emitter curves: brightness variation on freshly written colours, size over lifetime.
+    if (ps.def.emitter.color_deviation > 0.0)
+      apply_tint(st, ps.gradient.constant() ? first_new : 0, st.count);
+    if (!ps.size_curve.empty()) ps.size_curve.apply(st, 0, st.count);
+  }
+}
+
+}  // namespace simreel::sim::detail

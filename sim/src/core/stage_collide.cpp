@@ -1,0 +1,50 @@
+// Stage "particle collisions" (stages.hpp): the particles integrated this step, as swept spheres
+// against the colliders (Coutinho Ch. 2–3; collision/particle_response.cpp), and the splash
+// droplets of HitAction::split.
+#include "core/stages.hpp"
+
+namespace simreel::sim::detail {
+
+void stage_particle_collisions(WorldState& w, double t0, double t1) {
+  if (w.colliders.empty()) return;
+  for (std::size_t index = 0; index < w.systems.size(); ++index) {
+    ParticleSystemState& ps = w.systems.at(index);
+    if (ps.def.collide) w.collide_system(index, 0, ps.n_old, t1 - t0);
+  }
+}
+
+void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_t end, double h) {
+  ParticleSystemState& ps = systems.at(index);
+  ParticleStore& st = ps.store;
+  CollisionContext ctx;
+  ctx.contact_speed = def.contact_speed;
+  ctx.rng = &ps.splash_rng;
+  ctx.spawns = &ps.spawns;
+  if (ps.def.on_hit) {
+    ctx.on_hit = &*ps.def.on_hit;
+    ctx.on_hit_split = &ps.def.on_hit_split;
+  }
+  ps.spawns.clear();
+  collide(st, begin, end, h, colliders.dense(), ctx, ps.forces);
+  ps.removed_inside += ctx.removed_inside;
+  // Splash droplets (HitAction::split) join the system now, at age 0: they move from the next
+  // step on. Droplets past max_particles are dropped.
+  for (const SpawnRequest& q : ps.spawns) {
+    if (st.count >= ps.def.emitter.max_particles) break;
+    const std::size_t i = st.append(1);
+    for (int k = 0; k < 3; ++k) {
+      st.position[3 * i + std::size_t(k)] = float(q.position[k]);
+      if (st.track_prev) st.prev_position[3 * i + std::size_t(k)] = float(q.position[k]);
+      st.velocity[3 * i + std::size_t(k)] = float(q.velocity[k]);
+    }
+    st.mass[i] = float(q.mass);
+    st.radius[i] = float(q.radius);
+    st.base_radius[i] = float(q.radius);
+    st.lifetime[i] = float(q.lifetime);
+    st.age[i] = 0.0f;
+    st.id[i] = ps.next_id++;
+    ps.gradient.apply(st, i, i + 1);
+  }
+}
+
+}  // namespace simreel::sim::detail

@@ -1,0 +1,100 @@
+// Stage "particle forces and integration" (stages.hpp): every system's particles alive at t0
+// move over the step, by the fast gravity + drag path or the general integrators (forces.hpp,
+// integrators.hpp; Coutinho §3.3, Appendix B).
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/stages.hpp"
+#include "simreel/sim/world.hpp"
+
+namespace simreel::sim::detail {
+
+void stage_particle_integration(WorldState& w, double t0, double t1) {
+  const double h = t1 - t0;
+  for (std::size_t index = 0; index < w.systems.size(); ++index) {
+    ParticleSystemState& ps = w.systems.at(index);
+    ParticleStore& st = ps.store;
+    ps.n_old = st.count;
+    ps.general = w.general(index);
+    if (ps.general) {
+      w.build_dynamics(index, true);
+      if (integrate_system(st, 0, ps.n_old, t0, h, ps.dynamics, ps.def.integrator,
+                           ps.def.tolerance, ps.integrator_state, ps.workspace))
+        w.non_finite(index, 0, ps.n_old, t1);
+    } else {
+      ++ps.integrator_state.substeps;
+      if (integrate(st, 0, ps.n_old, h, ps.forces, ps.def.integrator, w.threads))
+        w.non_finite(index, 0, ps.n_old, t1);
+    }
+  }
+}
+
+bool WorldState::general(std::size_t index) const {
+  const ParticleSystemState& ps = systems.at(index);
+  const Integrator in = ps.def.integrator;
+  if (in != Integrator::semi_implicit_euler && in != Integrator::rk4) return true;
+  if (!ps.springs.empty() || ps.def.pair_forces.enabled()) return true;
+  if (!ps.dynamics.fields.empty()) return true;
+  return !ps.attractors.empty();
+}
+
+void WorldState::build_dynamics(std::size_t index, bool interactions) {
+  ParticleSystemState& ps = systems.at(index);
+  ParticleStore& st = ps.store;
+  Dynamics& d = ps.dynamics;
+  d.gravity = ps.def.gravity;
+  d.drag = ps.def.drag;
+  d.threads = threads;
+  d.pair = ps.def.pair_forces;
+  if (!interactions) d.pair.gravitational_G = d.pair.coulomb_K = 0.0;
+  d.springs.clear();
+  d.pulls.clear();
+  if (!interactions) return;
+  // Ids increase along the arrays (emission order, survivors keep theirs): binary search.
+  const auto find = [&](std::uint64_t id) -> std::size_t {
+    const auto* b = st.id.data();
+    const auto* e = b + st.count;
+    const auto* it = std::lower_bound(b, e, id);
+    return it != e && *it == id ? std::size_t(it - b) : st.count;
+  };
+  std::size_t keep = 0;
+  for (const SpringDef& s : ps.springs) {
+    const std::size_t i = find(s.a), j = find(s.b);
+    if (i == st.count || j == st.count) continue;  // an end died: the spring goes with it
+    ps.springs[keep++] = s;
+    d.springs.push_back({std::uint32_t(i), std::uint32_t(j), s.stiffness, s.damping, s.rest_length});
+  }
+  ps.springs.resize(keep);
+  for (const AttractorSpringDef* a : ps.attractors) {
+    Dynamics::Pull p{a, {}, a->ids.empty()};
+    for (std::uint64_t id : a->ids) {
+      const std::size_t i = find(id);
+      if (i < st.count) p.index.push_back(std::uint32_t(i));
+    }
+    d.pulls.push_back(std::move(p));
+  }
+}
+
+void WorldState::non_finite(std::size_t index, std::size_t begin, std::size_t end,
+                            double t1) const {
+  const ParticleSystemState& ps = systems.at(index);
+  const ParticleStore& st = ps.store;
+  std::size_t i = begin;
+  for (; i < end; ++i) {
+    bool ok = true;
+    for (int k = 0; k < 3; ++k)
+      ok = ok && std::isfinite(st.position[3 * i + std::size_t(k)]) &&
+           std::isfinite(st.velocity[3 * i + std::size_t(k)]);
+    if (!ok) break;
+  }
+  std::ostringstream m;
+  m.precision(9);
+  m << "particle system '" << ps.def.name << "' (index " << index
+    << "): non-finite particle state";
+  if (i < end) m << " (particle id " << st.id[i] << ")";
+  m << " at internal step " << steps + 1 << ", t = " << t1 << " s";
+  throw NonFiniteState(m.str());
+}
+
+}  // namespace simreel::sim::detail

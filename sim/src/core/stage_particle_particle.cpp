@@ -1,0 +1,45 @@
+// Stage "particle-particle" (stages.hpp): systems that opted in (collide_particles,
+// collision_group) collide with each other's particles (hashed grid §2.3.1, sequential impulses
+// §3.6.2); the overlap corrections are swept against the colliders (§3.4).
+#include "core/stages.hpp"
+
+namespace simreel::sim::detail {
+
+void stage_particle_particle(WorldState& w, double t0, double t1) {
+  const double h = t1 - t0;
+  std::vector<ParticleSystemState>& systems = w.systems.dense();
+  const std::vector<Collider>& colliders = w.colliders.dense();
+  ParticleCollider& pc = w.particle_collider;
+  // Groups in order of their first member; a system without a group is its own group.
+  std::vector<bool> done(systems.size(), false);
+  std::vector<ParticleGroupMember> members;
+  for (std::size_t s = 0; s < systems.size(); ++s) {
+    if (done[s]) continue;
+    const ParticleSystemDef& d = systems[s].def;
+    if (!d.collide_particles && d.collision_group.empty()) continue;
+    members.clear();
+    for (std::size_t u = s; u < systems.size(); ++u) {
+      const ParticleSystemDef& du = systems[u].def;
+      const bool same = u == s || (!d.collision_group.empty() && du.collision_group == d.collision_group);
+      if (!same || done[u]) continue;
+      done[u] = true;
+      // The warm-start key is the registration serial: it survives other systems' removal.
+      members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction,
+                         du.collide, std::uint32_t(w.systems.serial(u))});
+    }
+    // A lone system without collide_particles has nobody to collide with.
+    if (members.size() == 1 && !d.collide_particles) continue;
+    pc.run(members, w.def.contact_speed, h, &colliders);
+    if (colliders.empty() || pc.x_before.empty()) continue;
+    // The overlap correction moved particles: sweep those moves against the colliders (§3.4).
+    std::size_t k = 0;
+    for (const ParticleGroupMember& m : members) {
+      for (std::size_t i = 0; i < m.store->count; ++i, ++k) {
+        const Vec3& from = pc.x_before[k];
+        if (m.collide && from != pc.x[k]) constrain_displacement(*m.store, i, from, colliders);
+      }
+    }
+  }
+}
+
+}  // namespace simreel::sim::detail

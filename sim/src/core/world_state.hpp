@@ -1,0 +1,89 @@
+#pragma once
+// The world's state (private to core/): the slot tables of every kind of object, time and step
+// count, and the scratch of the passes that involve several objects. World::Impl is this struct;
+// the stage functions (stages.hpp) take it by reference.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "cloth/cloth_particles.hpp"
+#include "collision/collider_impl.hpp"
+#include "collision/particle_collisions.hpp"
+#include "core/slot_table.hpp"
+#include "particles/emitter.hpp"
+#include "particles/forces.hpp"
+#include "particles/integrators.hpp"
+#include "particles/particle_store.hpp"
+#include "simreel/sim/cloth.hpp"
+#include "simreel/sim/moved_object.hpp"
+#include "simreel/sim/particle_system.hpp"
+#include "simreel/sim/world_def.hpp"
+
+namespace simreel::sim::detail {
+
+/// One particle system's model (definition) and state (particles, emitter).
+struct ParticleSystemState {
+  ParticleSystemDef def;
+  ParticleStore store;
+  EmitterState emitter;
+  ColorGradient gradient;
+  SizeCurve size_curve;  ///< size over lifetime (emitter.hpp)
+  Rng split_rng;         ///< particle split draws (split.hpp), a stream apart from the emitter's
+  ForceParams forces{};
+  std::uint64_t next_id = 0;
+  // Forces beyond gravity + drag and the general integrators (forces.hpp, integrators.hpp).
+  std::vector<SpringDef> springs;  ///< by particle id, rest lengths resolved
+  /// Attractor springs pulling this system, in registration order (the order their forces are
+  /// summed in; owned by WorldState::attractors).
+  std::vector<const AttractorSpringDef*> attractors;
+  Rng charge_rng;
+  IntegratorState integrator_state;
+  IntegratorWorkspace workspace;
+  Dynamics dynamics;
+  // Collisions (issue 5): splash droplets, §3.4.2 removals.
+  Rng splash_rng;
+  std::vector<SpawnRequest> spawns;
+  std::uint64_t removed_inside = 0;
+  // Handed from one stage of the current step to the next (stages.hpp).
+  std::size_t n_old = 0;  ///< particles alive at t0 (integrated by the integration stage)
+  bool general = false;   ///< integrated by the general path (forces.hpp Dynamics)
+};
+
+/// A force field and whether it acts on every system (an empty system list at registration; it
+/// stays so for systems registered later). A field whose listed systems were all removed acts on
+/// none.
+struct FieldEntry {
+  std::unique_ptr<FieldState> state;
+  bool all_systems = false;
+};
+
+struct WorldState {
+  WorldDef def;
+  double time = 0.0;        ///< (s)
+  std::uint64_t steps = 0;  ///< internal steps taken
+  int threads = 1;
+  SlotTable<Collider> colliders{ObjectKind::body, "body/collider"};
+  SlotTable<ParticleSystemState> systems{ObjectKind::particle_system, "particle-system"};
+  SlotTable<FieldEntry> fields{ObjectKind::force_field, "force-field"};
+  SlotTable<std::unique_ptr<AttractorSpringDef>> attractors{ObjectKind::attractor_spring,
+                                                             "attractor-spring"};
+  SlotTable<Cloth> cloths{ObjectKind::cloth, "cloth"};
+  std::vector<MovedObject> moved;
+  std::vector<Handle> removed;  ///< removals since the last advance(), reported by the next
+  ParticleCollider particle_collider;
+  ClothParticleScratch cloth_scratch;  ///< particles against cloth (issue 6)
+
+  /// Is system i integrated by the general path (integrators.hpp) rather than the fast one?
+  [[nodiscard]] bool general(std::size_t i) const;
+  /// Resolves system i's springs and attractor springs to indices for this step.
+  void build_dynamics(std::size_t i, bool interactions);
+  /// Colliders of system i over particles [begin, end), then its splash droplets; h (s).
+  void collide_system(std::size_t i, std::size_t begin, std::size_t end, double h);
+  /// Throws NonFiniteState naming system i, the first bad particle in [begin, end), step, time.
+  [[noreturn]] void non_finite(std::size_t i, std::size_t begin, std::size_t end,
+                               double t1) const;
+};
+
+}  // namespace simreel::sim::detail

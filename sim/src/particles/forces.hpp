@@ -1,0 +1,76 @@
+#pragma once
+// Force evaluation shared by every integrator (private): one call computes the accelerations of
+// a whole system from its state (Coutinho §3.2: connected particles are advanced together).
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "particles/noise.hpp"
+#include "simreel/sim/forces.hpp"
+#include "simreel/sim/particle_system.hpp"
+#include "simreel/sim/types.hpp"
+
+namespace simreel::sim::detail {
+
+/// A registered force field and its pose at the time of the current evaluation.
+struct FieldState {
+  ForceFieldDef def;
+  GradientNoise noise;
+  Vec3 centre = Vec3::Zero();
+  Mat3 rotation = Mat3::Identity();  ///< field frame -> world
+  void pose_at(double t);
+  /// Drop-off weight (see Falloff) at world point x, for the current pose.
+  [[nodiscard]] double weight(const Vec3& x) const;
+  /// Acceleration (m/s²) on a particle of mass m at x with velocity v, current pose, time t.
+  [[nodiscard]] Vec3 acceleration(const Vec3& x, const Vec3& v, double m, double t) const;
+};
+
+/// Everything that pushes the particles of one system, resolved to indices in the integrated
+/// range [0, n). Built for each internal step (springs and attractors are stored by id).
+struct Dynamics {
+  struct Spring {
+    std::uint32_t i, j;
+    double ks, kd, rest;
+  };
+  struct Pull {  // attractor spring, zero rest length (§3.3.5)
+    const AttractorSpringDef* def;
+    std::vector<std::uint32_t> index;  // empty with all = true: every particle
+    bool all = false;
+  };
+
+  std::size_t n = 0;
+  const double* mass = nullptr;     // (n)
+  const double* charge = nullptr;   // (n) or nullptr
+  Vec3 gravity = Vec3::Zero();
+  double drag = 0.0;
+  PairForceDef pair;
+  std::vector<FieldState*> fields;
+  std::vector<Spring> springs;
+  std::vector<Pull> pulls;
+  int threads = 1;
+
+  /// a (n x 3) = accelerations at time t for positions x and velocities v (n x 3 each). Linear
+  /// drag -k_d v / m is included only when `with_drag` (semi-implicit Euler takes it implicitly).
+  void eval(double t, const double* x, const double* v, double* a, bool with_drag);
+
+  /// Pair-force accelerations only, added to a (for tests through eval).
+  void add_pair_forces(const double* x, double* a);
+
+  // grid scratch (reused; no allocation once grown)
+  std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle
+  std::vector<std::uint32_t> order_;        // (n) particle indices sorted by (cell key, index)
+  std::vector<double> sorted_;              // (n x 5) x, y, z, q, m in that order
+  std::vector<std::uint64_t> cell_keys_;    // occupied cells' keys, increasing
+  std::vector<std::uint32_t> cell_start_;   // first particle (in order_) of each cell, + n
+};
+
+/// Validation of the force-related definitions: std::invalid_argument naming the field.
+void validate_forces(const ParticleSystemDef& def);
+void validate(const ForceFieldDef& def);
+void validate(const AttractorSpringDef& def);
+
+/// Minimum particle count before a loop is split over threads (below it the fork costs more).
+inline constexpr std::size_t kParallelMin = 16384;
+
+}  // namespace simreel::sim::detail

@@ -1,0 +1,270 @@
+// General integrators (Coutinho Appendix B): explicit and semi-implicit Euler, midpoint RK2,
+// RK4, linearised implicit Euler, adaptive step doubling (eq. B.31 with the 0.8 safety factor).
+#include "particles/integrators.hpp"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstring>
+
+namespace simreel::sim::detail {
+
+namespace {
+
+using Vec = std::vector<double>;
+
+/// out = a + s b over 3n doubles (element-wise, so any split over threads gives the same bits).
+void axpy(std::size_t m, double* out, const double* a, double s, const double* b, int threads) {
+#pragma omp parallel for schedule(static) num_threads(threads) if (m >= 3 * kParallelMin)
+  for (std::size_t k = 0; k < m; ++k) out[k] = a[k] + s * b[k];
+}
+
+/// One classical RK4 step of the whole system: (x, v) at t -> (xo, vo) at t + h.
+void rk4_step(Dynamics& dyn, double t, double h, const double* x, const double* v, double* xo,
+              double* vo, IntegratorWorkspace& w) {
+  const std::size_t m = 3 * dyn.n;
+  const int th = dyn.threads;
+  dyn.eval(t, x, v, w.a1.data(), true);
+  axpy(m, w.xt.data(), x, 0.5 * h, v, th);
+  axpy(m, w.v2.data(), v, 0.5 * h, w.a1.data(), th);
+  dyn.eval(t + 0.5 * h, w.xt.data(), w.v2.data(), w.a2.data(), true);
+  axpy(m, w.xt.data(), x, 0.5 * h, w.v2.data(), th);
+  axpy(m, w.v3.data(), v, 0.5 * h, w.a2.data(), th);
+  dyn.eval(t + 0.5 * h, w.xt.data(), w.v3.data(), w.a3.data(), true);
+  axpy(m, w.xt.data(), x, h, w.v3.data(), th);
+  axpy(m, w.vt.data(), v, h, w.a3.data(), th);
+  dyn.eval(t + h, w.xt.data(), w.vt.data(), w.a4.data(), true);
+  const double h6 = h / 6.0;
+#pragma omp parallel for schedule(static) num_threads(th) if (m >= 3 * kParallelMin)
+  for (std::size_t k = 0; k < m; ++k) {
+    xo[k] = x[k] + h6 * (v[k] + 2.0 * w.v2[k] + 2.0 * w.v3[k] + w.vt[k]);
+    vo[k] = v[k] + h6 * (w.a1[k] + 2.0 * w.a2[k] + 2.0 * w.a3[k] + w.a4[k]);
+  }
+}
+
+/// Linearised backward Euler (Baraff & Witkin 1998; Coutinho App. B, implicit Euler):
+///   (M - h ∂f/∂v - h² ∂f/∂x) Δv = h (f + h ∂f/∂x v),  v += Δv,  x += h v.
+/// ∂f/∂x and ∂f/∂v come from the springs (the transverse term of a compressed spring is dropped,
+/// which keeps the matrix symmetric positive definite for conjugate gradients), the drag and the
+/// attractor springs; fields and pair forces are taken explicitly (only in f).
+void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v,
+                         IntegratorWorkspace& w) {
+  const std::size_t n = dyn.n;
+  double* a = w.a1.data();
+  dyn.eval(t, x, v, a, true);
+  // Diagonal stiffness and damping per particle from the attractor springs.
+  Vec& ks_diag = w.a2;  // reuse scratch: first n entries
+  Vec& kd_diag = w.a3;
+  std::fill(ks_diag.begin(), ks_diag.begin() + std::ptrdiff_t(n), 0.0);
+  std::fill(kd_diag.begin(), kd_diag.begin() + std::ptrdiff_t(n), dyn.drag);
+  for (const Dynamics::Pull& p : dyn.pulls) {
+    auto add = [&](std::size_t i) {
+      ks_diag[i] += p.def->stiffness;
+      kd_diag[i] += p.def->damping;
+    };
+    if (p.all)
+      for (std::size_t i = 0; i < n; ++i) add(i);
+    else
+      for (std::uint32_t i : p.index) add(i);
+  }
+  if (dyn.springs.empty()) {  // block-diagonal: closed form per particle
+    for (std::size_t i = 0; i < n; ++i) {
+      const double m = dyn.mass[i];
+      const double d = m + h * kd_diag[i] + h * h * ks_diag[i];
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t c = 3 * i + std::size_t(k);
+        const double b = h * (m * a[c] - h * ks_diag[i] * v[c]);
+        v[c] += b / d;
+        x[c] += h * v[c];
+      }
+    }
+    return;
+  }
+  using Sparse = Eigen::SparseMatrix<double>;
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(3 * n + 36 * dyn.springs.size());
+  Eigen::VectorXd rhs(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double m = dyn.mass[i];
+    const double d = m + h * kd_diag[i] + h * h * ks_diag[i];
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t c = 3 * i + std::size_t(k);
+      trip.emplace_back(int(c), int(c), d);
+      rhs[Eigen::Index(c)] = h * (m * a[c] - h * ks_diag[i] * v[c]);
+    }
+  }
+  for (const Dynamics::Spring& s : dyn.springs) {
+    const Vec3 l(x[3 * s.i] - x[3 * s.j], x[3 * s.i + 1] - x[3 * s.j + 1],
+                 x[3 * s.i + 2] - x[3 * s.j + 2]);
+    const double len = l.norm();
+    if (!(len > 1e-12)) continue;
+    const Vec3 u = l / len;
+    const Mat3 P = u * u.transpose();
+    // -∂f_i/∂x_i = k_s [P + max(0, 1 - r/|l|)(I - P)];  -∂f_i/∂v_i = k_d P.
+    const Mat3 Ks = s.ks * (P + std::max(0.0, 1.0 - s.rest / len) * (Mat3::Identity() - P));
+    const Mat3 B = h * s.kd * P + h * h * Ks;
+    const Vec3 dv(v[3 * s.i] - v[3 * s.j], v[3 * s.i + 1] - v[3 * s.j + 1],
+                  v[3 * s.i + 2] - v[3 * s.j + 2]);
+    const Vec3 kv = -(Ks * dv);  // (∂f/∂x v)_i
+    for (int r = 0; r < 3; ++r) {
+      rhs[Eigen::Index(3 * s.i + r)] += h * h * kv[r];
+      rhs[Eigen::Index(3 * s.j + r)] -= h * h * kv[r];
+      for (int c = 0; c < 3; ++c) {
+        trip.emplace_back(int(3 * s.i + r), int(3 * s.i + c), B(r, c));
+        trip.emplace_back(int(3 * s.j + r), int(3 * s.j + c), B(r, c));
+        trip.emplace_back(int(3 * s.i + r), int(3 * s.j + c), -B(r, c));
+        trip.emplace_back(int(3 * s.j + r), int(3 * s.i + c), -B(r, c));
+      }
+    }
+  }
+  Sparse A(Eigen::Index(3 * n), Eigen::Index(3 * n));
+  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::ConjugateGradient<Sparse, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(1e-12);
+  cg.compute(A);
+  const Eigen::VectorXd dv = cg.solve(rhs);
+  for (std::size_t c = 0; c < 3 * n; ++c) {
+    v[c] += dv[Eigen::Index(c)];
+    x[c] += h * v[c];
+  }
+}
+
+}  // namespace
+
+bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, double t0, double h,
+                      Dynamics& dyn, Integrator integrator, double tolerance,
+                      IntegratorState& state, IntegratorWorkspace& w, bool age_particles) {
+  if (begin >= end) return false;
+  const std::size_t n = end - begin, m = 3 * n;
+  for (Vec* a : {&w.x, &w.v, &w.a1, &w.a2, &w.a3, &w.a4, &w.xt, &w.vt, &w.v2, &w.v3})
+    if (a->size() < m) a->resize(m);
+  if (w.m.size() < n) w.m.resize(n);
+  const int th = dyn.threads;
+  const bool par = n >= kParallelMin && th > 1;
+  {
+    double* __restrict wx = w.x.data();
+    double* __restrict wv = w.v.data();
+    const float* __restrict px = s.position.data() + 3 * begin;
+    const float* __restrict pv = s.velocity.data() + 3 * begin;
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
+    for (std::size_t k = 0; k < m; ++k) {
+      wx[k] = px[k];
+      wv[k] = pv[k];
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) w.m[i] = s.mass[begin + i];
+  dyn.n = n;
+  dyn.mass = w.m.data();
+  dyn.charge = nullptr;
+  if (s.has_charge) {
+    if (w.q.size() < n) w.q.resize(n);
+    for (std::size_t i = 0; i < n; ++i) w.q[i] = s.charge[begin + i];
+    dyn.charge = w.q.data();
+  }
+  if (s.track_prev)
+    std::memcpy(&s.prev_position[3 * begin], &s.position[3 * begin], m * sizeof(float));
+  double* x = w.x.data();
+  double* v = w.v.data();
+
+  switch (integrator) {
+    case Integrator::explicit_euler: {
+      dyn.eval(t0, x, v, w.a1.data(), true);
+      for (std::size_t k = 0; k < m; ++k) {
+        x[k] += h * v[k];
+        v[k] += h * w.a1[k];
+      }
+      ++state.substeps;
+      break;
+    }
+    case Integrator::semi_implicit_euler: {
+      // Drag at the new velocity (see Integrator::semi_implicit_euler), the rest explicit.
+      dyn.eval(t0, x, v, w.a1.data(), false);
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
+      for (std::size_t i = 0; i < n; ++i) {
+        const double damp = 1.0 / (1.0 + h * dyn.drag / w.m[i]);
+        for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
+          v[k] = (v[k] + h * w.a1[k]) * damp;
+          x[k] += h * v[k];
+        }
+      }
+      ++state.substeps;
+      break;
+    }
+    case Integrator::rk2: {
+      dyn.eval(t0, x, v, w.a1.data(), true);
+      axpy(m, w.xt.data(), x, 0.5 * h, v, th);
+      axpy(m, w.vt.data(), v, 0.5 * h, w.a1.data(), th);
+      dyn.eval(t0 + 0.5 * h, w.xt.data(), w.vt.data(), w.a2.data(), true);
+      for (std::size_t k = 0; k < m; ++k) {
+        x[k] += h * w.vt[k];
+        v[k] += h * w.a2[k];
+      }
+      ++state.substeps;
+      break;
+    }
+    case Integrator::rk4:
+      rk4_step(dyn, t0, h, x, v, x, v, w);
+      ++state.substeps;
+      break;
+    case Integrator::implicit_euler:
+      implicit_euler_step(dyn, t0, h, x, v, w);
+      ++state.substeps;
+      break;
+    case Integrator::adaptive: {
+      for (Vec* a : {&w.x_full, &w.v_full, &w.x_half, &w.v_half})
+        if (a->size() < m) a->resize(m);
+      double t = t0;
+      const double t1 = t0 + h;
+      double hs = state.next_h > 0.0 ? std::min(state.next_h, h) : h;
+      const double h_min = h * 1e-6;
+      while (t < t1) {
+        const bool last = t1 - t <= hs * (1.0 + 1e-12);
+        const double step = last ? t1 - t : hs;
+        rk4_step(dyn, t, step, x, v, w.x_full.data(), w.v_full.data(), w);
+        rk4_step(dyn, t, 0.5 * step, x, v, w.x_half.data(), w.v_half.data(), w);
+        rk4_step(dyn, t + 0.5 * step, 0.5 * step, w.x_half.data(), w.v_half.data(),
+                 w.x_half.data(), w.v_half.data(), w);
+        double err = 0.0;  // max is exact and order-free: thread-count independent
+        for (std::size_t k = 0; k < m; ++k) err = std::max(err, std::abs(w.x_full[k] - w.x_half[k]));
+        if (!std::isfinite(err)) err = 1e300;
+        // Eq. B.31: h_d = h |δ_d / δ|^(1/p), RK4's local error ∝ h^5; 0.8 safety margin,
+        // growth capped at 4x per step.
+        const double factor = err > 0.0 ? 0.8 * std::pow(tolerance / err, 0.2) : 4.0;
+        if (err <= tolerance || step <= h_min) {
+          std::memcpy(x, w.x_half.data(), m * sizeof(double));
+          std::memcpy(v, w.v_half.data(), m * sizeof(double));
+          t = last ? t1 : t + step;
+          ++state.substeps;
+          hs = std::max(h_min, step * std::min(4.0, factor));
+          if (!last) state.next_h = hs;
+          else if (hs > step) state.next_h = hs;  // a short final piece must not shrink it
+        } else {
+          ++state.rejected;
+          hs = std::max(h_min, step * std::max(0.1, std::min(0.8, factor)));
+          state.next_h = hs;
+        }
+      }
+      break;
+    }
+  }
+
+  unsigned bad = 0;
+  float* __restrict px = s.position.data() + 3 * begin;
+  float* __restrict pv = s.velocity.data() + 3 * begin;
+#pragma omp parallel for schedule(static) num_threads(th) reduction(| : bad) if (par)
+  for (std::size_t k = 0; k < m; ++k) {
+    bad |= unsigned(!(std::abs(x[k]) <= double(FLT_MAX))) |
+           unsigned(!(std::abs(v[k]) <= double(FLT_MAX)));
+    px[k] = float(x[k]);
+    pv[k] = float(v[k]);
+  }
+  if (age_particles) {
+    const float hf = float(h);
+    for (std::size_t i = begin; i < end; ++i) s.age[i] += hf;
+  }
+  return bad != 0;
+}
+
+}  // namespace simreel::sim::detail
