@@ -32,10 +32,12 @@ std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(a) << 32) | std::uint64_t(b);
 }
 
-/// Closed and consistently oriented <=> every directed edge a→b occurs exactly once and its
-/// opposite b→a occurs too (each edge shared by exactly two triangles wound opposite ways along
-/// it). A sorted vector, not a hash set, so the first error reported does not depend on hashing.
-void check_closed_oriented(std::span<const std::array<std::uint32_t, 3>> triangles) {
+}  // namespace
+
+std::string closed_oriented_error(std::span<const std::array<std::uint32_t, 3>> triangles) {
+  // Closed and consistently oriented <=> every directed edge a→b occurs exactly once and its
+  // opposite b→a occurs too (each edge shared by exactly two triangles wound opposite ways
+  // along it). A sorted vector, not a hash set, so the error reported does not depend on hashing.
   std::vector<std::uint64_t> edges;
   edges.reserve(3 * triangles.size());
   for (const auto& t : triangles)
@@ -46,19 +48,16 @@ void check_closed_oriented(std::span<const std::array<std::uint32_t, 3>> triangl
   };
   for (std::size_t i = 1; i < edges.size(); ++i)
     if (edges[i] == edges[i - 1])
-      throw std::invalid_argument(
-          "mesh_mass: edge " + name(edges[i]) +
-          " is used twice in the same direction: triangles are not consistently oriented (or "
-          "the edge is shared by more than two triangles)");
+      return "edge " + name(edges[i]) +
+             " is used twice in the same direction: triangles are not consistently oriented (or "
+             "the edge is shared by more than two triangles)";
   for (const std::uint64_t e : edges) {
     const std::uint64_t opposite = ((e & 0xffffffffu) << 32) | (e >> 32);
     if (!std::binary_search(edges.begin(), edges.end(), opposite))
-      throw std::invalid_argument("mesh_mass: the mesh is open: edge " + name(e) +
-                                  " has no triangle on its other side");
+      return "the mesh is open: edge " + name(e) + " has no triangle on its other side";
   }
+  return {};
 }
-
-}  // namespace
 
 MassProperties sphere_mass(double radius, double density) {
   require_positive(radius, "sphere_mass", "radius");
@@ -160,7 +159,8 @@ MassProperties mesh_mass(std::span<const Vec3> vertices,
     hi = hi.cwiseMax(vertices[i]);
   }
   origin /= double(n);
-  check_closed_oriented(triangles);
+  if (const std::string error = closed_oriented_error(triangles); !error.empty())
+    throw std::invalid_argument("mesh_mass: " + error);
 
   // Sums over the tetrahedra (origin, a, b, c), each weighted by d = det[a b c] = 6 V_tet
   // (coordinates relative to `origin`): Σ d, Σ d s and Σ d (aaᵀ + bbᵀ + ccᵀ + s sᵀ), s = a+b+c.

@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include "simreel/sim/types.hpp"
 
@@ -84,6 +85,11 @@ MassProperties capsule_mass(double radius, double half_height, double density);
 /// usually an export bug that would also turn the collision normals inwards.
 MassProperties mesh_mass(std::span<const Vec3> vertices,
                          std::span<const std::array<std::uint32_t, 3>> triangles, double density);
+
+/// Empty if `triangles` form a closed, consistently oriented surface (every directed edge a→b
+/// used by exactly one triangle and its opposite b→a by another); otherwise what is wrong, naming
+/// the first offending edge. Indices are not range-checked here.
+std::string closed_oriented_error(std::span<const std::array<std::uint32_t, 3>> triangles);
 
 /// The same body with its mass set to `mass` (kg) instead of coming from a density: mass and
 /// inertia scale by mass / props.mass; centre of mass and volume are unchanged. Throws
