@@ -36,8 +36,8 @@ inline Mesh box_mesh(const Vec3& h) {
 inline Mesh icosphere(int level, double radius) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   Mesh m;
-  m.vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                  {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                  {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -82,7 +82,9 @@ inline Mesh hemisphere_mesh(double radius, std::uint32_t n_lon, std::uint32_t n_
   }
   const auto centre = std::uint32_t(m.vertices.size());
   m.vertices.emplace_back(0, 0, 0);
-  const auto ring = [&](std::uint32_t i, std::uint32_t j) { return 1 + (i - 1) * n_lon + j % n_lon; };
+  const auto ring = [&](std::uint32_t i, std::uint32_t j) {
+    return 1 + (i - 1) * n_lon + j % n_lon;
+  };
   for (std::uint32_t j = 0; j < n_lon; ++j) {
     m.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
     for (std::uint32_t i = 1; i < n_lat; ++i) {

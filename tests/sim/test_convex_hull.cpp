@@ -204,11 +204,12 @@ TEST(ConvexHull, HullOfACubeHasTheBoxMassProperties) {
   const Vec3 h(0.5, 1.0, 0.25), t(2.0, 0.0, -1.0);
   std::vector<Vec3> points;
   for (int i = 0; i < 8; ++i)
-    points.push_back(r * Vec3(i & 1 ? h.x() : -h.x(), i & 2 ? h.y() : -h.y(),
-                              i & 4 ? h.z() : -h.z()) + t);
+    points.push_back(
+        r * Vec3(i & 1 ? h.x() : -h.x(), i & 2 ? h.y() : -h.y(), i & 4 ? h.z() : -h.z()) + t);
   for (int i = 0; i < 500; ++i)
     points.push_back(r * Vec3(rng.uniform(-h.x(), h.x()), rng.uniform(-h.y(), h.y()),
-                              rng.uniform(-h.z(), h.z())) + t);
+                              rng.uniform(-h.z(), h.z())) +
+                     t);
   const ConvexHull hull = convex_hull(points);
   EXPECT_EQ(hull.vertices.size(), 8u);
   const MassProperties got = mesh_mass(hull.vertices, hull.triangles, 400.0);

@@ -65,9 +65,9 @@ TEST(MassPropertiesMesh, TriangulatedBoxIsExact) {
   expect_same(mesh, box_mass(h, 750.0), 1e-12);
   EXPECT_LE(mesh.center_of_mass.norm(), 1e-15);
   // Off-diagonal terms vanish for the axis-aligned box.
-  EXPECT_LE(std::abs(mesh.inertia(0, 1)) + std::abs(mesh.inertia(0, 2)) +
-                std::abs(mesh.inertia(1, 2)),
-            1e-13 * mesh.inertia(0, 0));
+  EXPECT_LE(
+      std::abs(mesh.inertia(0, 1)) + std::abs(mesh.inertia(0, 2)) + std::abs(mesh.inertia(1, 2)),
+      1e-13 * mesh.inertia(0, 0));
 }
 
 TEST(MassPropertiesMesh, RightTetrahedronTextbookFormula) {
@@ -84,7 +84,7 @@ TEST(MassPropertiesMesh, RightTetrahedronTextbookFormula) {
   EXPECT_LE((p.center_of_mass - Vec3(a, b, c) / 4.0).norm(), 1e-15);
   Mat3 expected;
   expected << 3 * m * (b * b + c * c) / 80, m * a * b / 80, m * a * c / 80,  //
-      m * a * b / 80, 3 * m * (a * a + c * c) / 80, m * b * c / 80,            //
+      m * a * b / 80, 3 * m * (a * a + c * c) / 80, m * b * c / 80,          //
       m * a * c / 80, m * b * c / 80, 3 * m * (a * a + b * b) / 80;
   EXPECT_LE(rel_diff(p.inertia, expected), 1e-14) << p.inertia;
 }
@@ -129,9 +129,10 @@ TEST(MassPropertiesMesh, SphereMeshConvergesAtSecondOrder) {
     if (level > 1) {
       const double rv = previous_volume_error / volume_error;
       const double ri = previous_inertia_error / inertia_error;
-      std::printf("icosphere level %d: volume error %.3e (ratio %.3f), inertia error %.3e "
-                  "(ratio %.3f)\n",
-                  level, volume_error, rv, inertia_error, ri);
+      std::printf(
+          "icosphere level %d: volume error %.3e (ratio %.3f), inertia error %.3e "
+          "(ratio %.3f)\n",
+          level, volume_error, rv, inertia_error, ri);
       if (level >= 4) {
         EXPECT_NEAR(rv, 4.0, 0.15);
         EXPECT_NEAR(ri, 4.0, 0.15);
@@ -188,8 +189,7 @@ TEST(MassPropertiesMesh, RejectsOpenInconsistentInsideOutAndBadInput) {
       << message_of(flipped_one);
   Mesh inside_out = box;
   for (auto& t : inside_out.triangles) std::swap(t[1], t[2]);
-  EXPECT_NE(message_of(inside_out).find("inside out"), std::string::npos)
-      << message_of(inside_out);
+  EXPECT_NE(message_of(inside_out).find("inside out"), std::string::npos) << message_of(inside_out);
   Mesh bad_index = box;
   bad_index.triangles[0][0] = 99;
   EXPECT_NE(message_of(bad_index).find(">= vertex count"), std::string::npos);
@@ -213,8 +213,8 @@ TEST(MassPropertiesCompound, CapsuleIsCylinderPlusTwoHemispheres) {
   expect_same(combine(parts), cap, 1e-14);
   // The pitfall the closed form avoids: the sphere's 2/5 m r² shifted by h is too small.
   const MassProperties sphere = sphere_mass(r, rho);
-  const double naive = cylinder_mass(r, h, rho).inertia(0, 0) + sphere.inertia(0, 0) +
-                       sphere.mass * h * h;
+  const double naive =
+      cylinder_mass(r, h, rho).inertia(0, 0) + sphere.inertia(0, 0) + sphere.mass * h * h;
   EXPECT_GT(cap.inertia(0, 0) - naive, 0.01 * cap.inertia(0, 0));
   // A capsule of zero length is the sphere; two hemispheres face to face are the sphere.
   expect_same(capsule_mass(r, 0.0, rho), sphere, 1e-15);

@@ -37,9 +37,7 @@ class Builder {
 
   std::vector<Face> faces;
 
-  double distance(const Face& f, std::uint32_t i) const {
-    return f.normal.dot(p_[i]) - f.offset;
-  }
+  double distance(const Face& f, std::uint32_t i) const { return f.normal.dot(p_[i]) - f.offset; }
 
   std::int32_t add_face(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     Face f;
@@ -85,7 +83,8 @@ class Builder {
       for (int k = 0; k < 3; ++k)
         for (std::size_t g = 0; g < 4; ++g)
           for (int j = 0; j < 3; ++j)
-            if (faces[g].v[j] == faces[f].v[(k + 1) % 3] && faces[g].v[(j + 1) % 3] == faces[f].v[k])
+            if (faces[g].v[j] == faces[f].v[(k + 1) % 3] &&
+                faces[g].v[(j + 1) % 3] == faces[f].v[k])
               faces[f].adj[k] = std::int32_t(g);
     for (std::uint32_t i = 0; i < p_.size(); ++i)
       if (i != a && i != b && i != c && i != d) assign(i, 0, 4);
@@ -129,7 +128,8 @@ class Builder {
             h.visible = h.normal.dot(e) - h.offset > eps_;
             if (h.visible) stack.push_back(faces[g].adj[k]);
           }
-          if (!h.visible) horizon.push_back({faces[g].v[k], faces[g].v[(k + 1) % 3], faces[g].adj[k]});
+          if (!h.visible)
+            horizon.push_back({faces[g].v[k], faces[g].v[(k + 1) % 3], faces[g].adj[k]});
         }
       }
 
@@ -268,7 +268,8 @@ std::vector<std::vector<std::uint32_t>> merge_coplanar(const std::vector<Face>& 
     boundary.clear();
     for (const std::int32_t g : members)
       for (int k = 0; k < 3; ++k)
-        if (group[faces[g].adj[k]] != id) boundary.emplace_back(faces[g].v[k], faces[g].v[(k + 1) % 3]);
+        if (group[faces[g].adj[k]] != id)
+          boundary.emplace_back(faces[g].v[k], faces[g].v[(k + 1) % 3]);
     std::sort(boundary.begin(), boundary.end());
     bool simple = std::adjacent_find(boundary.begin(), boundary.end(), [](auto x, auto y) {
                     return x.first == y.first;
@@ -342,8 +343,7 @@ ConvexHull convex_hull(std::span<const Vec3> points, const ConvexHullOptions& op
         const std::uint32_t next = poly[(k + 1) % poly.size()];
         if (off_line(points[prev], points[poly[k]], points[next]) > eps) corner[poly[k]] = 1;
       }
-    for (auto& poly : polygons)
-      std::erase_if(poly, [&](std::uint32_t v) { return !corner[v]; });
+    for (auto& poly : polygons) std::erase_if(poly, [&](std::uint32_t v) { return !corner[v]; });
     std::erase_if(polygons, [](const auto& poly) { return poly.size() < 3; });
   }
   std::vector<Tri> triangles;

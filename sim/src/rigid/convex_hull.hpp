@@ -27,8 +27,8 @@ struct ConvexHullOptions {
 
 /// A closed convex polyhedron: outward-wound triangles over a subset of the input points.
 struct ConvexHull {
-  std::vector<Vec3> vertices;               ///< (V) positions (m), the input's frame
-  std::vector<std::uint32_t> input_index;   ///< (V) index of each vertex in the input, ascending
+  std::vector<Vec3> vertices;              ///< (V) positions (m), the input's frame
+  std::vector<std::uint32_t> input_index;  ///< (V) index of each vertex in the input, ascending
   /// (F) vertex indices, counter-clockwise seen from outside (outward normal (b-a) × (c-a));
   /// closed and consistently oriented, ready for mesh_mass().
   std::vector<std::array<std::uint32_t, 3>> triangles;

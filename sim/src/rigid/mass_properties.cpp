@@ -175,7 +175,8 @@ MassProperties mesh_mass(std::span<const Vec3> vertices,
     const Vec3 s = a + b + c;
     sum_d += d;
     sum_first += d * s;
-    sum_second += d * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
+    sum_second +=
+        d * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
   }
   const double volume = sum_d / 6.0;
   // Non-positive volume: inside out (clockwise winding) or flat. The threshold is relative to the
@@ -225,8 +226,7 @@ MassProperties combine(std::span<const MassPart> parts) {
   Vec3 weighted = Vec3::Zero();
   for (std::size_t i = 0; i < parts.size(); ++i) {
     if (!(parts[i].props.mass > 0.0))
-      throw std::invalid_argument("combine: part " + std::to_string(i) +
-                                  " has non-positive mass " +
+      throw std::invalid_argument("combine: part " + std::to_string(i) + " has non-positive mass " +
                                   std::to_string(parts[i].props.mass));
     const auto& part = parts[i];
     total.mass += part.props.mass;

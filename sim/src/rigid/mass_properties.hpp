@@ -20,10 +20,10 @@ namespace simreel::sim::detail {
 
 /// Mass, centre of mass, inertia and volume of a rigid body in its own frame.
 struct MassProperties {
-  double mass = 0.0;                     ///< (kg) > 0
-  Vec3 center_of_mass = Vec3::Zero();    ///< (m) body frame
-  Mat3 inertia = Mat3::Zero();           ///< (kg m²) about the centre of mass, body-frame axes
-  double volume = 0.0;                   ///< (m³) > 0
+  double mass = 0.0;                   ///< (kg) > 0
+  Vec3 center_of_mass = Vec3::Zero();  ///< (m) body frame
+  Mat3 inertia = Mat3::Zero();         ///< (kg m²) about the centre of mass, body-frame axes
+  double volume = 0.0;                 ///< (m³) > 0
 };
 
 /// Solid sphere of `radius` (m) centred at the origin; `density` (kg/m³).
@@ -80,9 +80,10 @@ MassProperties capsule_mass(double radius, double half_height, double density);
 /// of range, a triangle with a repeated index, a non-finite vertex, a non-positive or non-finite
 /// density; an open mesh (an edge a→b without a triangle holding b→a); inconsistent orientation
 /// or a non-manifold edge (an edge a→b used by two triangles); a volume that is not positive
-/// (at most 1e-12 × the cube of the bounding-box diagonal: a flat mesh). An inside-out mesh (every triangle wound clockwise from
-/// outside) is rejected by that last check rather than silently flipped: a reversed winding is
-/// usually an export bug that would also turn the collision normals inwards.
+/// (at most 1e-12 × the cube of the bounding-box diagonal: a flat mesh). An inside-out mesh (every
+/// triangle wound clockwise from outside) is rejected by that last check rather than silently
+/// flipped: a reversed winding is usually an export bug that would also turn the collision normals
+/// inwards.
 MassProperties mesh_mass(std::span<const Vec3> vertices,
                          std::span<const std::array<std::uint32_t, 3>> triangles, double density);
 
@@ -100,8 +101,8 @@ MassProperties with_mass(const MassProperties& props, double mass);
 /// frame, x_compound = rotation · x_part + translation.
 struct MassPart {
   MassProperties props;
-  Vec3 translation = Vec3::Zero();       ///< (m) part origin in the compound frame
-  Mat3 rotation = Mat3::Identity();      ///< part axes in the compound frame (proper rotation)
+  Vec3 translation = Vec3::Zero();   ///< (m) part origin in the compound frame
+  Mat3 rotation = Mat3::Identity();  ///< part axes in the compound frame (proper rotation)
 };
 
 /// Mass properties of `props` after moving the body by x' = rotation · x + translation:
@@ -118,9 +119,9 @@ MassProperties combine(std::span<const MassPart> parts);
 
 /// Principal axes of an inertia tensor: inertia = rotation · diag(moments) · rotationᵀ.
 struct PrincipalAxes {
-  Vec3 moments = Vec3::Zero();        ///< (kg m²) principal moments, ascending
-  Mat3 rotation = Mat3::Identity();   ///< columns: unit principal axes in the body frame;
-                                      ///< a proper rotation (det = +1, right-handed)
+  Vec3 moments = Vec3::Zero();       ///< (kg m²) principal moments, ascending
+  Mat3 rotation = Mat3::Identity();  ///< columns: unit principal axes in the body frame;
+                                     ///< a proper rotation (det = +1, right-handed)
 };
 
 /// Eigen-decomposition of a symmetric inertia tensor (Eigen::SelfAdjointEigenSolver); the
