@@ -49,6 +49,14 @@ ConvexContact collide_exact(const PosedShape& A, const PosedShape& B) {
   return collide(A, B, kInf);
 }
 
+/// Sphere, box, capsule, cylinder and a tetrahedron hull, of comparable sizes (index = kind).
+std::array<ConvexShape, 5> one_of_each_kind() {
+  static const std::vector<Vec3> tetra{Vec3(0, 0, 0.5), Vec3(0.5, 0, -0.2), Vec3(-0.3, 0.4, -0.2),
+                                       Vec3(-0.3, -0.4, -0.2)};
+  return {ConvexShape::sphere(0.4), ConvexShape::box({0.3, 0.5, 0.2}), ConvexShape::capsule(0.3, 0.2),
+          ConvexShape::cylinder(0.3, 0.4), ConvexShape::hull(tetra)};
+}
+
 bool finite(const ConvexContact& c) {
   return std::isfinite(c.depth) && c.normal.allFinite() && c.point_a.allFinite() &&
          c.point_b.allFinite() && std::abs(c.normal.norm() - 1.0) < 1e-9;
@@ -367,11 +375,7 @@ TEST(GjkContact, TouchingGivesZeroDistance) {
 
 TEST(GjkContact, SwappingShapesFlipsTheNormal) {
   Rng rng(10);
-  static const std::vector<Vec3> tetra{Vec3(0, 0, 0.5), Vec3(0.5, 0, -0.2), Vec3(-0.3, 0.4, -0.2),
-                                       Vec3(-0.3, -0.4, -0.2)};
-  const std::array<ConvexShape, 5> shapes{ConvexShape::sphere(0.4), ConvexShape::box({0.3, 0.5, 0.2}),
-                                          ConvexShape::capsule(0.3, 0.2),
-                                          ConvexShape::cylinder(0.3, 0.4), ConvexShape::hull(tetra)};
+  const std::array<ConvexShape, 5> shapes = one_of_each_kind();
   for (int n = 0; n < 500; ++n) {
     const PosedShape a(shapes[n % 5], rng.rotation(), rng.vec(-1, 1));
     const PosedShape b(shapes[(n / 5) % 5], rng.rotation(), rng.vec(-1, 1));
@@ -460,11 +464,7 @@ TEST(GjkWarmStart, CachedSimplexGivesTheSameAnswerInFewerIterations) {
 TEST(GjkIterations, MeanCountsStaySmall) {
   // Every pair of the five kinds at 400 random poses, about half of them overlapping.
   Rng rng(13);
-  static const std::vector<Vec3> tetra{Vec3(0, 0, 0.5), Vec3(0.5, 0, -0.2), Vec3(-0.3, 0.4, -0.2),
-                                       Vec3(-0.3, -0.4, -0.2)};
-  const std::array<ConvexShape, 5> shapes{ConvexShape::sphere(0.4), ConvexShape::box({0.3, 0.5, 0.2}),
-                                          ConvexShape::capsule(0.3, 0.2),
-                                          ConvexShape::cylinder(0.3, 0.4), ConvexShape::hull(tetra)};
+  const std::array<ConvexShape, 5> shapes = one_of_each_kind();
   const std::array<const char*, 5> names{"sphere", "box", "capsule", "cylinder", "hull"};
   long gjk = 0, epa = 0, queries = 0, epa_queries = 0;
   int gjk_max = 0, epa_max = 0;

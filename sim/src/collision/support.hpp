@@ -39,41 +39,24 @@ struct ConvexShape {
   Vec3 half_extents = Vec3::Zero();  ///< (m) box, local axes; >= 0
   /// Hull vertices, local frame (m); not owned: the caller keeps them alive (the body's shape
   /// storage). Any point set: its support is that of its convex hull. At least one point.
-  std::span<const Vec3> vertices;
+  std::span<const Vec3> vertices{};
 
   [[nodiscard]] static ConvexShape sphere(double r) {
-    ConvexShape s;
-    s.kind = ConvexKind::sphere;
-    s.radius = r;
-    return s;
+    return {.kind = ConvexKind::sphere, .radius = r};
   }
   [[nodiscard]] static ConvexShape box(const Vec3& half) {
-    ConvexShape s;
-    s.kind = ConvexKind::box;
-    s.half_extents = half;
-    return s;
+    return {.kind = ConvexKind::box, .half_extents = half};
   }
   /// Segment from (0, 0, -half_height) to (0, 0, half_height) grown by r.
   [[nodiscard]] static ConvexShape capsule(double half_height, double r) {
-    ConvexShape s;
-    s.kind = ConvexKind::capsule;
-    s.half_height = half_height;
-    s.radius = r;
-    return s;
+    return {.kind = ConvexKind::capsule, .radius = r, .half_height = half_height};
   }
   /// Flat-ended cylinder of radius r between z = -half_height and z = half_height.
   [[nodiscard]] static ConvexShape cylinder(double r, double half_height) {
-    ConvexShape s;
-    s.kind = ConvexKind::cylinder;
-    s.radius = r;
-    s.half_height = half_height;
-    return s;
+    return {.kind = ConvexKind::cylinder, .radius = r, .half_height = half_height};
   }
   [[nodiscard]] static ConvexShape hull(std::span<const Vec3> points) {
-    ConvexShape s;
-    s.kind = ConvexKind::hull;
-    s.vertices = points;
-    return s;
+    return {.kind = ConvexKind::hull, .vertices = points};
   }
 
   /// Radius by which the core is grown (m): sphere and capsule radius, 0 for the others.
