@@ -157,6 +157,11 @@ TEST(GjkSimplex, ClosestPointsOfSimplices) {
   c = closest_on_simplex(w, 3);
   EXPECT_EQ(c.count, 1);
   EXPECT_EQ(c.index[0], 0);
+  // Triangle whose closest point is on one edge (only the last coordinate is negative).
+  w = {Vec3(-1, 1, 0), Vec3(1, 1, 0), Vec3(0, 3, 0), Vec3::Zero()};
+  c = closest_on_simplex(w, 3);
+  EXPECT_EQ(c.count, 2);
+  EXPECT_NEAR((c.v - Vec3(0, 1, 0)).norm(), 0.0, 1e-15);
   // Tetrahedron around the origin; and one beside it (closest on the face x = 1).
   w = {Vec3(-1, -1, -1), Vec3(3, -1, -1), Vec3(-1, 3, -1), Vec3(-1, -1, 3)};
   EXPECT_EQ(closest_on_simplex(w, 4).count, 4);
