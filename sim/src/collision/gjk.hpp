@@ -40,6 +40,8 @@ struct GjkOptions {
   int max_iterations = 64;  ///< support evaluations at most (it never loops past this)
   /// Stop when |v|² - v·w <= rel_tol |v|²: the distance is then known to a relative error of
   /// about rel_tol (van den Bergen 1999, §4; Coutinho eq. 4.48's lower bound v·w / |v|).
+  /// Polytopes and rounded cores end exactly; against a curved surface (the cylinder's rim)
+  /// the distance converges to rel_tol but the normal only to about sqrt(rel_tol).
   double rel_tol = 1e-10;
   /// The shapes count as overlapping when |v| <= overlap_tol * max |w| over the simplex (the
   /// origin is on the simplex up to rounding).
