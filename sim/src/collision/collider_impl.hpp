@@ -133,7 +133,7 @@ struct SurfaceContact {
 /// Closest features of collider c to the sphere (centre p, radius r, world frame) with
 /// gap < margin, nearest first, at most max_out with normals apart by more than ~2.5 degrees (a
 /// particle in a mesh crease touches one facet per side; the facets sharing an edge or vertex
-/// give one contact). A centre inside a sphere, cylinder or closed mesh gives none (§3.4.2
+/// give one contact). A centre inside a sphere, cylinder, capsule or closed mesh gives none (§3.4.2
 /// removes it); one inside a box gives the face it is least deep behind. Returns the count.
 int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
                      SurfaceContact* out, int max_out);

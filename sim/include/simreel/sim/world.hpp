@@ -112,8 +112,8 @@ class World {
   /// each other's particles (hashed grid §2.3.1, sequential impulses §3.6.2), their overlap
   /// corrections swept against the colliders. No particle ends a step with its centre closer than
   /// its radius to a plane on the solid side; one found inside a box leaves through the nearest
-  /// face with the box's normal velocity; one inside a sphere, cylinder or closed mesh is
-  /// removed and counted (§3.4.2, removed_inside_count()).
+  /// face with the box's normal velocity; one inside a sphere, cylinder, capsule or closed mesh
+  /// is removed and counted (§3.4.2, removed_inside_count()).
   /// @throws std::invalid_argument unless sampling_time is > 0 and finite.
   /// Cloths step after the particle systems (see add_cloth); a cloth whose state becomes
   /// non-finite is reported as NonFiniteState naming the cloth, step and time.
@@ -172,7 +172,7 @@ class World {
   /// by the emitter or spawn_particle(); births dropped at max_particles are not counted.
   [[nodiscard]] std::uint64_t emitted_count(ParticleSystemHandle h) const;
   /// Particles of the system removed because their centre was found inside a solid collider
-  /// (sphere, cylinder, closed mesh) after their step (Coutinho §3.4.2), since registration.
+  /// (sphere, cylinder, capsule, closed mesh) after their step (Coutinho §3.4.2), since registration.
   /// @throws std::out_of_range if the handle is stale.
   [[nodiscard]] std::uint64_t removed_inside_count(ParticleSystemHandle h) const;
   [[nodiscard]] std::vector<ParticleSystemHandle> particle_systems() const;
