@@ -392,32 +392,36 @@ TEST(SimCollisionMesh, SurfaceContactsGiveTheClosestFeatureOfEachShape) {
     EXPECT_NEAR(out[0].gap, gap, 1e-12) << p.transpose();
     EXPECT_LT((out[0].normal - n).norm(), 1e-12) << p.transpose();
   };
-  BoxDef b;
-  b.half_extents = Vec3(0.1, 0.2, 0.3);
-  b.transform.translation = Vec3(1, 0, 0);
-  const detail::Collider box = detail::make_collider(b, 0.0);
+  // A static shape posed at `at` (identity offset), as World::add_body places it.
+  auto posed = [](const ShapeDef& d, const Vec3& at = Vec3::Zero()) {
+    detail::Collider c = detail::make_collider(d, "shape");
+    c.follow(Transform{at, Quat::Identity()}, Vec3::Zero(), Vec3::Zero());
+    return c;
+  };
+  const detail::Collider box = posed(ShapeDef::box(Vec3(0.1, 0.2, 0.3)), Vec3(1, 0, 0));
   one(box, Vec3(1.05, 0.2 + r + 0.002, 0), 0.002, Vec3::UnitY());              // face
   one(box, Vec3(1.1 + 0.003, 0.2 + 0.004, 0), 0.005 - r, Vec3(0.6, 0.8, 0));   // edge
   one(box, Vec3(1.0, 0.0, 0.3 - 0.001), -0.001 - r, Vec3::UnitZ());            // inside: least deep
   EXPECT_EQ(detail::surface_contacts(box, Vec3(1.05, 0.2 + r + 0.006, 0), r, margin, out, 3), 0);
-  SphereDef sd;
-  sd.radius = 0.5;
-  const detail::Collider sphere = detail::make_collider(sd, 0.0);
+  const detail::Collider sphere = posed(ShapeDef::sphere(0.5));
   one(sphere, Vec3(0, 0.3, 0.402), std::hypot(0.3, 0.402) - 0.5 - r, Vec3(0, 0.3, 0.402).normalized());
   EXPECT_EQ(detail::surface_contacts(sphere, Vec3(0, 0, 0.2), r, margin, out, 3), 0);  // inside
-  CylinderDef cd;
-  cd.radius = 0.2;
-  cd.half_height = 0.1;
-  const detail::Collider cyl = detail::make_collider(cd, 0.0);
+  const detail::Collider cyl = posed(ShapeDef::cylinder(0.2, 0.1));
   one(cyl, Vec3(0.2 + r + 0.001, 0, 0.05), 0.001, Vec3::UnitX());              // side
   one(cyl, Vec3(0.1, 0, -0.1 - r + 0.002), -0.002, -Vec3::UnitZ());            // cap
   one(cyl, Vec3(0.2 + 0.003, 0, 0.1 + 0.004), 0.005 - r, Vec3(0.6, 0, 0.8));   // rim
+  // Capsule (segment |z| <= 0.1 grown by 0.2): side, and the end cap's sphere.
+  const detail::Collider cap = posed(ShapeDef::capsule(0.2, 0.1));
+  one(cap, Vec3(0.2 + r + 0.001, 0, 0.05), 0.001, Vec3::UnitX());
+  one(cap, Vec3(0, 0, 0.1) + (0.2 + r + 0.003) * Vec3(0.6, 0, 0.8), 0.003, Vec3(0.6, 0, 0.8));
+  EXPECT_EQ(detail::surface_contacts(cap, Vec3(0.1, 0, 0.25), r, margin, out, 3), 0);  // inside
   // A crease of a mesh (two facets at 90 degrees along x): one contact per facet, nearest first.
-  MeshDef md;
+  ShapeDef md;
+  md.type = ShapeType::mesh;
   md.vertices = {Vec3(-1, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0), Vec3(1, 0, 1),
                  Vec3(-1, 0, 1)};
   md.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 4}, {0, 4, 5}};
-  const detail::Collider crease = detail::make_collider(md, 0.0);
+  const detail::Collider crease = posed(md);
   ASSERT_EQ(detail::surface_contacts(crease, Vec3(0.2, r + 0.001, r - 0.001), r, margin, out, 3), 2);
   EXPECT_NEAR(out[0].gap, -0.001, 1e-12);
   EXPECT_LT((out[0].normal - Vec3::UnitZ()).norm(), 1e-12);

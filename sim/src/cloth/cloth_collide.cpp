@@ -93,13 +93,13 @@ bool near_solid(const Collider& c, const Vec3& x_start, const Vec3& x, double th
          ((c.aabb_center - hi).array() <= grow.array()).all();
 }
 
-/// Sphere, cylinder and triangle mesh (static or kinematic). The vertex's path x_start -> x is
+/// Sphere, cylinder, capsule and triangle mesh (static or kinematic). The vertex's path x_start -> x is
 /// swept as a sphere of radius `thickness` with the particle pass's closed forms and AABB-tree
 /// query (sweep_collider, Coutinho §3.4, §2.2), along the motion relative to a kinematic body, so
 /// a fast vertex cannot tunnel. At the first contact the vertex stops on the grown surface and the
 /// rest of its displacement, less its normal part, slides on along the tangent plane and is
 /// swept again (up to kMaxSlides contacts; after the last one it stays at the contact point).
-/// A vertex that ends inside the sphere or cylinder grown by `thickness` without a swept contact
+/// A vertex that ends inside the sphere, cylinder or capsule grown by `thickness` without a swept contact
 /// (it started inside the solid: a collider moved onto it) goes out to the nearest point of the
 /// grown surface. For meshes the sweep alone keeps vertices out: a vertex that somehow started
 /// deep inside a mesh is not pushed out.
@@ -128,6 +128,16 @@ bool solid(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Ve
     if (d < rg && d > 0.0) {
       n = off / d;
       x = c.center + rg * n;
+      touched = true;
+    }
+  } else if (c.shape == Collider::Shape::capsule) {
+    const Vec3 q = c.R.transpose() * (x - c.center);
+    const Vec3 axis(0.0, 0.0, std::clamp(q.z(), -c.half_height, c.half_height));
+    const Vec3 off = q - axis;
+    const double rg = c.radius + thickness, d = off.norm();
+    if (d < rg && d > 0.0) {
+      n = c.R * (off / d);
+      x = c.center + c.R * (axis + rg * (off / d));
       touched = true;
     }
   } else if (c.shape == Collider::Shape::cylinder) {
@@ -175,6 +185,7 @@ void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector
             break;
           case Collider::Shape::sphere:
           case Collider::Shape::cylinder:
+          case Collider::Shape::capsule:
           case Collider::Shape::mesh:
             touched = solid(c, x_start[i], x[i], thickness, normal);
             break;

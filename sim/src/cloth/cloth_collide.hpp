@@ -18,7 +18,7 @@ namespace simreel::sim::detail {
 /// bounce) and the tangential part is reduced by friction × the normal speed removed (Coulomb,
 /// §3.6.1), to zero at most. `hit[i]` is set to 1 for every vertex touched.
 /// A switch on the collider kind: plane, box, and (swept, see cloth_collide.cpp) sphere,
-/// cylinder and triangle mesh, static or kinematic.
+/// cylinder, capsule and triangle mesh, static or kinematic.
 void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
                    const std::vector<std::uint8_t>& free, const std::vector<Collider>& colliders,
                    double thickness, double friction, std::vector<std::uint8_t>& hit);

@@ -1,7 +1,7 @@
-// Colliders at run time: definitions -> Collider (pose, world bounds, a mesh's AABB tree built
-// once in its local frame, Coutinho §2.1–2.2), kinematic poses from the path, and the validation
-// of collider definitions. The sweeps are in sweep.cpp, the resting-contact features in
-// surface_contacts.cpp, the particle pass in particle_response.cpp.
+// Shapes at run time: ShapeDef -> Collider (geometry, a mesh's AABB tree built once in its
+// local frame, Coutinho §2.1–2.2), the shape's world pose from its body's (body pose ∘ offset),
+// and the validation of shape definitions. The sweeps are in sweep.cpp, the resting-contact
+// features in surface_contacts.cpp, the particle pass in particle_response.cpp.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -11,7 +11,6 @@
 
 #include "collision/collider_impl.hpp"
 #include "collision/narrow_phase.hpp"
-#include "core/path_math.hpp"
 #include "core/validate.hpp"
 
 namespace simreel::sim::detail {
@@ -33,7 +32,22 @@ bool MeshShape::contains(const Vec3& p) const {
   return (crossings & 1) != 0;
 }
 
+namespace {
+
+[[nodiscard]] bool is_identity(const Quat& q) {
+  return q.x() == 0.0 && q.y() == 0.0 && q.z() == 0.0 && q.w() == 1.0;
+}
+
+}  // namespace
+
 void Collider::set_pose(const Transform& t) {
+  if (shape == Shape::plane) {
+    // The centre and rotation of a plane stay zero and identity (they are hashed as such).
+    point = t.translation;
+    normal = is_identity(t.rotation) ? local_normal
+                                     : Vec3((t.rotation.normalized() * local_normal).normalized());
+    return;
+  }
   center = t.translation;
   rotation = t.rotation.normalized();
   R = rotation.toRotationMatrix();
@@ -50,6 +64,10 @@ void Collider::set_pose(const Transform& t) {
       aabb_center = center;
       aabb_half = R.cwiseAbs() * Vec3(radius, radius, half_height);
       break;
+    case Shape::capsule:
+      aabb_center = center;
+      aabb_half = R.col(2).cwiseAbs() * half_height + Vec3::Constant(radius);
+      break;
     case Shape::mesh:
       aabb_center = center + R * mesh->local_center;
       aabb_half = R.cwiseAbs() * mesh->local_half;
@@ -59,12 +77,18 @@ void Collider::set_pose(const Transform& t) {
   }
 }
 
-void Collider::update(double t) {
+void Collider::follow(const Transform& body_pose, const Vec3& v, const Vec3& w) {
   prev_center = center;
   prev_R = R;
-  set_pose(path.sample(t));
-  velocity = path.velocity(t);
-  angular_velocity = detail::angular_velocity(path, t);
+  if (offset_identity) {
+    set_pose(body_pose);
+    velocity = v;
+  } else {
+    const Quat q = body_pose.rotation.normalized();
+    set_pose(Transform{body_pose.translation + q * offset.translation, q * offset.rotation});
+    velocity = v + w.cross(center - body_pose.translation);
+  }
+  angular_velocity = w;
 }
 
 MovedObject Collider::pose() const {
@@ -80,90 +104,12 @@ MovedObject Collider::pose() const {
   return m;
 }
 
-Collider make_collider(const PlaneDef& def) {
-  validate(def);
-  Collider c;
-  c.shape = Collider::Shape::plane;
-  c.material = def.material;
-  c.point = def.point;
-  c.normal = def.normal.normalized();
-  return c;
-}
-
 namespace {
 
-/// Pose setup shared by the solids: static at `transform`, or on its path at `time`.
-Collider& place(Collider& c, const Transform& transform, const KeyframePath& path, double time) {
-  c.path = path;
-  if (c.kinematic()) {
-    c.update(time);
-  } else {
-    c.set_pose(transform);
-  }
-  c.prev_center = c.center;
-  c.prev_R = c.R;
-  c.reported_translation = c.center;
-  c.reported_rotation = c.rotation;
-  return c;
-}
-
-void validate_pose(const Transform& t, const KeyframePath& path, const std::string& what) {
-  if (!t.translation.allFinite() || !t.rotation.coeffs().allFinite() ||
-      !(t.rotation.norm() > 1e-12))
-    throw std::invalid_argument(what +
-                                ".transform must be finite with a non-zero rotation quaternion");
-  validate(path, what + ".path");
-}
-
-}  // namespace
-
-Collider make_collider(const BoxDef& def, double time) {
-  validate(def);
-  Collider c;
-  c.shape = Collider::Shape::box;
-  c.material = def.material;
-  c.half_extents = def.half_extents;
-  return place(c, def.transform, def.path, time);
-}
-
-Collider make_collider(const SphereDef& def, double time) {
-  if (!(def.radius > 0.0) || !std::isfinite(def.radius)) {
-    std::ostringstream m;
-    m << "SphereDef.radius must be > 0 and finite (got " << def.radius << ")";
-    throw std::invalid_argument(m.str());
-  }
-  validate_pose(def.transform, def.path, "SphereDef");
-  validate(def.material, "SphereDef.material");
-  Collider c;
-  c.shape = Collider::Shape::sphere;
-  c.material = def.material;
-  c.radius = def.radius;
-  return place(c, def.transform, def.path, time);
-}
-
-Collider make_collider(const CylinderDef& def, double time) {
-  if (!(def.radius > 0.0) || !std::isfinite(def.radius) || !(def.half_height > 0.0) ||
-      !std::isfinite(def.half_height)) {
-    std::ostringstream m;
-    m << "CylinderDef.radius and half_height must be > 0 and finite (got " << def.radius << ", "
-      << def.half_height << ")";
-    throw std::invalid_argument(m.str());
-  }
-  validate_pose(def.transform, def.path, "CylinderDef");
-  validate(def.material, "CylinderDef.material");
-  Collider c;
-  c.shape = Collider::Shape::cylinder;
-  c.material = def.material;
-  c.radius = def.radius;
-  c.half_height = def.half_height;
-  return place(c, def.transform, def.path, time);
-}
-
-Collider make_collider(const MeshDef& def, double time) {
-  if (def.triangles.empty())
-    throw std::invalid_argument("MeshDef.triangles must not be empty");
+std::shared_ptr<const MeshShape> make_mesh(const ShapeDef& def, const std::string& what) {
+  if (def.triangles.empty()) throw std::invalid_argument(what + ".triangles must not be empty");
   for (const Vec3& v : def.vertices)
-    if (!v.allFinite()) throw std::invalid_argument("MeshDef.vertices must be finite");
+    if (!v.allFinite()) throw std::invalid_argument(what + ".vertices must be finite");
   auto shape = std::make_shared<MeshShape>();
   shape->triangles.reserve(def.triangles.size());
   std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
@@ -173,7 +119,7 @@ Collider make_collider(const MeshDef& def, double time) {
     for (std::uint32_t k : tri)
       if (k >= def.vertices.size()) {
         std::ostringstream m;
-        m << "MeshDef.triangles[" << t << "] refers to vertex " << k << " of "
+        m << what << ".triangles[" << t << "] refers to vertex " << k << " of "
           << def.vertices.size();
         throw std::invalid_argument(m.str());
       }
@@ -188,9 +134,7 @@ Collider make_collider(const MeshDef& def, double time) {
     }
   }
   if (shape->triangles.empty())
-    throw std::invalid_argument("MeshDef.triangles are all degenerate (zero area)");
-  validate_pose(def.transform, def.path, "MeshDef");
-  validate(def.material, "MeshDef.material");
+    throw std::invalid_argument(what + ".triangles are all degenerate (zero area)");
   std::sort(edges.begin(), edges.end());
   bool closed = true;
   for (std::size_t i = 0; i < edges.size() && closed;) {
@@ -204,11 +148,63 @@ Collider make_collider(const MeshDef& def, double time) {
   const Aabb& b = shape->bvh.bounds();
   shape->local_center = 0.5 * (b.lo + b.hi);
   shape->local_half = 0.5 * (b.hi - b.lo);
+  return shape;
+}
+
+}  // namespace
+
+Collider make_collider(const ShapeDef& def, const std::string& what) {
   Collider c;
-  c.shape = Collider::Shape::mesh;
+  switch (def.type) {
+    case ShapeType::plane:
+      if (!def.normal.allFinite() || !(def.normal.norm() > 1e-12)) {
+        std::ostringstream m;
+        m << what << ".normal must be finite and non-zero (got (" << def.normal.transpose()
+          << "))";
+        throw std::invalid_argument(m.str());
+      }
+      c.shape = Collider::Shape::plane;
+      c.local_normal = def.normal.normalized();
+      c.normal = c.local_normal;
+      break;
+    case ShapeType::sphere:
+      require_in(def.radius, ranges::kColliderSize, what + ".radius");
+      c.shape = Collider::Shape::sphere;
+      break;
+    case ShapeType::box:
+      for (int k = 0; k < 3; ++k)
+        require_in(def.half_extents[k], ranges::kColliderSize,
+                   what + ".half_extents[" + std::to_string(k) + "]");
+      c.shape = Collider::Shape::box;
+      break;
+    case ShapeType::cylinder:
+    case ShapeType::capsule:
+      require_in(def.radius, ranges::kColliderSize, what + ".radius");
+      require_in(def.half_height, ranges::kColliderSize, what + ".half_height");
+      c.shape = def.type == ShapeType::cylinder ? Collider::Shape::cylinder
+                                                : Collider::Shape::capsule;
+      break;
+    case ShapeType::mesh:
+      c.mesh = make_mesh(def, what);
+      c.shape = Collider::Shape::mesh;
+      break;
+    default:
+      throw std::invalid_argument(what + ".type is not a shape type");
+  }
+  const bool round = def.type == ShapeType::sphere || def.type == ShapeType::cylinder ||
+                     def.type == ShapeType::capsule;
+  c.radius = round ? def.radius : 0.0;
+  c.half_height = round && def.type != ShapeType::sphere ? def.half_height : 0.0;
+  c.half_extents = def.type == ShapeType::box ? def.half_extents : Vec3::Zero();
+  if (!def.offset.translation.allFinite() || !def.offset.rotation.coeffs().allFinite() ||
+      !(def.offset.rotation.norm() > 1e-12))
+    throw std::invalid_argument(what +
+                                ".offset must be finite with a non-zero rotation quaternion");
+  c.offset = def.offset;
+  c.offset_identity = def.offset.translation == Vec3::Zero() && is_identity(def.offset.rotation);
+  validate(def.material, what + ".material");
   c.material = def.material;
-  c.mesh = std::move(shape);
-  return place(c, def.transform, def.path, time);
+  return c;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -231,23 +227,45 @@ void validate(const Material& m, const std::string& what) {
   require_in(sp.min_radius, ranges::kHitSplitMinRadius, what + ".split.min_radius");
 }
 
-void validate(const PlaneDef& def) {
-  if (!def.point.allFinite() || !def.normal.allFinite())
-    throw std::invalid_argument("PlaneDef: point and normal must be finite");
-  if (!(def.normal.norm() > 1e-12))
-    throw std::invalid_argument("PlaneDef.normal must be non-zero (got (0, 0, 0))");
-  validate(def.material, "PlaneDef.material");
-}
-
-void validate(const BoxDef& def) {
-  for (int k = 0; k < 3; ++k)
-    require_in(def.half_extents[k], ranges::kColliderSize, "BoxDef.half_extents[" + std::to_string(k) + "]");
-  if (!def.transform.translation.allFinite() || !def.transform.rotation.coeffs().allFinite() ||
-      !(def.transform.rotation.norm() > 1e-12))
-    throw std::invalid_argument(
-        "BoxDef.transform must be finite with a non-zero rotation quaternion");
-  validate(def.path, "BoxDef.path");
-  validate(def.material, "BoxDef.material");
-}
-
 }  // namespace simreel::sim::detail
+
+namespace simreel::sim {
+
+ShapeDef ShapeDef::sphere(double radius, const Transform& offset) {
+  ShapeDef s;
+  s.type = ShapeType::sphere;
+  s.radius = radius;
+  s.offset = offset;
+  return s;
+}
+
+ShapeDef ShapeDef::box(const Vec3& half_extents, const Transform& offset) {
+  ShapeDef s;
+  s.type = ShapeType::box;
+  s.half_extents = half_extents;
+  s.offset = offset;
+  return s;
+}
+
+ShapeDef ShapeDef::cylinder(double radius, double half_height, const Transform& offset) {
+  ShapeDef s = sphere(radius, offset);
+  s.type = ShapeType::cylinder;
+  s.half_height = half_height;
+  return s;
+}
+
+ShapeDef ShapeDef::capsule(double radius, double half_height, const Transform& offset) {
+  ShapeDef s = cylinder(radius, half_height, offset);
+  s.type = ShapeType::capsule;
+  return s;
+}
+
+ShapeDef ShapeDef::plane(const Vec3& normal, const Transform& offset) {
+  ShapeDef s;
+  s.type = ShapeType::plane;
+  s.normal = normal;
+  s.offset = offset;
+  return s;
+}
+
+}  // namespace simreel::sim

@@ -7,12 +7,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "collision/bvh.hpp"
 #include "collision/narrow_phase.hpp"
 #include "particles/particle_store.hpp"
-#include "simreel/sim/collider.hpp"
+#include "simreel/sim/body.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/moved_object.hpp"
 
@@ -29,21 +30,29 @@ struct MeshShape {
   [[nodiscard]] bool contains(const Vec3& p) const;
 };
 
+/// One shape of a body at run time, posed in the world: geometry in the shape frame, material,
+/// and the pose and velocities of the shape frame at the end of the current step. The world
+/// keeps every body's shapes in one dense array (the collision passes loop over it).
 struct Collider {
-  enum class Shape : std::uint8_t { plane, box, sphere, cylinder, mesh };
+  enum class Shape : std::uint8_t { plane, box, sphere, cylinder, capsule, mesh };
   Shape shape = Shape::plane;
   Material material;
 
   // plane
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();  ///< unit
+  Vec3 local_normal = Vec3::UnitZ();  ///< unit, shape frame
 
   // solids: definition
   Vec3 half_extents = Vec3::Zero();  ///< box
-  double radius = 0.0;               ///< sphere, cylinder
-  double half_height = 0.0;          ///< cylinder
+  double radius = 0.0;               ///< sphere, cylinder, capsule
+  double half_height = 0.0;          ///< cylinder, capsule (half the segment)
   std::shared_ptr<const MeshShape> mesh;
-  KeyframePath path;  ///< empty: static
+  /// Pose of the shape frame in its body's frame; identity (the body's only shape, as the
+  /// single-collider wrappers build it) takes the body pose unchanged, bit for bit.
+  Transform offset;
+  bool offset_identity = true;
+  bool moving = false;  ///< belongs to a kinematic body
   // solids: pose at the end of the current step (Coutinho §3.4: the body is taken as fixed there)
   Vec3 center = Vec3::Zero();  ///< origin of the local frame, world
   Quat rotation = Quat::Identity();
@@ -58,14 +67,12 @@ struct Collider {
   Vec3 aabb_center = Vec3::Zero();  ///< world AABB of the solid (unexpanded)
   Vec3 aabb_half = Vec3::Zero();
 
-  // what the moved list last reported
-  Vec3 reported_translation = Vec3::Zero();
-  Quat reported_rotation = Quat::Identity();
-
-  [[nodiscard]] bool kinematic() const { return shape != Shape::plane && !path.empty(); }
+  [[nodiscard]] bool kinematic() const { return moving; }
+  /// Sets the shape frame's world pose (a plane: its point and normal; its centre stays zero).
   void set_pose(const Transform& t);
-  /// Moves a kinematic collider to its pose and velocities at time t.
-  void update(double t);
+  /// Places the shape on its body: the body frame's world pose and velocities (m/s of the body
+  /// origin, rad/s, world). The previous pose becomes the start-of-step pose.
+  void follow(const Transform& body_pose, const Vec3& v, const Vec3& w);
   /// Velocity (m/s) of the collider's material point at world position p.
   [[nodiscard]] Vec3 point_velocity(const Vec3& p) const {
     return shape == Shape::plane ? Vec3::Zero() : Vec3(velocity + angular_velocity.cross(p - center));
@@ -73,11 +80,10 @@ struct Collider {
   [[nodiscard]] MovedObject pose() const;
 };
 
-Collider make_collider(const PlaneDef& def);
-Collider make_collider(const BoxDef& def, double time);
-Collider make_collider(const SphereDef& def, double time);
-Collider make_collider(const CylinderDef& def, double time);
-Collider make_collider(const MeshDef& def, double time);
+/// The shape's geometry and material (not yet posed: see Collider::follow), with a mesh's AABB
+/// tree built once in its frame (§2.2). @throws std::invalid_argument naming `what` + the field
+/// (e.g. "BodyDef.shapes[1].radius") on bad parameters.
+Collider make_collider(const ShapeDef& def, const std::string& what);
 
 /// A droplet requested by HitAction::split, appended to the system after the pass.
 struct SpawnRequest {
@@ -127,7 +133,7 @@ struct SurfaceContact {
 /// Closest features of collider c to the sphere (centre p, radius r, world frame) with
 /// gap < margin, nearest first, at most max_out with normals apart by more than ~2.5 degrees (a
 /// particle in a mesh crease touches one facet per side; the facets sharing an edge or vertex
-/// give one contact). A centre inside a sphere, cylinder or closed mesh gives none (§3.4.2
+/// give one contact). A centre inside a sphere, cylinder, capsule or closed mesh gives none (§3.4.2
 /// removes it); one inside a box gives the face it is least deep behind. Returns the count.
 int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
                      SurfaceContact* out, int max_out);

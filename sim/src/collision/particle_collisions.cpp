@@ -124,14 +124,17 @@ void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colli
   }
 }
 
-void ParticleCollider::forget_collider(std::uint32_t removed, std::uint32_t moved_from) {
+void ParticleCollider::remap_colliders(const std::vector<std::uint32_t>& new_index) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
   for (WarmCache& c : caches_) {
     std::size_t keep = 0;
     for (std::size_t q = 0; q < c.ki.size(); ++q) {
       std::uint64_t kj = c.kj[q];
-      if (kj == (kWall | removed)) continue;
-      if (kj == (kWall | moved_from)) kj = kWall | removed;
+      if ((kj & kWall) != 0) {
+        const std::uint64_t old = kj & ~kWall;
+        if (old >= new_index.size() || new_index[old] == kRemoved) continue;
+        kj = kWall | new_index[old];
+      }
       c.ki[keep] = c.ki[q];
       c.kj[keep] = kj;
       c.n[keep] = c.n[q];

@@ -110,10 +110,10 @@ class ParticleCollider {
   double cell_size = 0.0;  ///< (m) of the last find_contacts(), at its finest level
   int levels = 1;          ///< grid levels of the last find_contacts() (1: uniform grid)
 
-  /// A collider was swap-removed from the world's dense array: warm-start entries against
-  /// `removed` are dropped, those against `moved_from` (the old last index, now at `removed`)
-  /// follow it. Equal indices: the removed one was last.
-  void forget_collider(std::uint32_t removed, std::uint32_t moved_from);
+  static constexpr std::uint32_t kRemoved = 0xffffffffu;  ///< remap_colliders: gone
+  /// The world's collider array changed (a body and its shapes were removed): warm-start entries
+  /// against collider k now name new_index[k], or are dropped when it is kRemoved.
+  void remap_colliders(const std::vector<std::uint32_t>& new_index);
   /// A system was removed: its group's cache is dropped (entries of its particles in other
   /// groups' caches never match again: serials are not reused).
   void forget_system(std::uint32_t serial);

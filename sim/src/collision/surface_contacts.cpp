@@ -116,6 +116,14 @@ int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
       }
       break;
     }
+    case Collider::Shape::capsule: {
+      const Vec3 off = l - Vec3(0.0, 0.0, std::clamp(l.z(), -c.half_height, c.half_height));
+      const double d = off.norm();
+      if (!(d >= c.radius)) return 0;
+      ln = off / d;
+      dist = d - c.radius;
+      break;
+    }
     case Collider::Shape::mesh: {
       const MeshShape& m = *c.mesh;
       int count = 0;

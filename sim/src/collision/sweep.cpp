@@ -1,5 +1,5 @@
 // Swept spheres against colliders (Coutinho §3.4, App. A): the first contact of a particle's
-// step with a plane, box, sphere, cylinder or triangle mesh, in the collider's frame.
+// step with a plane, box, sphere, cylinder, capsule or triangle mesh, in the collider's frame.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -145,6 +145,46 @@ void sweep_cylinder(const Collider& c, const Vec3& a, const Vec3& b, double r, b
   best = Hit{s, Vec3(c.R * ln), Vec3(c.center + c.R * lp), &c};
 }
 
+/// Sphere moving a -> b against the capsule (segment from -H to +H along local z grown by the
+/// radius R) grown by r: the exact union of the infinite cylinder of radius R + r about the
+/// segment's line, clipped to |z| <= H, and the two end spheres of radius R + r. The first entry
+/// into the union is the earliest of the first entries into the clipped cylinder (closed-form
+/// quadratic; an entry point beyond the segment's ends lies inside an end sphere, which is entered
+/// no later) and into the end spheres (ray–sphere, as sweep_sphere). A start point between the
+/// capsule and the grown capsule moving in is a contact at s = 0; one inside the capsule itself
+/// is left to the §3.4.2 removal.
+void sweep_capsule(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
+                   Hit& best) {
+  Vec3 m, d;
+  local_segment(c, a, b, first, m, d);
+  const double H = c.half_height, Rg = c.radius + r;
+  if ((m - Vec3(0.0, 0.0, std::clamp(m.z(), -H, H))).squaredNorm() < c.radius * c.radius)
+    return;  // inside the capsule itself: §3.4.2 removal
+  double s_best = std::numeric_limits<double>::infinity();
+  Vec3 axis_point = Vec3::Zero();  // the segment point the contact normal leaves from
+  double s;
+  if (np::first_entry(d.head<2>().squaredNorm(), m.head<2>().dot(d.head<2>()),
+                      m.head<2>().squaredNorm() - Rg * Rg, s) &&
+      std::abs(m.z() + s * d.z()) <= H) {
+    s_best = s;
+    axis_point = Vec3(0.0, 0.0, m.z() + s * d.z());
+  }
+  for (const double z : {-H, H}) {
+    const Vec3 e(0.0, 0.0, z);
+    const Vec3 me = m - e;
+    if (np::first_entry(d.squaredNorm(), me.dot(d), me.squaredNorm() - Rg * Rg, s) && s < s_best) {
+      s_best = s;
+      axis_point = e;
+    }
+  }
+  if (!(s_best < best.s)) return;
+  const Vec3 off = m + s_best * d - axis_point;
+  const double len = off.norm();
+  if (!(len > 0.0)) return;
+  const Vec3 ln = off / len;
+  best = Hit{s_best, Vec3(c.R * ln), Vec3(c.center + c.R * (axis_point + Rg * ln)), &c};
+}
+
 /// Sphere moving a -> b against a triangle mesh: the segment goes into the mesh frame (§2.1), the
 /// AABB tree gives the triangles near the segment's box grown by r (§2.2), and each is swept
 /// exactly (narrow_phase.hpp, §3.7).
@@ -171,6 +211,7 @@ void sweep(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first
     case Collider::Shape::box: sweep_box(c, a, b, r, best); break;
     case Collider::Shape::sphere: sweep_sphere(c, a, b, r, first, best); break;
     case Collider::Shape::cylinder: sweep_cylinder(c, a, b, r, first, best); break;
+    case Collider::Shape::capsule: sweep_capsule(c, a, b, r, first, best); break;
     case Collider::Shape::mesh: sweep_mesh(c, a, b, r, first, best); break;
   }
 }
@@ -181,6 +222,11 @@ bool inside_solid(const Collider& c, const Vec3& p) {
     case Collider::Shape::cylinder: {
       const Vec3 l = c.R.transpose() * (p - c.center);
       return l.head<2>().squaredNorm() < c.radius * c.radius && std::abs(l.z()) < c.half_height;
+    }
+    case Collider::Shape::capsule: {
+      const Vec3 l = c.R.transpose() * (p - c.center);
+      const double z = std::clamp(l.z(), -c.half_height, c.half_height);
+      return (l - Vec3(0.0, 0.0, z)).squaredNorm() < c.radius * c.radius;
     }
     case Collider::Shape::mesh:
       return c.mesh->closed && c.mesh->contains(c.R.transpose() * (p - c.center));

@@ -1,6 +1,6 @@
 #pragma once
 // Swept-sphere tests of one particle against one collider (private to collision/): closed forms
-// for plane, box, sphere and cylinder and the AABB-tree query for meshes (Coutinho §3.4, §2.2).
+// for plane, box, sphere, cylinder and capsule and the AABB-tree query for meshes (Coutinho §3.4, §2.2).
 
 #include <limits>
 

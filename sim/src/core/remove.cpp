@@ -8,11 +8,8 @@
 namespace simreel::sim {
 
 void World::remove(BodyHandle h) {
-  detail::WorldState& w = *impl_;
-  const auto r = w.colliders.remove(h.id);
-  // Warm-start data names colliders by dense index: forget the removed one, follow the moved one.
-  w.particle_collider.forget_collider(std::uint32_t(r.removed), std::uint32_t(r.moved_from));
-  w.removed.push_back(h.id);
+  detail::remove_body(*impl_, h.id);  // with all its shapes; reported once
+  impl_->removed.push_back(h.id);
 }
 
 void World::remove(ParticleSystemHandle h) {

@@ -8,7 +8,7 @@ namespace simreel::sim::detail {
 
 void stage_births_and_deaths(WorldState& w, double t0, double t1) {
   const double h = t1 - t0;
-  const bool any_collider = !w.colliders.empty();
+  const bool any_collider = !w.shapes.empty();
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
     ParticleStore& st = ps.store;

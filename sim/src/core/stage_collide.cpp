@@ -6,7 +6,7 @@
 namespace simreel::sim::detail {
 
 void stage_particle_collisions(WorldState& w, double t0, double t1) {
-  if (w.colliders.empty()) return;
+  if (w.shapes.empty()) return;
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
     if (ps.def.collide) w.collide_system(index, 0, ps.n_old, t1 - t0);
@@ -25,7 +25,7 @@ void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_
     ctx.on_hit_split = &ps.def.on_hit_split;
   }
   ps.spawns.clear();
-  collide(st, begin, end, h, colliders.dense(), ctx, ps.forces);
+  collide(st, begin, end, h, shapes, ctx, ps.forces);
   ps.removed_inside += ctx.removed_inside;
   // Splash droplets (HitAction::split) join the system now, at age 0: they move from the next
   // step on. Droplets past max_particles are dropped.

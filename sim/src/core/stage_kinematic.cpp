@@ -4,8 +4,8 @@
 namespace simreel::sim::detail {
 
 void stage_kinematic_poses(WorldState& w, double /*t0*/, double t1) {
-  for (Collider& c : w.colliders.dense())
-    if (c.kinematic()) c.update(t1);
+  for (Body& b : w.bodies.dense())
+    if (b.kinematic()) b.move_to(t1, w.shapes);
 }
 
 }  // namespace simreel::sim::detail

@@ -8,7 +8,7 @@ namespace simreel::sim::detail {
 void stage_particle_particle(WorldState& w, double t0, double t1) {
   const double h = t1 - t0;
   std::vector<ParticleSystemState>& systems = w.systems.dense();
-  const std::vector<Collider>& colliders = w.colliders.dense();
+  const std::vector<Collider>& colliders = w.shapes;
   ParticleCollider& pc = w.particle_collider;
   // Groups in order of their first member; a system without a group is its own group.
   std::vector<bool> done(systems.size(), false);

@@ -81,8 +81,8 @@ std::uint64_t World::state_hash() const {
     for (const Vec3& x : c.positions()) f.vec(x);
     for (const Vec3& v : c.velocities()) f.vec(v);
   }
-  f.value(std::uint64_t(w.colliders.size()));
-  for (const detail::Collider& c : w.colliders.dense()) {
+  f.value(std::uint64_t(w.shapes.size()));
+  for (const detail::Collider& c : w.shapes) {
     f.vec(c.center);
     for (int k = 0; k < 4; ++k) f.value(c.rotation.coeffs()[k]);
   }

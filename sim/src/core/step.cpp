@@ -21,20 +21,23 @@ void step(detail::WorldState& w, double t0, double t1) {
   ++w.steps;
 }
 
-/// The moved list: kinematic colliders whose pose changed since the last report (dense order,
-/// which is registration order until a removal), then the removals since the last advance().
+/// The moved list: kinematic bodies whose pose changed since the last report, once each whatever
+/// their shape count (dense order, which is registration order until a removal), then the
+/// removals since the last advance().
 void report(detail::WorldState& w) {
   w.moved.clear();
-  std::vector<detail::Collider>& colliders = w.colliders.dense();
-  for (std::size_t i = 0; i < colliders.size(); ++i) {
-    detail::Collider& c = colliders[i];
-    if (!c.kinematic()) continue;
-    if (c.center == c.reported_translation && c.rotation.coeffs() == c.reported_rotation.coeffs())
+  std::vector<detail::Body>& bodies = w.bodies.dense();
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    detail::Body& b = bodies[i];
+    if (!b.kinematic()) continue;
+    const Quat q = b.pose.rotation.normalized();
+    if (b.pose.translation == b.reported_translation &&
+        q.coeffs() == b.reported_rotation.coeffs())
       continue;
-    c.reported_translation = c.center;
-    c.reported_rotation = c.rotation;
-    MovedObject m = c.pose();
-    m.handle = w.colliders.handle(i);
+    b.reported_translation = b.pose.translation;
+    b.reported_rotation = q;
+    MovedObject m = b.report_pose(w.shapes);
+    m.handle = w.bodies.handle(i);
     w.moved.push_back(m);
   }
   for (const Handle& h : w.removed) {

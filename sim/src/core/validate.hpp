@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "simreel/sim/collider.hpp"
+#include "simreel/sim/types.hpp"
 #include "simreel/sim/keyframes.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/ranges.hpp"
@@ -13,8 +13,6 @@
 namespace simreel::sim::detail {
 
 void validate(const WorldDef& def);
-void validate(const PlaneDef& def);
-void validate(const BoxDef& def);
 void validate(const ParticleSystemDef& def);
 /// `what` names the path in messages, e.g. "BoxDef.path".
 void validate(const KeyframePath& path, const std::string& what);

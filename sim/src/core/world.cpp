@@ -1,5 +1,5 @@
-// The World: registration, removal and the accessors (Coutinho §1.4.1). The step is in step.cpp
-// and its stages (stages.hpp); removal in remove.cpp.
+// The World: registration, removal and the accessors (Coutinho §1.4.1). Bodies are registered in
+// bodies.cpp, the step is in step.cpp and its stages (stages.hpp); removal in remove.cpp.
 #include "simreel/sim/world.hpp"
 
 #include <algorithm>
@@ -38,30 +38,6 @@ World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
 World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
-
-namespace {
-
-ColliderHandle add_collider(detail::WorldState& w, detail::Collider c) {
-  return ColliderHandle{w.colliders.add(std::move(c))};
-}
-
-}  // namespace
-
-ColliderHandle World::add_plane(const PlaneDef& def) {
-  return add_collider(*impl_, detail::make_collider(def));
-}
-ColliderHandle World::add_box(const BoxDef& def) {
-  return add_collider(*impl_, detail::make_collider(def, impl_->time));
-}
-ColliderHandle World::add_sphere(const SphereDef& def) {
-  return add_collider(*impl_, detail::make_collider(def, impl_->time));
-}
-ColliderHandle World::add_cylinder(const CylinderDef& def) {
-  return add_collider(*impl_, detail::make_collider(def, impl_->time));
-}
-ColliderHandle World::add_mesh(const MeshDef& def) {
-  return add_collider(*impl_, detail::make_collider(def, impl_->time));
-}
 
 std::uint64_t World::removed_inside_count(ParticleSystemHandle h) const {
   return impl_->systems[h.id].removed_inside;
@@ -223,12 +199,6 @@ std::uint64_t World::rejected_steps(ParticleSystemHandle h) const {
   return impl_->systems[h.id].integrator_state.rejected;
 }
 
-MovedObject World::pose(ColliderHandle h) const {
-  MovedObject m = impl_->colliders[h.id].pose();
-  m.handle = h.id;
-  return m;
-}
-
 ParticleView World::particles(ParticleSystemHandle h) const { return impl_->systems[h.id].store.view(); }
 
 const ParticleSystemDef& World::definition(ParticleSystemHandle h) const {
@@ -246,13 +216,6 @@ std::vector<ParticleSystemHandle> World::particle_systems() const {
   std::vector<ParticleSystemHandle> out;
   for (std::size_t i = 0; i < impl_->systems.size(); ++i)
     out.push_back(ParticleSystemHandle{impl_->systems.handle(i)});
-  return out;
-}
-
-std::vector<ColliderHandle> World::colliders() const {
-  std::vector<ColliderHandle> out;
-  for (std::size_t i = 0; i < impl_->colliders.size(); ++i)
-    out.push_back(ColliderHandle{impl_->colliders.handle(i)});
   return out;
 }
 

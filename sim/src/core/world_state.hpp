@@ -11,6 +11,7 @@
 #include "cloth/cloth_particles.hpp"
 #include "collision/collider_impl.hpp"
 #include "collision/particle_collisions.hpp"
+#include "core/body_state.hpp"
 #include "core/slot_table.hpp"
 #include "particles/emitter.hpp"
 #include "particles/forces.hpp"
@@ -64,7 +65,10 @@ struct WorldState {
   double time = 0.0;        ///< (s)
   std::uint64_t steps = 0;  ///< internal steps taken
   int threads = 1;
-  SlotTable<Collider> colliders{ObjectKind::body, "body/collider"};
+  SlotTable<Body> bodies{ObjectKind::body, "body/collider"};
+  /// Every body's shapes, posed in the world, grouped per body in the order of bodies.dense()
+  /// (Body::first_shape): what the collision passes loop over.
+  std::vector<Collider> shapes;
   SlotTable<ParticleSystemState> systems{ObjectKind::particle_system, "particle-system"};
   SlotTable<FieldEntry> fields{ObjectKind::force_field, "force-field"};
   SlotTable<std::unique_ptr<AttractorSpringDef>> attractors{ObjectKind::attractor_spring,
@@ -85,5 +89,9 @@ struct WorldState {
   [[noreturn]] void non_finite(std::size_t i, std::size_t begin, std::size_t end,
                                double t1) const;
 };
+
+/// Removes a body and its shapes (bodies.cpp); the shapes keep the bodies' dense order and the
+/// warm-start data follows them. @throws std::out_of_range on a null or stale handle.
+void remove_body(WorldState& w, const Handle& h);
 
 }  // namespace simreel::sim::detail

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "simreel/sim/body.hpp"
 #include "simreel/sim/cloth.hpp"
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/forces.hpp"
@@ -37,15 +38,32 @@ class World {
   World(World&&) noexcept;
   World& operator=(World&&) noexcept;
 
-  /// Registers colliders and particle systems. @throws std::invalid_argument on an invalid
-  /// definition (non-positive size, zero normal, restitution outside [0, 1], ...).
+  // --- Bodies (body.hpp; Coutinho Ch. 2 shapes, §3.7 moving bodies) ---------------------------
+  /// Registers a body and its shapes. Each shape is posed in the world at body pose ∘ offset
+  /// (a kinematic body's shapes all follow its path) and collides with particles and cloth; a
+  /// mesh's AABB tree is built here, once, in its frame (Coutinho §2.2), O(n log n) in the
+  /// triangle count. The body is named by one handle: World::pose gives its frame's pose, the
+  /// moved list reports it once per advance() in which it moved, World::remove removes it with
+  /// every shape.
+  /// @throws std::invalid_argument naming the field ("BodyDef.shapes[1].radius", ...) when the
+  ///         type is dynamic (not simulated yet: the rigid-body issue adds it), there is no
+  ///         shape, a static body has a path or a non-zero velocity, a kinematic body has no path
+  ///         or a non-zero velocity, a damping is negative, a pose or offset is not finite, a
+  ///         plane is on a body that is not static, or a shape's parameters are out of range.
+  BodyHandle add_body(const BodyDef& def);
+
+  /// The single colliders of the scene format (collider.hpp): each registers a body with one
+  /// shape at an identity offset (static when its path is empty, else kinematic), exactly as
+  /// add_body would, and returns its handle. Messages name the collider definition's fields
+  /// ("SphereDef.radius"). @throws std::invalid_argument on an invalid definition (non-positive
+  /// size, zero normal, restitution outside [0, 1], ...).
   ColliderHandle add_plane(const PlaneDef& def);
   ColliderHandle add_box(const BoxDef& def);
-  /// Solid colliders (collider.hpp). A mesh's AABB tree is built here, once, in its local frame
-  /// (Coutinho §2.2); O(n log n) in the triangle count.
   ColliderHandle add_sphere(const SphereDef& def);
   ColliderHandle add_cylinder(const CylinderDef& def);
   ColliderHandle add_mesh(const MeshDef& def);
+
+  /// Registers a particle system. @throws std::invalid_argument on an invalid definition.
   ParticleSystemHandle add_particle_system(const ParticleSystemDef& def);
 
   /// Adds one particle to a system now, outside its emitter (tests, tools, scripted effects):
@@ -81,7 +99,7 @@ class World {
 
   /// Advances the simulation by `sampling_time` (s, > 0) in internal steps of at most
   /// WorldDef::max_step. Returns the objects whose pose changed since the last call (kinematic
-  /// colliders; registration order until a removal), then the objects removed since the last call
+  /// bodies, once each with the body's pose; registration order until a removal), then the objects removed since the last call
   /// (MovedObject::removed). The reference stays valid until the next call.
   ///
   /// Each internal step (Coutinho §1.3): kinematic colliders move to their end-of-step pose; per
@@ -94,8 +112,8 @@ class World {
   /// each other's particles (hashed grid §2.3.1, sequential impulses §3.6.2), their overlap
   /// corrections swept against the colliders. No particle ends a step with its centre closer than
   /// its radius to a plane on the solid side; one found inside a box leaves through the nearest
-  /// face with the box's normal velocity; one inside a sphere, cylinder or closed mesh is
-  /// removed and counted (§3.4.2, removed_inside_count()).
+  /// face with the box's normal velocity; one inside a sphere, cylinder, capsule or closed mesh
+  /// is removed and counted (§3.4.2, removed_inside_count()).
   /// @throws std::invalid_argument unless sampling_time is > 0 and finite.
   /// Cloths step after the particle systems (see add_cloth); a cloth whose state becomes
   /// non-finite is reported as NonFiniteState naming the cloth, step and time.
@@ -111,7 +129,8 @@ class World {
   /// in its list (MovedObject::removed), after the moved entries. The other objects keep their
   /// handles; the order of the lists (colliders(), particle_systems(), cloths(), the moved list)
   /// may change, since the engine's arrays are compacted by swap-remove.
-  /// - a body/collider: warm-start data of resting contacts against it are dropped;
+  /// - a body/collider: all its shapes stop colliding at once (one removal is reported); warm-start
+  ///   data of resting contacts against them are dropped;
   /// - a particle system: the attractor springs that pull it are removed with it (not reported
   ///   separately) and force fields forget it (a field left with no system acts on none);
   /// - a force field or attractor spring: it stops acting from the next step.
@@ -137,10 +156,12 @@ class World {
   /// the state size. Definitions (model) are not hashed.
   [[nodiscard]] std::uint64_t state_hash() const;
 
-  /// Current pose of a collider (for the initial render list): a box's centre and rotation; a
-  /// plane's reference point and a rotation taking local +z to its normal.
+  /// Current pose of a body (for the initial render list): its frame's origin and rotation (a
+  /// one-shape body with an identity offset: that shape's centre and rotation), except a body
+  /// whose only shape is a plane at an identity offset: the plane's reference point and a
+  /// rotation taking local +z to its normal.
   /// @throws std::out_of_range if stale.
-  [[nodiscard]] MovedObject pose(ColliderHandle h) const;
+  [[nodiscard]] MovedObject pose(BodyHandle h) const;
   /// Live particles of a system. @throws std::out_of_range if the handle is stale.
   [[nodiscard]] ParticleView particles(ParticleSystemHandle h) const;
   [[nodiscard]] const ParticleSystemDef& definition(ParticleSystemHandle h) const;
@@ -151,11 +172,12 @@ class World {
   /// by the emitter or spawn_particle(); births dropped at max_particles are not counted.
   [[nodiscard]] std::uint64_t emitted_count(ParticleSystemHandle h) const;
   /// Particles of the system removed because their centre was found inside a solid collider
-  /// (sphere, cylinder, closed mesh) after their step (Coutinho §3.4.2), since registration.
+  /// (sphere, cylinder, capsule, closed mesh) after their step (Coutinho §3.4.2), since registration.
   /// @throws std::out_of_range if the handle is stale.
   [[nodiscard]] std::uint64_t removed_inside_count(ParticleSystemHandle h) const;
   [[nodiscard]] std::vector<ParticleSystemHandle> particle_systems() const;
-  [[nodiscard]] std::vector<ColliderHandle> colliders() const;
+  /// Every body (the colliders of the scene format included), in the engine's dense order.
+  [[nodiscard]] std::vector<BodyHandle> colliders() const;
 
   // --- Cloth (Coutinho §3.9.2; see cloth.hpp) ------------------------------------------------
   /// Registers a cloth. Each internal step of advance() steps every cloth after the particle

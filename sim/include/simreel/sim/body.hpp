@@ -1,0 +1,105 @@
+#pragma once
+/// @file body.hpp
+/// Bodies apart from their shapes (after Box2D v3's b2BodyDef / b2ShapeDef): a BodyDef says how
+/// a body moves (type, pose, path, velocity, damping); each ShapeDef of it says what it collides
+/// with (geometry, material, offset in the body frame). Coutinho Ch. 2 (shapes, bounding volumes
+/// and hierarchies), §3.4–3.7 (particles as swept spheres against bodies, impulse response,
+/// moving bodies), Ch. 4 (rigid-body dynamics: what a dynamic body will be).
+///
+/// Frames: the body frame is placed in the world by the body's pose (BodyDef::pose, or its path
+/// for a kinematic body); a shape's frame is placed in the body frame by ShapeDef::offset, so a
+/// shape's world pose is body pose ∘ offset. A body with one shape and an identity offset
+/// behaves exactly like the single colliders of collider.hpp (World::add_sphere and the others
+/// build such a body).
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "simreel/sim/keyframes.hpp"
+#include "simreel/sim/types.hpp"
+
+namespace simreel::sim {
+
+/// How a body moves.
+enum class BodyType : std::uint8_t {
+  /// Never moves: its pose is BodyDef::pose; its velocities must be zero and its path empty.
+  static_body,
+  /// Follows BodyDef::path (not empty); its velocities come from the path (linear, and angular
+  /// from the rotation keys) and enter the relative velocity of a contact (§3.7). It appears in
+  /// World::advance()'s moved list whenever its pose changes. Contacts do not push it.
+  kinematic,
+  /// Moved by forces and contacts (Coutinho Ch. 4). Not simulated yet: World::add_body rejects
+  /// it (std::invalid_argument) until the rigid-body issue adds mass properties and integration.
+  dynamic,
+};
+
+/// The geometry of a shape.
+enum class ShapeType : std::uint8_t {
+  plane,     ///< infinite plane through the shape origin; `normal`; static bodies only
+  sphere,    ///< `radius` about the shape origin
+  box,       ///< `half_extents` along the shape axes, centred on the shape origin
+  cylinder,  ///< capped cylinder along local z: `radius`, `half_height`
+  capsule,   ///< segment from -half_height to +half_height along local z grown by `radius`
+  mesh,      ///< triangle mesh: `vertices`, `triangles`
+};
+
+/// One shape of a body: geometry in the shape frame, material, and the shape frame's pose in the
+/// body frame. Only the fields of its `type` are read (and checked).
+///
+/// Particles collide with every shape as swept spheres (Coutinho §3.4): closed forms for plane,
+/// sphere, box (the box grown by the particle radius with square edges: a corner contact is found
+/// up to r (sqrt 2 - 1) early, never late), cylinder (square rims likewise) and capsule (exact),
+/// and an AABB tree built once in the shape frame for meshes (§2.2). A particle whose centre is
+/// found inside a sphere, cylinder, capsule or closed mesh after its step is removed (§3.4.2,
+/// World::removed_inside_count); one inside a box leaves through the nearest face.
+struct ShapeDef {
+  ShapeType type = ShapeType::sphere;
+  /// Pose of the shape frame in the body frame (m; rotation). A plane's offset moves and turns
+  /// the plane with it.
+  Transform offset;
+  double radius = 0.5;       ///< (m) > 0: sphere, cylinder, capsule
+  double half_height = 0.5;  ///< (m) > 0: cylinder, capsule (half the segment), along local z
+  Vec3 half_extents{0.5, 0.5, 0.5};  ///< (m) each > 0: box, along the shape axes
+  /// Plane: outward normal in the shape frame (non-zero; normalised on add). The solid half-space
+  /// is the side it points away from.
+  Vec3 normal = Vec3::UnitZ();
+  /// Mesh: (n) vertex positions in the shape frame (m, already scaled), finite.
+  std::vector<Vec3> vertices;
+  /// Mesh: (m) triangles as vertex indices, each < n; two-sided. A mesh whose every edge is
+  /// shared by exactly two triangles is closed (particles found inside it are removed).
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  Material material;  ///< response of particles and cloth against this shape (§3.6.1)
+
+  /// Shorthands for the common shapes (material default, identity offset unless given).
+  static ShapeDef sphere(double radius, const Transform& offset = {});
+  static ShapeDef box(const Vec3& half_extents, const Transform& offset = {});
+  static ShapeDef cylinder(double radius, double half_height, const Transform& offset = {});
+  static ShapeDef capsule(double radius, double half_height, const Transform& offset = {});
+  static ShapeDef plane(const Vec3& normal = Vec3::UnitZ(), const Transform& offset = {});
+};
+
+/// A body: how it moves, and its shapes (at least one). Registered by World::add_body, named by
+/// a BodyHandle, removed (with all its shapes) by World::remove.
+struct BodyDef {
+  BodyType type = BodyType::static_body;
+  /// Pose of the body frame in the world (m; rotation) for a static body. A kinematic body takes
+  /// its pose from `path` (this field is then ignored).
+  Transform pose;
+  /// Kinematic bodies: the keyframed path of the body frame, world frame (must not be empty).
+  /// Static bodies: must be empty.
+  KeyframePath path;
+  /// (m/s) velocity of the body origin, world frame. Must be zero for static and kinematic
+  /// bodies (a kinematic body's velocity comes from its path); the initial velocity of a
+  /// dynamic body once those exist (Ch. 4).
+  Vec3 linear_velocity = Vec3::Zero();
+  /// (rad/s) angular velocity, world frame. Zero unless dynamic, like linear_velocity.
+  Vec3 angular_velocity = Vec3::Zero();
+  double linear_damping = 0.0;   ///< (1/s) >= 0; used by dynamic bodies (Ch. 4)
+  double angular_damping = 0.0;  ///< (1/s) >= 0; used by dynamic bodies (Ch. 4)
+  std::vector<ShapeDef> shapes;  ///< at least one; planes only on static bodies
+  std::string name;              ///< for messages
+};
+
+}  // namespace simreel::sim

@@ -1,0 +1,201 @@
+// Bodies (Box2D v3's body apart from shape): World::add_body, the single-collider wrappers that
+// build a one-shape body, the body's pose, its removal with all its shapes, and the kinematic
+// motion of a body's shapes (body pose ∘ shape offset; Coutinho §3.7 moving bodies).
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "core/path_math.hpp"
+#include "core/validate.hpp"
+#include "core/world_impl.hpp"
+
+namespace simreel::sim {
+
+namespace detail {
+
+void Body::move_to(double t, std::vector<Collider>& shapes) {
+  pose = path.sample(t);
+  velocity = path.velocity(t);
+  angular_velocity = detail::angular_velocity(path, t);
+  for (std::uint32_t k = first_shape; k < first_shape + shape_count; ++k)
+    shapes[k].follow(pose, velocity, angular_velocity);
+}
+
+MovedObject Body::report_pose(const std::vector<Collider>& shapes) const {
+  if (shape_count == 1 && shapes[first_shape].offset_identity) return shapes[first_shape].pose();
+  MovedObject m;
+  m.translation = pose.translation;
+  m.rotation = pose.rotation.normalized().toRotationMatrix();
+  return m;
+}
+
+namespace {
+
+/// How messages name the fields: "BodyDef.pose", "BodyDef.shapes[i]", or the single-collider
+/// definition the body was built from ("SphereDef.transform", "SphereDef").
+struct Names {
+  std::string pose, path, shape;
+  bool indexed = true;  ///< shape names get "[i]"
+};
+
+void require_zero(const Vec3& v, BodyType type, const char* field) {
+  if (v == Vec3::Zero()) return;
+  std::ostringstream m;
+  m << "BodyDef." << field << " must be zero for a "
+    << (type == BodyType::static_body ? "static body" : "kinematic body (its velocity comes from its path)")
+    << " (got (" << v.transpose() << "))";
+  throw std::invalid_argument(m.str());
+}
+
+void validate_body(const BodyDef& def, const Names& names) {
+  if (def.type == BodyType::dynamic)
+    throw std::invalid_argument("BodyDef.type: dynamic bodies are not simulated yet (the rigid-body "
+                                "issue adds them); use static_body or kinematic");
+  if (def.type != BodyType::static_body && def.type != BodyType::kinematic)
+    throw std::invalid_argument("BodyDef.type is not a body type");
+  if (def.shapes.empty()) throw std::invalid_argument("BodyDef.shapes must hold at least one shape");
+  const Transform& t = def.pose;
+  if (!t.translation.allFinite() || !t.rotation.coeffs().allFinite() ||
+      !(t.rotation.norm() > 1e-12))
+    throw std::invalid_argument(names.pose +
+                                " must be finite with a non-zero rotation quaternion");
+  validate(def.path, names.path);
+  if (def.type == BodyType::kinematic && def.path.empty())
+    throw std::invalid_argument(names.path + " must not be empty for a kinematic body");
+  if (def.type == BodyType::static_body && !def.path.empty())
+    throw std::invalid_argument(names.path + " must be empty for a static body (make it kinematic)");
+  require_zero(def.linear_velocity, def.type, "linear_velocity");
+  require_zero(def.angular_velocity, def.type, "angular_velocity");
+  require_in(def.linear_damping, ranges::kNonNegative, "BodyDef.linear_damping");
+  require_in(def.angular_damping, ranges::kNonNegative, "BodyDef.angular_damping");
+}
+
+BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
+  validate_body(def, names);
+  // Every shape is made (and checked) before the world changes: a throw leaves it as it was.
+  std::vector<Collider> made;
+  made.reserve(def.shapes.size());
+  for (std::size_t i = 0; i < def.shapes.size(); ++i) {
+    const std::string what = names.indexed ? names.shape + "[" + std::to_string(i) + "]" : names.shape;
+    made.push_back(make_collider(def.shapes[i], what));
+    if (made.back().shape == Collider::Shape::plane && def.type != BodyType::static_body)
+      throw std::invalid_argument(what + ": a plane may only belong to a static body");
+  }
+  Body b;
+  b.type = def.type;
+  b.name = def.name;
+  b.path = def.path;
+  b.pose = def.pose;
+  b.linear_damping = def.linear_damping;
+  b.angular_damping = def.angular_damping;
+  b.first_shape = std::uint32_t(w.shapes.size());
+  b.shape_count = std::uint32_t(made.size());
+  for (Collider& c : made) {
+    c.moving = b.kinematic();
+    w.shapes.push_back(std::move(c));
+  }
+  if (b.kinematic()) {
+    b.move_to(w.time, w.shapes);
+  } else {
+    for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k)
+      w.shapes[k].follow(b.pose, Vec3::Zero(), Vec3::Zero());
+  }
+  for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k) {
+    w.shapes[k].prev_center = w.shapes[k].center;
+    w.shapes[k].prev_R = w.shapes[k].R;
+  }
+  b.reported_translation = b.pose.translation;
+  b.reported_rotation = b.pose.rotation.normalized();
+  return BodyHandle{w.bodies.add(std::move(b))};
+}
+
+/// A one-shape body from a single-collider definition: static when its path is empty.
+BodyDef one_shape(ShapeDef shape, const Transform& transform, const KeyframePath& path,
+                  const Material& material) {
+  BodyDef b;
+  b.type = path.empty() ? BodyType::static_body : BodyType::kinematic;
+  b.pose = transform;
+  b.path = path;
+  shape.material = material;
+  b.shapes.push_back(std::move(shape));
+  return b;
+}
+
+Names names_of(const std::string& def) {
+  return Names{def + ".transform", def + ".path", def, false};
+}
+
+}  // namespace
+
+void remove_body(WorldState& w, const Handle& h) {
+  w.bodies.remove(h);
+  // The shapes follow the bodies' dense order again; the warm-start data that names shapes by
+  // index follows them (for one-shape bodies this is the swap-remove of the shape array).
+  std::vector<std::uint32_t> new_index(w.shapes.size(), ParticleCollider::kRemoved);
+  std::vector<Collider> shapes;
+  shapes.reserve(w.shapes.size());
+  for (Body& b : w.bodies.dense()) {
+    const std::uint32_t first = std::uint32_t(shapes.size());
+    for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k) {
+      new_index[k] = std::uint32_t(shapes.size());
+      shapes.push_back(std::move(w.shapes[k]));
+    }
+    b.first_shape = first;
+  }
+  w.shapes = std::move(shapes);
+  w.particle_collider.remap_colliders(new_index);
+}
+
+}  // namespace detail
+
+BodyHandle World::add_body(const BodyDef& def) {
+  return detail::add(*impl_, def, detail::Names{"BodyDef.pose", "BodyDef.path", "BodyDef.shapes"});
+}
+
+ColliderHandle World::add_plane(const PlaneDef& def) {
+  BodyDef b;
+  b.pose.translation = def.point;
+  b.shapes.push_back(ShapeDef::plane(def.normal));
+  b.shapes.back().material = def.material;
+  return detail::add(*impl_, b, detail::Names{"PlaneDef.point", "PlaneDef.path", "PlaneDef", false});
+}
+ColliderHandle World::add_box(const BoxDef& def) {
+  return detail::add(*impl_, detail::one_shape(ShapeDef::box(def.half_extents), def.transform,
+                                               def.path, def.material),
+                     detail::names_of("BoxDef"));
+}
+ColliderHandle World::add_sphere(const SphereDef& def) {
+  return detail::add(*impl_, detail::one_shape(ShapeDef::sphere(def.radius), def.transform,
+                                               def.path, def.material),
+                     detail::names_of("SphereDef"));
+}
+ColliderHandle World::add_cylinder(const CylinderDef& def) {
+  return detail::add(*impl_,
+                     detail::one_shape(ShapeDef::cylinder(def.radius, def.half_height),
+                                       def.transform, def.path, def.material),
+                     detail::names_of("CylinderDef"));
+}
+ColliderHandle World::add_mesh(const MeshDef& def) {
+  ShapeDef mesh;
+  mesh.type = ShapeType::mesh;
+  mesh.vertices = def.vertices;
+  mesh.triangles = def.triangles;
+  return detail::add(*impl_, detail::one_shape(std::move(mesh), def.transform, def.path, def.material),
+                     detail::names_of("MeshDef"));
+}
+
+MovedObject World::pose(BodyHandle h) const {
+  MovedObject m = impl_->bodies[h.id].report_pose(impl_->shapes);
+  m.handle = h.id;
+  return m;
+}
+
+std::vector<BodyHandle> World::colliders() const {
+  std::vector<BodyHandle> out;
+  for (std::size_t i = 0; i < impl_->bodies.size(); ++i)
+    out.push_back(BodyHandle{impl_->bodies.handle(i)});
+  return out;
+}
+
+}  // namespace simreel::sim
