@@ -160,3 +160,126 @@ TEST(ContactSolver, SphereBouncesToESquaredH) {
 
 }  // namespace
 }  // namespace simreel::sim::detail
+
+namespace simreel::sim::detail {
+namespace {
+
+TEST(ContactSolverPhysics, BoxDroppedFlatComesToRestAndStays) {
+  RigidScene s;
+  s.friction = 0.5;
+  s.add_ground();
+  const Vec3 half(0.5, 0.3, 0.2);
+  s.add(ConvexShape::box(half), 500.0, Vec3(0.2, -0.1, half.z() + 0.3));
+  const double h = kDefaultStep;
+  double t_rest = -1.0;
+  for (int i = 0; i < static_cast<int>(2.0 / h); ++i) {
+    s.step(h);
+    const double speed = s.bodies.linear_velocity[1].norm() + s.bodies.angular_velocity[1].norm() * 0.5;
+    if (speed < 1e-3 && t_rest < 0.0) t_rest = (i + 1) * h;
+    if (speed >= 1e-3) t_rest = -1.0;
+  }
+  ASSERT_GT(t_rest, 0.0) << "not at rest within 2 s";
+  const Vec3 x_rest = s.bodies.position[1];
+  const Quat q_rest = s.bodies.orientation[1];
+  double worst_speed = 0.0, worst_depth = 0.0;
+  for (int i = 0; i < static_cast<int>(10.0 / h); ++i) {
+    s.step(h);
+    worst_speed = std::max(worst_speed, s.bodies.linear_velocity[1].norm());
+    worst_depth = std::max(worst_depth, s.max_depth());
+  }
+  std::printf("[ figures  ] box at rest after %.3f s; over 10 s: max speed %.2e m/s, max depth "
+              "%.2e m, drift %.2e m, %.2e rad\n", t_rest, worst_speed, worst_depth,
+              (s.bodies.position[1] - x_rest).norm(), s.bodies.orientation[1].angularDistance(q_rest));
+  EXPECT_LT(worst_speed, 1e-3);
+  EXPECT_LE(worst_depth, s.solver.settings().slop * 1.01);
+  EXPECT_LT((s.bodies.position[1] - x_rest).norm(), 1e-4);
+  EXPECT_LT(s.bodies.orientation[1].angularDistance(q_rest), 1e-4);
+  EXPECT_NEAR(s.bodies.position[1].z(), half.z(), 2.0 * s.solver.settings().slop);
+}
+
+/// Box on a slope of angle theta with friction mu, started at rest; returns the displacement
+/// along the slope (downhill positive) after `duration` and the mean acceleration.
+std::pair<double, double> slide(double theta, double mu, double duration) {
+  RigidScene s;
+  s.friction = mu;
+  const Quat tilt(Eigen::AngleAxisd(theta, Vec3::UnitY()));
+  s.add_ground(tilt);
+  const Vec3 half(0.3, 0.3, 0.1);
+  // Rotating about y by θ > 0 tips +x down: (cos θ, 0, -sin θ) is downhill.
+  const Vec3 up = tilt * Vec3::UnitZ(), downhill = tilt * Vec3::UnitX();
+  s.add(ConvexShape::box(half), 500.0, (half.z() - 0.0005) * up, tilt);
+  const double h = kDefaultStep;
+  const int n = static_cast<int>(duration / h);
+  for (int i = 0; i < n; ++i) s.step(h);
+  // Started at rest: constant acceleration a = v(t) / t (velocities are exact for constant
+  // forces under semi-implicit Euler, positions carry an O(h) offset).
+  return {s.bodies.position[1].dot(downhill), s.bodies.linear_velocity[1].dot(downhill) / (n * h)};
+}
+
+TEST(ContactSolverPhysics, BoxOnSlopeSticksBelowTheFrictionAngleAndSlidesAbove) {
+  const double g = 9.81, mu = 0.4;
+  for (const double theta_deg : {10.0, 20.0}) {  // tan 20° = 0.364 < 0.4
+    const auto [d, a] = slide(theta_deg * M_PI / 180.0, mu, 2.0);
+    EXPECT_LT(std::abs(d), 1e-3) << theta_deg << "°";
+  }
+  for (const double theta_deg : {30.0, 45.0}) {
+    const double th = theta_deg * M_PI / 180.0;
+    const auto [d, a] = slide(th, mu, 1.0);
+    const double expected = g * (std::sin(th) - mu * std::cos(th));
+    std::printf("[ figures  ] slope %.0f°: a = %.4f m/s² vs %.4f (%.2f%%)\n", theta_deg, a,
+                expected, 100.0 * (a / expected - 1.0));
+    EXPECT_NEAR(a, expected, 0.02 * expected);
+  }
+}
+
+TEST(ContactSolverPhysics, StackOfFiveBoxesStandsTenSeconds) {
+  RigidScene s;
+  s.friction = 0.6;
+  s.add_ground();
+  const Vec3 half(0.4, 0.4, 0.2);
+  for (int k = 0; k < 5; ++k)
+    s.add(ConvexShape::box(half), 400.0, Vec3(0.01 * (k % 2), 0.0, half.z() * (2 * k + 1)));
+  std::vector<Vec3> start = s.bodies.position;
+  const double h = kDefaultStep;
+  for (int i = 0; i < static_cast<int>(10.0 / h); ++i) s.step(h);
+  double drift = 0.0;
+  for (std::size_t k = 1; k < s.bodies.size(); ++k)
+    drift = std::max(drift, (s.bodies.position[k] - start[k]).norm());
+  std::printf("[ figures  ] 5-box stack after 10 s: max displacement %.2e m, max depth %.2e m\n",
+              drift, s.max_depth());
+  EXPECT_LT(drift, 0.01);
+  for (std::size_t k = 1; k < s.bodies.size(); ++k)
+    EXPECT_LT(s.bodies.linear_velocity[k].norm(), 1e-3);
+}
+
+TEST(ContactSolverPhysics, SphereSphereConservesMomentumAndEnergyForEOne) {
+  for (const double e : {1.0, 0.3}) {
+    RigidScene s;
+    s.gravity.setZero();
+    s.restitution = e;
+    s.friction = 0.0;
+    s.add(ConvexShape::sphere(0.3), 1000.0, Vec3(-1.0, 0.0, 0.0), Quat::Identity(), Vec3(2.0, 0.0, 0.0));
+    s.add(ConvexShape::sphere(0.2), 3000.0, Vec3(1.0, 0.15, 0.05), Quat::Identity(), Vec3(-1.0, 0.0, 0.0));
+    auto momentum = [&] {
+      return Vec3(s.bodies.mass[0] * s.bodies.linear_velocity[0] +
+                  s.bodies.mass[1] * s.bodies.linear_velocity[1]);
+    };
+    auto energy = [&] { return kinetic_energy(s.bodies, 0) + kinetic_energy(s.bodies, 1); };
+    const Vec3 P0 = momentum();
+    const double E0 = energy();
+    bool hit = false;
+    for (int i = 0; i < 600; ++i) {
+      s.step(kDefaultStep);
+      hit = hit || !s.contacts.empty();
+    }
+    ASSERT_TRUE(hit);
+    EXPECT_LE((momentum() - P0).norm(), 1e-12 * P0.norm()) << "e " << e;
+    if (e == 1.0) EXPECT_NEAR(energy(), E0, 1e-9 * E0);
+    else EXPECT_LT(energy(), 0.99 * E0);
+    // Frictionless spheres: no spin.
+    EXPECT_LE(s.bodies.angular_velocity[0].norm() + s.bodies.angular_velocity[1].norm(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace simreel::sim::detail
