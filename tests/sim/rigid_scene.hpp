@@ -53,6 +53,15 @@ struct RigidScene {
     return add(ConvexShape::box(half), 0.0, top - q * Vec3(0.0, 0.0, half.z()), q);
   }
 
+  /// n boxes of `half` extents stacked on z = 0, box k of density density + k density_step,
+  /// shifted along x by x_offset when k is odd.
+  void add_box_stack(int n, const Vec3& half, double density, double density_step = 0.0,
+                     double x_offset = 0.0) {
+    for (int k = 0; k < n; ++k)
+      add(ConvexShape::box(half), density + k * density_step,
+          Vec3(x_offset * (k % 2), 0.0, half.z() * (2 * k + 1)));
+  }
+
   [[nodiscard]] PosedShape posed(std::size_t i) const {
     return {shapes[i], bodies.orientation[i].toRotationMatrix(), bodies.position[i]};
   }

@@ -37,77 +37,69 @@ TEST(ContactSolver, TangentBasisIsRightHandedAndOrthonormal) {
   }
 }
 
-TEST(ContactSolver, SingleImpactFollowsNewtonsLawInOneSweep) {
-  // A body hits the static world at its centre of mass: v_n⁺ = -e v_n⁻ exactly, one sweep.
-  RigidBodies b;
-  add_body(b, unit_body(Vec3::Zero(), Vec3(0.0, 0.0, -2.0)));
-  ContactPoint c;
-  c.body_b = 0;  // a = static ground, normal up from a to b
-  c.point = Vec3::Zero();
-  c.restitution = 0.5;
-  std::array<ContactPoint, 1> contacts{c};
+/// One body (unit_body) moving at `velocity` onto the static ground: contact at its centre of
+/// mass, normal +z from the ground (a) to the body (b); prepared and solved with h = 0.01 s.
+struct OneContact {
+  RigidBodies bodies;
+  std::array<ContactPoint, 1> contacts;
+};
+OneContact solve_one(const Vec3& velocity, double restitution, double friction,
+                     double depth = 0.0) {
+  OneContact o;
+  add_body(o.bodies, unit_body(Vec3::Zero(), velocity));
+  ContactPoint& c = o.contacts[0];
+  c.body_b = 0;
+  c.restitution = restitution;
+  c.friction = friction;
+  c.depth = depth;
   ContactSolver solver;
-  solver.prepare(b, contacts, 0.01);
-  solver.warm_start(b, contacts);
-  solver.iterate_velocities(b, contacts);
-  EXPECT_NEAR(b.linear_velocity[0].z(), 1.0, 1e-14);
-  EXPECT_NEAR(contacts[0].normal_impulse, 2.0 * 3.0, 1e-13);  // m Δv
+  solver.prepare(o.bodies, o.contacts, 0.01);
+  solver.solve(o.bodies, o.contacts);
+  return o;
+}
+
+TEST(ContactSolver, SingleImpactFollowsNewtonsLaw) {
+  // A body hits the static world at its centre of mass: v_n⁺ = -e v_n⁻ exactly.
+  const OneContact o = solve_one(Vec3(0.0, 0.0, -2.0), 0.5, 0.0);
+  EXPECT_NEAR(o.bodies.linear_velocity[0].z(), 1.0, 1e-14);
+  EXPECT_NEAR(o.contacts[0].normal_impulse, 2.0 * 3.0, 1e-13);  // m Δv
   // Same impact with the roles swapped: body a above the ground, normal from a (body) down to b.
   RigidBodies b2;
   add_body(b2, unit_body(Vec3::Zero(), Vec3(0.0, 0.0, -2.0)));
+  ContactPoint c;
   c.body_a = 0;
-  c.body_b = kStaticBody;
   c.normal = -Vec3::UnitZ();
-  contacts = {c};
+  c.restitution = 0.5;
+  std::array<ContactPoint, 1> contacts{c};
+  ContactSolver solver;
   solver.prepare(b2, contacts, 0.01);
   solver.solve(b2, contacts);
   EXPECT_NEAR(b2.linear_velocity[0].z(), 1.0, 1e-14);
 }
 
 TEST(ContactSolver, SlowApproachIsRestingContactNoBounce) {
-  RigidBodies b;
-  add_body(b, unit_body(Vec3::Zero(), Vec3(0.0, 0.0, -0.3)));  // below the 0.5 m/s threshold
-  ContactPoint c;
-  c.body_b = 0;
-  c.restitution = 1.0;
-  std::array<ContactPoint, 1> contacts{c};
-  ContactSolver solver;
-  solver.prepare(b, contacts, 0.01);
-  solver.solve(b, contacts);
-  EXPECT_NEAR(b.linear_velocity[0].z(), 0.0, 1e-14);
+  // 0.3 m/s is below the 0.5 m/s threshold: no bounce even with e = 1.
+  EXPECT_NEAR(solve_one(Vec3(0.0, 0.0, -0.3), 1.0, 0.0).bodies.linear_velocity[0].z(), 0.0,
+              1e-14);
 }
 
 TEST(ContactSolver, FrictionStaysInsideTheCoulombCone) {
   // Sliding diagonally (between the tangent axes) on the ground with μ = 0.2: the tangent impulse
   // is μ λ_n in magnitude and opposes the sliding direction (a cone, not a pyramid).
-  RigidBodies b;
-  add_body(b, unit_body(Vec3::Zero(), Vec3(3.0, 3.0, -1.0)));
-  ContactPoint c;
-  c.body_b = 0;
-  c.friction = 0.2;
-  std::array<ContactPoint, 1> contacts{c};
-  ContactSolver solver;
-  solver.prepare(b, contacts, 0.01);
-  solver.solve(b, contacts);
+  const OneContact o = solve_one(Vec3(3.0, 3.0, -1.0), 0.0, 0.2);
+  const ContactPoint& c = o.contacts[0];
   Vec3 t1, t2;
   tangent_basis(Vec3::UnitZ(), t1, t2);
-  const Vec3 Pt = contacts[0].tangent_impulse[0] * t1 + contacts[0].tangent_impulse[1] * t2;
-  EXPECT_NEAR(Pt.norm(), 0.2 * contacts[0].normal_impulse, 1e-9);
+  const Vec3 Pt = c.tangent_impulse[0] * t1 + c.tangent_impulse[1] * t2;
+  EXPECT_GT(c.normal_impulse, 0.0);
+  EXPECT_NEAR(Pt.norm(), 0.2 * c.normal_impulse, 1e-9);
   EXPECT_NEAR(Pt.normalized().dot(-Vec3(1, 1, 0).normalized()), 1.0, 1e-6);
-  EXPECT_GT(contacts[0].normal_impulse, 0.0);
 }
 
 TEST(ContactSolver, SpeculativeContactLetsTheGapClose) {
-  RigidBodies b;
-  add_body(b, unit_body(Vec3::Zero(), Vec3(0.0, 0.0, -2.0)));
-  ContactPoint c;
-  c.body_b = 0;
-  c.depth = -0.01;  // 1 cm apart; at 2 m/s and h = 0.01 the body would travel 2 cm
-  std::array<ContactPoint, 1> contacts{c};
-  ContactSolver solver;
-  solver.prepare(b, contacts, 0.01);
-  solver.solve(b, contacts);
-  EXPECT_NEAR(b.linear_velocity[0].z(), -1.0, 1e-12);  // closes exactly the 1 cm gap
+  // 1 cm apart; at 2 m/s and h = 0.01 the body would travel 2 cm: it closes exactly the gap.
+  EXPECT_NEAR(solve_one(Vec3(0.0, 0.0, -2.0), 0.0, 0.0, -0.01).bodies.linear_velocity[0].z(), -1.0,
+              1e-12);
 }
 
 TEST(ContactSolver, DeterministicBitForBit) {
@@ -146,6 +138,10 @@ double bounce_height(double h, double H0, double e) {
   return apex;
 }
 
+// Discrete contact has O(h V) errors in the bounce height (V = impact speed): the contact is
+// found up to h V deep, the rebound velocity acts over a whole step, the slop stays. They
+// partly cancel and are not monotone in h (figures printed); 1% holds at the default step and
+// at 1/1000 s, not at 1/60 s (about -3%).
 TEST(ContactSolver, SphereBouncesToESquaredH) {
   const double H0 = 1.0, e = 0.5;
   std::array<double, 3> rel{};
@@ -236,9 +232,7 @@ TEST(ContactSolverPhysics, StackOfFiveBoxesStandsTenSeconds) {
   RigidScene s;
   s.friction = 0.6;
   s.add_ground();
-  const Vec3 half(0.4, 0.4, 0.2);
-  for (int k = 0; k < 5; ++k)
-    s.add(ConvexShape::box(half), 400.0, Vec3(0.01 * (k % 2), 0.0, half.z() * (2 * k + 1)));
+  s.add_box_stack(5, Vec3(0.4, 0.4, 0.2), 400.0, 0.0, 0.01);
   std::vector<Vec3> start = s.bodies.position;
   const double h = kDefaultStep;
   for (int i = 0; i < static_cast<int>(10.0 / h); ++i) s.step(h);

@@ -182,8 +182,7 @@ TEST(LcpVsSolver, ThreeBoxStackImpulsesMatchLcp) {
   s.friction = 0.0;
   s.add_ground();
   const Vec3 half(0.4, 0.3, 0.2);
-  for (int k = 0; k < 3; ++k)
-    s.add(ConvexShape::box(half), 300.0 + 200.0 * k, Vec3(0.0, 0.0, half.z() * (2 * k + 1)));
+  s.add_box_stack(3, half, 300.0, 200.0);
   s.bodies.linear_velocity[3] = Vec3(0.0, 0.0, -0.1);
   s.bodies.angular_velocity[2] = Vec3(0.0, 0.3, 0.0);
   s.bodies.angular_momentum[2] = world_inertia(s.bodies, 2) * s.bodies.angular_velocity[2];
@@ -213,8 +212,7 @@ TEST(LcpVsSolver, WarmStartingConvergesInFewerSweeps) {
   RigidScene s;
   s.friction = 0.6;
   s.add_ground();
-  const Vec3 half(0.4, 0.4, 0.2);
-  for (int k = 0; k < 3; ++k) s.add(ConvexShape::box(half), 400.0, Vec3(0.0, 0.0, half.z() * (2 * k + 1)));
+  s.add_box_stack(3, Vec3(0.4, 0.4, 0.2), 400.0);
   for (int i = 0; i < 480; ++i) s.step(1.0 / 240.0);
   s.find_contacts();
   RigidScene cold = s;
