@@ -1,0 +1,202 @@
+// Sequential impulses with warm starting, Coulomb cone and split impulses (see
+// contact_solver.hpp).
+#include "rigid/contact_solver.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include "rigid/integrate.hpp"
+
+namespace simreel::sim::detail {
+namespace {
+
+/// The mass-related data of one side of a contact; the static world is all zeros.
+struct Side {
+  double inv_mass = 0.0;
+  Mat3 inv_inertia = Mat3::Zero();
+  Vec3 position = Vec3::Zero();
+};
+
+Side side_of(const RigidBodies& bodies, std::uint32_t i) {
+  if (i == kStaticBody) return {};
+  assert(i < bodies.size());
+  return {bodies.inv_mass[i], bodies.inv_inertia_world[i], bodies.position[i]};
+}
+
+bool dynamic(const RigidBodies& bodies, std::uint32_t i) {
+  return i != kStaticBody && bodies.is_dynamic(i);
+}
+
+/// 1 / (J M⁻¹ Jᵀ) for the direction d at lever arms ra, rb (0 if both sides are static).
+double effective_mass(const Side& a, const Side& b, const Vec3& ra, const Vec3& rb,
+                      const Vec3& d) {
+  const Vec3 rad = ra.cross(d), rbd = rb.cross(d);
+  const double k =
+      a.inv_mass + b.inv_mass + rad.dot(a.inv_inertia * rad) + rbd.dot(b.inv_inertia * rbd);
+  return k > 0.0 ? 1.0 / k : 0.0;
+}
+
+/// Velocity of the body-fixed point at lever arm r, from the arrays v and w (real or pseudo).
+Vec3 velocity_at(const std::vector<Vec3>& v, const std::vector<Vec3>& w, std::uint32_t i,
+                 const Vec3& r) {
+  if (i == kStaticBody) return Vec3::Zero();
+  return v[i] + w[i].cross(r);
+}
+
+/// Applies +P at b and -P at a to the velocity arrays (v, w): real or pseudo.
+void apply(RigidBodies& bodies, std::vector<Vec3>& v, std::vector<Vec3>& w, std::uint32_t a,
+           std::uint32_t b, const Vec3& ra, const Vec3& rb, const Vec3& P) {
+  if (dynamic(bodies, a)) {
+    v[a] -= bodies.inv_mass[a] * P;
+    w[a] -= bodies.inv_inertia_world[a] * ra.cross(P);
+  }
+  if (dynamic(bodies, b)) {
+    v[b] += bodies.inv_mass[b] * P;
+    w[b] += bodies.inv_inertia_world[b] * rb.cross(P);
+  }
+}
+
+}  // namespace
+
+void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  // Cross n with the coordinate axis it is least aligned with; 1/√3 guarantees one component
+  // of that size, so the cross product never degenerates (Catto's b2PlaneSpace-like rule).
+  if (std::abs(n.x()) >= 0.57735026918962576)
+    t1 = Vec3(n.y(), -n.x(), 0.0).normalized();
+  else
+    t1 = Vec3(0.0, n.z(), -n.y()).normalized();
+  t2 = n.cross(t1);
+}
+
+Vec3 relative_velocity(const RigidBodies& bodies, std::uint32_t a, std::uint32_t b,
+                       const Vec3& p) {
+  const Vec3 va = a == kStaticBody ? Vec3::Zero() : point_velocity(bodies, a, p);
+  const Vec3 vb = b == kStaticBody ? Vec3::Zero() : point_velocity(bodies, b, p);
+  return vb - va;
+}
+
+void ContactSolver::prepare(const RigidBodies& bodies, std::span<const ContactPoint> contacts,
+                            double h) {
+  rows_.resize(contacts.size());  // keeps capacity: no allocation once grown
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    const ContactPoint& c = contacts[k];
+    Row& r = rows_[k];
+    const Side a = side_of(bodies, c.body_a), b = side_of(bodies, c.body_b);
+    r.a = c.body_a;
+    r.b = c.body_b;
+    r.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - a.position);
+    r.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - b.position);
+    r.n = c.normal;
+    tangent_basis(r.n, r.t1, r.t2);
+    r.normal_mass = effective_mass(a, b, r.ra, r.rb, r.n);
+    r.tangent_mass[0] = effective_mass(a, b, r.ra, r.rb, r.t1);
+    r.tangent_mass[1] = effective_mass(a, b, r.ra, r.rb, r.t2);
+    r.friction = c.friction;
+    const double vn = relative_velocity(bodies, c.body_a, c.body_b, c.point).dot(r.n);
+    if (c.depth < 0.0) {
+      // Speculative contact (a gap of -depth): the bodies may close the gap in this step but no
+      // more, so a contact found a little early neither stops them short nor lets them tunnel.
+      r.target_vn = c.depth / h;
+    } else {
+      // Newton's impact law v_n⁺ = -e v_n⁻ for an impact; 0 (stay in contact) when resting.
+      r.target_vn = vn < -settings_.restitution_threshold ? -c.restitution * vn : 0.0;
+    }
+    r.target_bias = settings_.split_beta * std::max(c.depth - settings_.slop, 0.0) / h;
+    r.bias_impulse = 0.0;
+  }
+}
+
+void ContactSolver::warm_start(RigidBodies& bodies, std::span<ContactPoint> contacts) {
+  assert(contacts.size() == rows_.size());
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    ContactPoint& c = contacts[k];
+    if (!settings_.warm_start) {
+      c.normal_impulse = c.tangent_impulse[0] = c.tangent_impulse[1] = 0.0;
+      continue;
+    }
+    const Row& r = rows_[k];
+    const Vec3 P = c.normal_impulse * r.n + c.tangent_impulse[0] * r.t1 +
+                   c.tangent_impulse[1] * r.t2;
+    apply(bodies, bodies.linear_velocity, bodies.angular_velocity, r.a, r.b, r.ra, r.rb, P);
+  }
+}
+
+double ContactSolver::iterate_velocities(RigidBodies& bodies, std::span<ContactPoint> contacts) {
+  assert(contacts.size() == rows_.size());
+  auto& v = bodies.linear_velocity;
+  auto& w = bodies.angular_velocity;
+  double largest = 0.0;
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    const Row& r = rows_[k];
+    ContactPoint& c = contacts[k];
+    // Friction first, with the normal impulse of the previous sweep as its bound: the normal
+    // row, solved last, then has the final say on penetration (Catto 2005).
+    const double limit = r.friction * c.normal_impulse;
+    const double old_t[2] = {c.tangent_impulse[0], c.tangent_impulse[1]};
+    const Vec3* const tangents[2] = {&r.t1, &r.t2};
+    for (int j = 0; j < 2; ++j) {
+      const Vec3 dv = velocity_at(v, w, r.b, r.rb) - velocity_at(v, w, r.a, r.ra);
+      c.tangent_impulse[j] -= r.tangent_mass[j] * dv.dot(*tangents[j]);
+      const double delta = c.tangent_impulse[j] - (j == 0 ? old_t[0] : old_t[1]);
+      apply(bodies, v, w, r.a, r.b, r.ra, r.rb, delta * *tangents[j]);
+    }
+    // Project the accumulated tangent impulse onto the Coulomb disc |λ_t| <= μ λ_n.
+    const double mag = std::hypot(c.tangent_impulse[0], c.tangent_impulse[1]);
+    if (mag > limit) {
+      const double s = mag > 0.0 ? limit / mag : 0.0;
+      const double fix0 = c.tangent_impulse[0] * s - c.tangent_impulse[0];
+      const double fix1 = c.tangent_impulse[1] * s - c.tangent_impulse[1];
+      c.tangent_impulse[0] += fix0;
+      c.tangent_impulse[1] += fix1;
+      apply(bodies, v, w, r.a, r.b, r.ra, r.rb, fix0 * r.t1 + fix1 * r.t2);
+    }
+    // Normal: reach target_vn, accumulated impulse clamped to >= 0 (Catto 2005).
+    const double vn = (velocity_at(v, w, r.b, r.rb) - velocity_at(v, w, r.a, r.ra)).dot(r.n);
+    const double old_n = c.normal_impulse;
+    c.normal_impulse = std::max(old_n - r.normal_mass * (vn - r.target_vn), 0.0);
+    const double dn = c.normal_impulse - old_n;
+    apply(bodies, v, w, r.a, r.b, r.ra, r.rb, dn * r.n);
+    largest = std::max(largest, std::abs(dn));
+  }
+  return largest;
+}
+
+void ContactSolver::solve_positions(RigidBodies& bodies) {
+  auto& v = bodies.bias_velocity;
+  auto& w = bodies.bias_angular_velocity;
+  for (int it = 0; it < settings_.position_iterations; ++it)
+    for (Row& r : rows_) {
+      if (r.target_bias <= 0.0 && r.bias_impulse <= 0.0) continue;
+      const double vn = (velocity_at(v, w, r.b, r.rb) - velocity_at(v, w, r.a, r.ra)).dot(r.n);
+      const double old = r.bias_impulse;
+      r.bias_impulse = std::max(old - r.normal_mass * (vn - r.target_bias), 0.0);
+      apply(bodies, v, w, r.a, r.b, r.ra, r.rb, (r.bias_impulse - old) * r.n);
+    }
+}
+
+void ContactSolver::finish(RigidBodies& bodies) const {
+  for (const Row& r : rows_) {
+    if (dynamic(bodies, r.a)) sync_angular_momentum(bodies, r.a);
+    if (dynamic(bodies, r.b)) sync_angular_momentum(bodies, r.b);
+  }
+}
+
+void ContactSolver::solve(RigidBodies& bodies, std::span<ContactPoint> contacts) {
+  warm_start(bodies, contacts);
+  for (int it = 0; it < settings_.velocity_iterations; ++it) iterate_velocities(bodies, contacts);
+  solve_positions(bodies);
+  finish(bodies);
+}
+
+void step_with_contacts(RigidBodies& bodies, ContactSolver& solver,
+                        std::span<ContactPoint> contacts, double h, const Vec3& g) {
+  apply_gravity(bodies, g);
+  solver.prepare(bodies, contacts, h);
+  integrate_velocities(bodies, h);
+  solver.solve(bodies, contacts);
+  integrate_positions(bodies, h);
+  clear_forces(bodies);
+}
+
+}  // namespace simreel::sim::detail

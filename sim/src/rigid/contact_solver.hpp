@@ -1,0 +1,137 @@
+#pragma once
+// Sequential-impulse contact solver (Catto 2005, "Iterative Dynamics with Temporal Coherence";
+// Catto 2006, "Fast and Simple Physics using Sequential Impulses"): the impulses with friction
+// of Coutinho §4.8 applied one contact at a time, iterated, with accumulated-impulse clamping,
+// so that the iteration converges to the solution of the contact LCP of §4.8 / App. G (checked
+// against rigid/lcp.hpp in the tests). Private; works on RigidBodies by index, no World.
+//
+// Conventions: the normal is unit, world, from body a to body b; the relative velocity is
+// v_rel = v_b(p) - v_a(p), so v_n = v_rel·n < 0 means approaching. The impulse λ n (N s) acts
+// on b and -λ n on a. Either body may be kStaticBody (infinite mass, not in RigidBodies).
+//
+// Choices (and why):
+// - Friction: the circular Coulomb cone. Each step solves the two tangent directions one after
+//   the other, then scales the accumulated tangent 2-vector back onto the disc of radius μ λ_n
+//   (Jolt's ContactConstraintManager does the same). A two-direction pyramid would be simpler
+//   but makes sliding friction depend on the direction of sliding relative to the tangent axes.
+// - Restitution: from the relative normal velocity recorded by prepare(), which runs before
+//   the velocity integration, so a resting contact does not see the step's gravity as an impact;
+//   only above `restitution_threshold` (resting contact, Coutinho §3.6.3).
+// - Speculative contacts: a contact with depth < 0 (a gap g = -depth, from a contact margin)
+//   only limits the approach speed to g/h, so it closes the gap by the end of the step at most.
+// - Position error: split impulses (Catto 2006; Box2D v2.x's "split impulse"): penetration
+//   beyond the slop is removed by pseudo-velocities that move the positions for one step and are
+//   then forgotten. Baumgarte stabilisation adds the correction to the real velocity, which
+//   injects energy (a resting box hops, a bouncing sphere rises higher than e² h); split
+//   impulses keep the velocity solve free of it, so restitution and resting contact stay exact.
+// - Warm starting: prepare() keeps the cached impulses in ContactPoint; warm_start() applies
+//   them. The tangent basis is a fixed function of the normal (tangent_basis()), so a persistent
+//   contact whose normal does not change keeps its tangent impulses meaningful.
+// - Determinism: contacts are solved in the order given; no hashing, no threads.
+// - Memory: the solver's rows live in one vector that is only ever resized; after the first
+//   steps (or reserve()) a step allocates nothing.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "rigid/body_state.hpp"
+
+namespace simreel::sim::detail {
+
+/// Body index meaning "the static world" (infinite mass, zero velocity).
+inline constexpr std::uint32_t kStaticBody = std::numeric_limits<std::uint32_t>::max();
+
+/// One contact point between bodies a and b, plain data. The caller (narrow phase or manifold)
+/// fills the geometry and material; the solver reads the cached impulses to warm-start and
+/// writes the accumulated ones back (copy them into next step's matching contact).
+struct ContactPoint {
+  std::uint32_t body_a = kStaticBody;  ///< index into RigidBodies, or kStaticBody
+  std::uint32_t body_b = kStaticBody;  ///< index into RigidBodies, or kStaticBody
+  Vec3 point = Vec3::Zero();           ///< (m) world; the contact (e.g. midway between surfaces)
+  Vec3 normal = Vec3::UnitZ();         ///< unit, world, from a to b
+  double depth = 0.0;                  ///< (m) penetration along the normal (> 0), or -gap
+  double restitution = 0.0;            ///< e in [0, 1]
+  double friction = 0.0;               ///< Coulomb μ >= 0 (static = dynamic)
+  double normal_impulse = 0.0;         ///< (N s) accumulated, >= 0: warm start in, result out
+  double tangent_impulse[2] = {0.0, 0.0};  ///< (N s) along tangent_basis(normal): in and out
+};
+
+/// Two unit tangents t1, t2 with (t1, t2, n) right-handed, a fixed function of the unit n
+/// (Coutinho App. A's tangent plane from a normal; Box2D/Catto's choice of the smaller component).
+void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2);
+
+struct ContactSolverSettings {
+  int velocity_iterations = 10;  ///< sweeps over all contacts for the velocities
+  int position_iterations = 4;   ///< sweeps for the split-impulse pseudo-velocities
+  /// (m/s) restitution only for approach speeds above this (resting contact below it).
+  double restitution_threshold = 0.5;
+  double slop = 0.001;       ///< (m) penetration left alone (keeps contacts alive, no jitter)
+  double split_beta = 0.2;   ///< fraction of penetration beyond slop removed per step, (0, 1]
+  bool warm_start = true;    ///< apply the cached impulses before iterating
+};
+
+class ContactSolver {
+ public:
+  ContactSolver() = default;
+  explicit ContactSolver(const ContactSolverSettings& settings) : settings_(settings) {}
+
+  [[nodiscard]] const ContactSolverSettings& settings() const { return settings_; }
+  ContactSolverSettings& settings() { return settings_; }
+
+  /// Reserves room for n contacts (no allocation in later steps with at most n).
+  void reserve(std::size_t n) { rows_.reserve(n); }
+
+  /// Builds the solver rows: lever arms, tangents, effective masses, the restitution target
+  /// from the current relative normal velocity, the split-impulse target from the depth. Call
+  /// before integrate_velocities() (see restitution above). Asserts on a bad body index.
+  void prepare(const RigidBodies& bodies, std::span<const ContactPoint> contacts, double h);
+
+  /// Applies the cached impulses of `contacts` (same span as prepare()) to the velocities, or
+  /// zeroes them when settings().warm_start is false.
+  void warm_start(RigidBodies& bodies, std::span<ContactPoint> contacts);
+
+  /// One Gauss–Seidel sweep over the contacts (friction, then normal, per contact). Returns the
+  /// largest change of an accumulated normal impulse in the sweep (N s): a convergence measure.
+  double iterate_velocities(RigidBodies& bodies, std::span<ContactPoint> contacts);
+
+  /// settings().position_iterations sweeps of split impulses on the pseudo-velocities
+  /// (RigidBodies::bias_velocity, bias_angular_velocity).
+  void solve_positions(RigidBodies& bodies);
+
+  /// Writes L = I_w ω back for every dynamic body touched by a contact.
+  void finish(RigidBodies& bodies) const;
+
+  /// warm_start, settings().velocity_iterations sweeps, solve_positions, finish.
+  void solve(RigidBodies& bodies, std::span<ContactPoint> contacts);
+
+ private:
+  struct Row {
+    std::uint32_t a, b;
+    Vec3 ra, rb;        ///< (m) contact point minus centre of mass, world
+    Vec3 n, t1, t2;
+    double normal_mass;      ///< 1 / (J M⁻¹ Jᵀ) along n (kg)
+    double tangent_mass[2];  ///< along t1, t2
+    double target_vn;        ///< (m/s) the normal velocity to reach: -e v_n⁻ or 0
+    double target_bias;      ///< (m/s) pseudo-velocity to reach: β (depth - slop)/h or 0
+    double friction;
+    double bias_impulse;     ///< accumulated split impulse (N s), >= 0
+  };
+  ContactSolverSettings settings_;
+  std::vector<Row> rows_;
+};
+
+/// Relative velocity v_b(p) - v_a(p) (m/s, world) at world point p.
+[[nodiscard]] Vec3 relative_velocity(const RigidBodies& bodies, std::uint32_t a,
+                                     std::uint32_t b, const Vec3& p);
+
+/// One full step of the bodies with the given contacts (found at the current positions):
+/// gravity g (m/s²) into the accumulators, prepare, integrate_velocities, solve,
+/// integrate_positions, clear_forces. The order every caller (tests, the World's bodies stage)
+/// should follow.
+void step_with_contacts(RigidBodies& bodies, ContactSolver& solver,
+                        std::span<ContactPoint> contacts, double h, const Vec3& g);
+
+}  // namespace simreel::sim::detail
