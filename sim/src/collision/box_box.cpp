@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "collision/clip.hpp"
-#include "collision/convex_contact.hpp"
+#include "collision/contact_manifold.hpp"
 #include "collision/polytope_faces.hpp"
 
 namespace simreel::sim::detail {
@@ -26,21 +26,6 @@ struct Axis {
 /// The tolerance by which an axis must beat the preferred one to replace it (m).
 double bias(const ManifoldOptions& o, double separation) {
   return o.bias_abs + o.bias_rel * std::abs(separation);
-}
-
-/// One point from GJK/EPA: what a clip that found nothing (rounding at a face's edge) falls
-/// back to, so touching boxes never report an empty manifold.
-Manifold single_point(const PosedShape& A, const PosedShape& B, double margin) {
-  Manifold m;
-  const ConvexContact c = collide(A, B, margin);
-  if (!c.touching) return m;
-  m.count = 1;
-  m.normal = c.normal;
-  m.points[0].point_a = c.point_a;
-  m.points[0].point_b = c.point_b;
-  m.points[0].separation = -c.depth;
-  m.points[0].id = {FeatureType::shape, FeatureType::shape, 0, 0};
-  return m;
 }
 
 }  // namespace
@@ -168,7 +153,9 @@ Manifold collide_boxes(const PosedShape& A, const PosedShape& B, const ManifoldO
   face_polygon(ref_shape, nullptr, most_aligned_face(ref_shape, nullptr, n_ref), ref);
   face_polygon(inc_shape, nullptr, most_aligned_face(inc_shape, nullptr, -n_ref), inc);
   clip_faces(ref, inc, margin, ref_is_a, m);
-  if (m.count == 0) return single_point(A, B, margin);
+  // Nothing within the margin after clipping: the chosen face axis's support points lie beyond
+  // the reference face's edges (a face kept by the bias at a corner). GJK/EPA's one point then.
+  if (m.count == 0) return manifold_from_contact(collide(A, B, margin));
   return m;
 }
 
