@@ -86,6 +86,39 @@ TEST(ManifoldHull, CubeHullGivesTheBoxBoxManifold) {
   }
 }
 
+TEST(ManifoldHull, NearTieOfFacesGoesToAAsInBoxBox) {
+  // A cube tilted by 1e-4 rad on a big box: B's face separates better by less than the bias,
+  // so A's tilted face is the reference (normal = minus its z axis), as collide_boxes decides.
+  const CubeHull cube({0.3, 0.3, 0.3});
+  const Mat3 tilt = rot(Vec3::UnitX(), 1e-4);
+  const PosedShape hull(cube.shape(), tilt, {0, 0, 0.799});
+  const PosedShape box(ConvexShape::box({0.3, 0.3, 0.3}), tilt, {0, 0, 0.799});
+  const PosedShape big(ConvexShape::box({2, 2, 0.5}), Mat3::Identity(), Vec3::Zero());
+  const Manifold m = collide_manifold(hull, big, {}, &cube.faces, nullptr);
+  ASSERT_EQ(m.count, 4);
+  EXPECT_NEAR((m.normal + tilt.col(2)).norm(), 0.0, 1e-12);
+  EXPECT_TRUE(same_manifold(m, collide_boxes(box, big), kTol));
+}
+
+TEST(ManifoldHull, CrossingEdgesGiveOnePoint) {
+  // Cube hull A turned 45° about x (top edge along x), box B turned 45° about y and yawed: the
+  // edges cross 1 cm deep. No face is the contact plane, so the one point of GJK/EPA, which is
+  // the box–box edge–edge answer.
+  const double h = 0.5, s2 = std::sqrt(2.0);
+  const CubeHull cube({h, h, h});
+  const Mat3 Ra = rot(Vec3::UnitX(), std::numbers::pi / 4);
+  const Mat3 Rb = rot(Vec3::UnitZ(), 0.6) * rot(Vec3::UnitY(), std::numbers::pi / 4);
+  const Vec3 ca(0.05, 0.1, 0.0), cb(0.15, -0.05, 2 * h * s2 - 0.01);
+  const Manifold m = collide_manifold(PosedShape(cube.shape(), Ra, ca),
+                                      PosedShape(ConvexShape::box({h, h, h}), Rb, cb), {},
+                                      &cube.faces, nullptr);
+  const Manifold e = collide_boxes(PosedShape(ConvexShape::box({h, h, h}), Ra, ca),
+                                   PosedShape(ConvexShape::box({h, h, h}), Rb, cb));
+  ASSERT_EQ(m.count, 1);
+  ASSERT_EQ(e.count, 1);
+  EXPECT_TRUE(same_manifold(m, e, 1e-8));
+}
+
 TEST(ManifoldCapsule, LyingOnABoxGivesTwoPointsAtTheSegmentEnds) {
   const double hh = 0.4, r = 0.1;
   for (const double yaw : {0.0, 0.7, 2.0}) {
