@@ -61,7 +61,9 @@ bool face_polygon(const PosedShape& s, const HullFaces* faces, int face, FacePol
 /// pointing toward the shape): the capsule's core segment (radius kept in out.radius); the
 /// cylinder's bottom cap as an inscribed square of four rim points when its axis is within
 /// parallel_sin of n, its lowest side line when the axis is within parallel_sin of the face.
-/// Returns false when there is none (a tilted cylinder, a sphere, any other kind).
+/// Returns false when there is none (a tilted cylinder, a sphere, any other kind). Ids: capsule
+/// segment edge 0 with ends 0 (-z) and 1 (+z); cylinder cap face 0 (+z) or 1 (-z) with rim
+/// vertices 0–3 (+z) or 4–7 (-z); cylinder side line edge 0 with ends 8 (-z) and 9 (+z).
 bool rounded_feature(const PosedShape& s, const Vec3& n, double parallel_sin, FacePolygon& out);
 
 }  // namespace simreel::sim::detail
