@@ -328,7 +328,8 @@ TEST(Bodies, InvalidDefinitionsAreRejectedNamingTheField) {
 
   BodyDef dynamic = dumbbell();
   dynamic.type = BodyType::dynamic;
-  expect_rejected(dynamic, "dynamic bodies are not simulated yet");
+  dynamic.shapes[0].density = -1.0;
+  expect_rejected(dynamic, "BodyDef.shapes[0].density must be > 0");
 
   BodyDef conveyor = dumbbell();
   conveyor.linear_velocity = Vec3(1, 0, 0);

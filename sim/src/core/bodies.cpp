@@ -1,12 +1,14 @@
 // Bodies (Box2D v3's body apart from shape): World::add_body, the single-collider wrappers that
 // build a one-shape body, the body's pose, its removal with all its shapes, and the kinematic
 // motion of a body's shapes (body pose ∘ shape offset; Coutinho §3.7 moving bodies).
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "core/path_math.hpp"
+#include "rigid/mass_properties.hpp"
 #include "core/validate.hpp"
 #include "core/world_impl.hpp"
 
@@ -49,10 +51,8 @@ void require_zero(const Vec3& v, BodyType type, const char* field) {
 }
 
 void validate_body(const BodyDef& def, const Names& names) {
-  if (def.type == BodyType::dynamic)
-    throw std::invalid_argument("BodyDef.type: dynamic bodies are not simulated yet (the rigid-body "
-                                "issue adds them); use static_body or kinematic");
-  if (def.type != BodyType::static_body && def.type != BodyType::kinematic)
+  if (def.type != BodyType::static_body && def.type != BodyType::kinematic &&
+      def.type != BodyType::dynamic)
     throw std::invalid_argument("BodyDef.type is not a body type");
   if (def.shapes.empty()) throw std::invalid_argument("BodyDef.shapes must hold at least one shape");
   const Transform& t = def.pose;
@@ -65,10 +65,53 @@ void validate_body(const BodyDef& def, const Names& names) {
     throw std::invalid_argument(names.path + " must not be empty for a kinematic body");
   if (def.type == BodyType::static_body && !def.path.empty())
     throw std::invalid_argument(names.path + " must be empty for a static body (make it kinematic)");
-  require_zero(def.linear_velocity, def.type, "linear_velocity");
-  require_zero(def.angular_velocity, def.type, "angular_velocity");
+  if (def.type == BodyType::dynamic) {
+    if (!def.path.empty())
+      throw std::invalid_argument(names.path + " must be empty for a dynamic body (make it kinematic)");
+    if (!def.linear_velocity.allFinite() || !def.angular_velocity.allFinite() ||
+        !def.gravity.allFinite())
+      throw std::invalid_argument("BodyDef.linear_velocity, angular_velocity and gravity must be finite");
+    if (!(std::isfinite(def.mass) && def.mass >= 0.0)) {
+      std::ostringstream m;
+      m << "BodyDef.mass must be >= 0 and finite (0: from the densities) (got " << def.mass << ")";
+      throw std::invalid_argument(m.str());
+    }
+  } else {
+    require_zero(def.linear_velocity, def.type, "linear_velocity");
+    require_zero(def.angular_velocity, def.type, "angular_velocity");
+  }
   require_in(def.linear_damping, ranges::kNonNegative, "BodyDef.linear_damping");
   require_in(def.angular_damping, ranges::kNonNegative, "BodyDef.angular_damping");
+}
+
+/// Mass properties of a dynamic body in its body frame from its shapes (Coutinho §4.1, App. D):
+/// each shape's closed form at its density, moved to its offset, combined by the parallel-axis
+/// theorem; BodyDef::mass > 0 then rescales the total.
+MassProperties body_mass(const BodyDef& def, const std::string& shape_name, bool indexed) {
+  std::vector<MassPart> parts;
+  for (std::size_t i = 0; i < def.shapes.size(); ++i) {
+    const ShapeDef& s = def.shapes[i];
+    const std::string what = indexed ? shape_name + "[" + std::to_string(i) + "]" : shape_name;
+    if (!(std::isfinite(s.density) && s.density > 0.0)) {
+      std::ostringstream m;
+      m << what << ".density must be > 0 and finite (kg/m³) (got " << s.density << ")";
+      throw std::invalid_argument(m.str());
+    }
+    MassPart p;
+    switch (s.type) {
+      case ShapeType::sphere: p.props = sphere_mass(s.radius, s.density); break;
+      case ShapeType::box: p.props = box_mass(s.half_extents, s.density); break;
+      case ShapeType::cylinder: p.props = cylinder_mass(s.radius, s.half_height, s.density); break;
+      case ShapeType::capsule: p.props = capsule_mass(s.radius, s.half_height, s.density); break;
+      default: throw std::invalid_argument(what + ": not a shape a dynamic body may have");
+    }
+    p.translation = s.offset.translation;
+    p.rotation = s.offset.rotation.normalized().toRotationMatrix();
+    parts.push_back(p);
+  }
+  MassProperties total = combine(parts);
+  if (def.mass > 0.0) total = with_mass(total, def.mass);
+  return total;
 }
 
 BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
@@ -81,7 +124,12 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
     made.push_back(make_collider(def.shapes[i], what));
     if (made.back().shape == Collider::Shape::plane && def.type != BodyType::static_body)
       throw std::invalid_argument(what + ": a plane may only belong to a static body");
+    if (made.back().shape == Collider::Shape::mesh && def.type == BodyType::dynamic)
+      throw std::invalid_argument(what + ": a mesh may not belong to a dynamic body yet (use "
+                                         "sphere, box, capsule or cylinder shapes)");
   }
+  MassProperties mass;
+  if (def.type == BodyType::dynamic) mass = body_mass(def, names.shape, names.indexed);
   Body b;
   b.type = def.type;
   b.name = def.name;
@@ -92,11 +140,29 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
   b.first_shape = std::uint32_t(w.shapes.size());
   b.shape_count = std::uint32_t(made.size());
   for (Collider& c : made) {
-    c.moving = b.kinematic();
+    c.moving = b.kinematic() || b.dynamic();  // particles see a dynamic body as a moving one
     w.shapes.push_back(std::move(c));
   }
   if (b.kinematic()) {
     b.move_to(w.time, w.shapes);
+    b.rigid = std::uint32_t(add_body(w.dyn.rigid, RigidBodyDef{.position = b.pose.translation}));
+  } else if (b.dynamic()) {
+    b.local_com = mass.center_of_mass;
+    b.gravity = def.gravity;
+    const Quat q = def.pose.rotation.normalized();
+    RigidBodyDef r;
+    r.position = def.pose.translation + q * mass.center_of_mass;
+    r.orientation = q;
+    r.linear_velocity = def.linear_velocity + def.angular_velocity.cross(q * mass.center_of_mass);
+    r.angular_velocity = def.angular_velocity;
+    r.mass = mass.mass;
+    r.inertia = mass.inertia;
+    r.linear_drag = def.linear_damping * mass.mass;
+    r.angular_drag = def.angular_damping * mass.inertia.trace() / 3.0;
+    b.rigid = std::uint32_t(add_body(w.dyn.rigid, r));
+    ++w.dyn.dynamic_count;
+    for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k)
+      w.shapes[k].follow(b.pose, def.linear_velocity, def.angular_velocity);
   } else {
     for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k)
       w.shapes[k].follow(b.pose, Vec3::Zero(), Vec3::Zero());
@@ -128,7 +194,18 @@ Names names_of(const std::string& def) {
 
 }  // namespace
 
+void remove_rigid(WorldState& w, std::uint32_t i) {
+  const std::uint32_t last = std::uint32_t(w.dyn.rigid.size() - 1);
+  swap_remove(w.dyn.rigid, i);
+  if (i == last) return;
+  for (Body& b : w.bodies.dense())
+    if (b.rigid == last) b.rigid = i;
+}
+
 void remove_body(WorldState& w, const Handle& h) {
+  const Body& gone = w.bodies[h];
+  if (gone.dynamic()) --w.dyn.dynamic_count;
+  if (gone.rigid != kNoRigid) remove_rigid(w, gone.rigid);
   w.bodies.remove(h);
   // The shapes follow the bodies' dense order again; the warm-start data that names shapes by
   // index follows them (for one-shape bodies this is the swap-remove of the shape array).

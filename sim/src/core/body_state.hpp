@@ -24,6 +24,11 @@ struct Body {
   Vec3 angular_velocity = Vec3::Zero();  ///< (rad/s), world
   double linear_damping = 0.0;           ///< (1/s)
   double angular_damping = 0.0;          ///< (1/s)
+  /// Index of its rigid entry (BodyDynamics::rigid) for dynamic and kinematic bodies, else
+  /// kNoRigid (body_dynamics.hpp).
+  std::uint32_t rigid = 0xffffffffu;
+  Vec3 local_com = Vec3::Zero();  ///< (m) dynamic: centre of mass in the body frame
+  Vec3 gravity = Vec3::Zero();    ///< (m/s²) dynamic: world
   std::uint32_t first_shape = 0;  ///< its shapes: WorldState::shapes[first_shape, + shape_count)
   std::uint32_t shape_count = 0;
   // What the moved list last reported.
@@ -31,6 +36,7 @@ struct Body {
   Quat reported_rotation = Quat::Identity();
 
   [[nodiscard]] bool kinematic() const { return type == BodyType::kinematic; }
+  [[nodiscard]] bool dynamic() const { return type == BodyType::dynamic; }
   /// Moves a kinematic body and its shapes to the path's pose and velocities at time t (s).
   void move_to(double t, std::vector<Collider>& shapes);
   /// The pose reported to the renderer: the body frame (rotation normalised), except a body

@@ -1,10 +1,62 @@
-// Stage "bodies" (stages.hpp): where dynamic bodies will be simulated (forces, broad and narrow
-// phase, contact and joint solve, integration; sim/src/rigid/README.md). World::add_body rejects
-// dynamic bodies until then, so there is nothing to do.
+// Stage "bodies" (stages.hpp; Coutinho Ch. 4): dynamic bodies over one step h —
+//   kinematic bodies' rigid entries take their path velocity (§3.7: it enters the contacts),
+//   broad and narrow phase with warm-started manifolds (body_contacts.cpp, §4.4–4.7),
+//   gravity, then prepare -> integrate velocities (forces, drag §4.3) -> sequential impulses
+//   (§4.8) -> integrate positions (§4.2, App. C) as rigid/contact_solver.hpp's step_with_contacts,
+//   the impulses kept in the manifolds for the next step's warm start,
+//   each dynamic body's frame and shapes placed from its centre of mass.
+// Nothing runs without a dynamic body, so scenes before Ch. 4 are bit-identical. Serial, in the
+// bodies' dense order: deterministic at any thread count.
 #include "core/stages.hpp"
+#include "rigid/integrate.hpp"
 
 namespace simreel::sim::detail {
 
-void stage_bodies(WorldState& /*w*/, double /*t0*/, double /*t1*/) {}
+void stage_bodies(WorldState& w, double t0, double t1) {
+  BodyDynamics& d = w.dyn;
+  if (d.dynamic_count == 0) return;
+  const double h = t1 - t0;
+  RigidBodies& r = d.rigid;
+  std::vector<Body>& bodies = w.bodies.dense();
+  for (const Body& b : bodies)
+    if (b.kinematic()) {
+      // Pose and velocities at t1 (stage "kinematic poses"); the rigid entry's position is the
+      // body origin, the point the path velocity is of.
+      r.position[b.rigid] = b.pose.translation;
+      r.linear_velocity[b.rigid] = b.velocity;
+      r.angular_velocity[b.rigid] = b.angular_velocity;
+    }
+  find_body_contacts(w);
+  for (const Body& b : bodies)
+    if (b.dynamic()) apply_force(r, b.rigid, r.mass[b.rigid] * b.gravity);
+  d.solver.prepare(r, d.points, h);
+  integrate_velocities(r, h);
+  d.solver.solve(r, d.points);
+  integrate_positions(r, h);
+  clear_forces(r);
+  // The solver's impulses go back into the manifolds: next step's warm start (tangent impulses
+  // as world vectors, persistent_manifold.hpp).
+  for (BodyManifold& m : d.manifolds)
+    for (int k = 0; k < m.manifold.count; ++k) {
+      const ContactPoint& c = d.points[m.first_point + std::uint32_t(k)];
+      Vec3 t1v, t2v;
+      tangent_basis(c.normal, t1v, t2v);
+      m.manifold.points[k].normal_impulse = c.normal_impulse;
+      m.manifold.points[k].tangent_impulse = c.tangent_impulse[0] * t1v + c.tangent_impulse[1] * t2v;
+    }
+  std::swap(d.previous, d.manifolds);
+  for (Body& b : bodies) {
+    if (!b.dynamic()) continue;
+    const std::uint32_t i = b.rigid;
+    const Quat& q = r.orientation[i];
+    const Vec3 arm = q * b.local_com;
+    b.pose.rotation = q;
+    b.pose.translation = r.position[i] - arm;
+    b.angular_velocity = r.angular_velocity[i];
+    b.velocity = r.linear_velocity[i] - b.angular_velocity.cross(arm);  // of the body origin
+    for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k)
+      w.shapes[k].follow(b.pose, b.velocity, b.angular_velocity);
+  }
+}
 
 }  // namespace simreel::sim::detail

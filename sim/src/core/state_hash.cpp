@@ -86,6 +86,17 @@ std::uint64_t World::state_hash() const {
     f.vec(c.center);
     for (int k = 0; k < 4; ++k) f.value(c.rotation.coeffs()[k]);
   }
+  // Dynamic bodies' velocities (their poses are in the shapes above). Absent without one, so
+  // the hashes of scenes before Ch. 4 are unchanged.
+  if (w.dyn.dynamic_count > 0) {
+    const detail::RigidBodies& r = w.dyn.rigid;
+    f.value(std::uint64_t(r.size()));
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      f.vec(r.position[i]);
+      f.vec(r.linear_velocity[i]);
+      f.vec(r.angular_momentum[i]);
+    }
+  }
   return f.get();
 }
 

@@ -21,7 +21,7 @@ void step(detail::WorldState& w, double t0, double t1) {
   ++w.steps;
 }
 
-/// The moved list: kinematic bodies whose pose changed since the last report, once each whatever
+/// The moved list: kinematic and dynamic bodies whose pose changed since the last report, once each whatever
 /// their shape count (dense order, which is registration order until a removal), then the
 /// removals since the last advance().
 void report(detail::WorldState& w) {
@@ -29,7 +29,7 @@ void report(detail::WorldState& w) {
   std::vector<detail::Body>& bodies = w.bodies.dense();
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     detail::Body& b = bodies[i];
-    if (!b.kinematic()) continue;
+    if (!b.kinematic() && !b.dynamic()) continue;
     const Quat q = b.pose.rotation.normalized();
     if (b.pose.translation == b.reported_translation &&
         q.coeffs() == b.reported_rotation.coeffs())

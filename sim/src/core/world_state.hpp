@@ -11,6 +11,7 @@
 #include "cloth/cloth_particles.hpp"
 #include "collision/collider_impl.hpp"
 #include "collision/particle_collisions.hpp"
+#include "core/body_dynamics.hpp"
 #include "core/body_state.hpp"
 #include "core/slot_table.hpp"
 #include "particles/emitter.hpp"
@@ -78,6 +79,7 @@ struct WorldState {
   std::vector<Handle> removed;  ///< removals since the last advance(), reported by the next
   ParticleCollider particle_collider;
   ClothParticleScratch cloth_scratch;  ///< particles against cloth (issue 6)
+  BodyDynamics dyn;  ///< dynamic bodies (Ch. 4): rigid state, solver, manifolds
 
   /// Is system i integrated by the general path (integrators.hpp) rather than the fast one?
   [[nodiscard]] bool general(std::size_t i) const;

@@ -1,6 +1,8 @@
 // Rigid-body state (SoA), force–torque pairs, springs (see body_state.hpp).
 #include "rigid/body_state.hpp"
 
+#include <cassert>
+
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <sstream>
@@ -32,6 +34,34 @@ void RigidBodies::reserve(std::size_t n) {
   angular_drag.reserve(n);
   bias_velocity.reserve(n);
   bias_angular_velocity.reserve(n);
+}
+
+namespace {
+template <class T>
+void swap_pop(std::vector<T>& a, std::size_t i) {
+  a[i] = a.back();
+  a.pop_back();
+}
+}  // namespace
+
+void swap_remove(RigidBodies& b, std::size_t i) {
+  assert(i < b.size());
+  swap_pop(b.position, i);
+  swap_pop(b.orientation, i);
+  swap_pop(b.linear_velocity, i);
+  swap_pop(b.angular_momentum, i);
+  swap_pop(b.angular_velocity, i);
+  swap_pop(b.mass, i);
+  swap_pop(b.inv_mass, i);
+  swap_pop(b.inertia_body, i);
+  swap_pop(b.inv_inertia_body, i);
+  swap_pop(b.inv_inertia_world, i);
+  swap_pop(b.force, i);
+  swap_pop(b.torque, i);
+  swap_pop(b.linear_drag, i);
+  swap_pop(b.angular_drag, i);
+  swap_pop(b.bias_velocity, i);
+  swap_pop(b.bias_angular_velocity, i);
 }
 
 std::size_t add_body(RigidBodies& bodies, const RigidBodyDef& def) {

@@ -73,6 +73,10 @@ struct RigidBodies {
 /// non-finite orientation, or a negative drag coefficient.
 std::size_t add_body(RigidBodies& bodies, const RigidBodyDef& def);
 
+/// Removes body i: the last body moves into slot i in every array (swap-remove); the caller
+/// re-points whatever named the last index. Asserts i < size().
+void swap_remove(RigidBodies& bodies, std::size_t i);
+
 /// Recomputes I_w⁻¹ = R I_b⁻¹ Rᵀ and ω = I_w⁻¹ L of body i from its current q and L.
 void update_derived(RigidBodies& bodies, std::size_t i);
 

@@ -30,8 +30,12 @@ enum class BodyType : std::uint8_t {
   /// from the rotation keys) and enter the relative velocity of a contact (§3.7). It appears in
   /// World::advance()'s moved list whenever its pose changes. Contacts do not push it.
   kinematic,
-  /// Moved by forces and contacts (Coutinho Ch. 4). Not simulated yet: World::add_body rejects
-  /// it (std::invalid_argument) until the rigid-body issue adds mass properties and integration.
+  /// Moved by gravity and contacts (Coutinho Ch. 4): mass properties from its shapes' densities
+  /// (or BodyDef::mass), state x, q, v, L integrated by semi-implicit Euler, contacts with every
+  /// other body's solid and plane shapes solved by sequential impulses with friction and
+  /// restitution (§4.8). Shapes: sphere, box, capsule, cylinder (a dynamic mesh or plane is
+  /// rejected). It appears in the moved list after every advance() in which it moved. Not yet:
+  /// sleeping, particle/cloth impulses on the body, continuous collision, joints.
   dynamic,
 };
 
@@ -70,7 +74,11 @@ struct ShapeDef {
   /// Mesh: (m) triangles as vertex indices, each < n; two-sided. A mesh whose every edge is
   /// shared by exactly two triangles is closed (particles found inside it are removed).
   std::vector<std::array<std::uint32_t, 3>> triangles;
-  Material material;  ///< response of particles and cloth against this shape (§3.6.1)
+  Material material;  ///< response of particles and cloth against this shape (§3.6.1); also
+                      ///< restitution and friction of body contacts (pair: max e, sqrt(mu_a mu_b))
+  /// (kg/m³) > 0: uniform density of a dynamic body's solid shape (its mass and inertia, App. D);
+  /// ignored for static and kinematic bodies. Water is 1000, wood ~600, steel ~7800.
+  double density = 1000.0;
 
   /// Shorthands for the common shapes (material default, identity offset unless given).
   static ShapeDef sphere(double radius, const Transform& offset = {});
@@ -84,7 +92,9 @@ struct ShapeDef {
 /// a BodyHandle, removed (with all its shapes) by World::remove.
 struct BodyDef {
   BodyType type = BodyType::static_body;
-  /// Pose of the body frame in the world (m; rotation) for a static body. A kinematic body takes
+  /// Pose of the body frame in the world (m; rotation) for a static body, the initial pose of a
+  /// dynamic one (its centre of mass is tracked inside; the moved list reports this frame, which
+  /// need not be the centre of mass). A kinematic body takes
   /// its pose from `path` (this field is then ignored).
   Transform pose;
   /// Kinematic bodies: the keyframed path of the body frame, world frame (must not be empty).
@@ -92,12 +102,22 @@ struct BodyDef {
   KeyframePath path;
   /// (m/s) velocity of the body origin, world frame. Must be zero for static and kinematic
   /// bodies (a kinematic body's velocity comes from its path); the initial velocity of a
-  /// dynamic body once those exist (Ch. 4).
+  /// dynamic body (Ch. 4).
   Vec3 linear_velocity = Vec3::Zero();
   /// (rad/s) angular velocity, world frame. Zero unless dynamic, like linear_velocity.
   Vec3 angular_velocity = Vec3::Zero();
-  double linear_damping = 0.0;   ///< (1/s) >= 0; used by dynamic bodies (Ch. 4)
-  double angular_damping = 0.0;  ///< (1/s) >= 0; used by dynamic bodies (Ch. 4)
+  /// (1/s) >= 0, dynamic bodies: linear drag force -c m v (Coutinho §4.3.2), so v decays as
+  /// e^{-c t} with no other force.
+  double linear_damping = 0.0;
+  /// (1/s) >= 0, dynamic bodies: drag torque -c Ī ω with Ī the mean principal moment of
+  /// inertia (ω decays as e^{-c t} for a body with equal moments).
+  double angular_damping = 0.0;
+  /// (kg) dynamic bodies: > 0 overrides the total mass from the shapes' densities (inertia scales
+  /// with it, centre of mass unchanged); 0 (default) keeps the densities' mass.
+  double mass = 0.0;
+  /// (m/s²) world: the gravitational acceleration on a dynamic body (per body, as particle
+  /// systems have their own; zero for a body that floats).
+  Vec3 gravity{0.0, 0.0, -9.81};
   std::vector<ShapeDef> shapes;  ///< at least one; planes only on static bodies
   std::string name;              ///< for messages
 };

@@ -45,9 +45,11 @@ class World {
   /// triangle count. The body is named by one handle: World::pose gives its frame's pose, the
   /// moved list reports it once per advance() in which it moved, World::remove removes it with
   /// every shape.
-  /// @throws std::invalid_argument naming the field ("BodyDef.shapes[1].radius", ...) when the
-  ///         type is dynamic (not simulated yet: the rigid-body issue adds it), there is no
-  ///         shape, a static body has a path or a non-zero velocity, a kinematic body has no path
+  /// A dynamic body gets its mass properties here (§4.1, App. D: closed forms per shape,
+  /// combined by the parallel-axis theorem) and is simulated by the `bodies` stage.
+  /// @throws std::invalid_argument naming the field ("BodyDef.shapes[1].radius", ...) when there
+  ///         is no shape, a dynamic body has a mesh or plane shape, a non-positive density or a
+  ///         negative mass, a static body has a path or a non-zero velocity, a kinematic body has no path
   ///         or a non-zero velocity, a damping is negative, a pose or offset is not finite, a
   ///         plane is on a body that is not static, or a shape's parameters are out of range.
   BodyHandle add_body(const BodyDef& def);

@@ -1,0 +1,198 @@
+// Broad and narrow phase of the bodies stage (body_dynamics.hpp; Coutinho §4.4–4.7).
+//
+// Broad phase: every solid shape's world AABB (Collider::aabb_*, fattened by kPad), sort and
+// sweep along x; a pair is kept when at least one side is dynamic and the shapes belong to
+// different bodies. Planes (static, unbounded) are tested against every dynamic shape directly.
+// Narrow phase, per pair, A before B:
+//   plane–convex: collide_plane (plane_manifold.hpp);
+//   convex–convex: collide_manifold (box–box SAT, face clipping, GJK/EPA; contact_manifold.hpp);
+//   mesh–convex: the mesh's AABB tree queried with the convex's box in the mesh frame; each
+//     triangle found is a 3-point hull for collide() (GJK/EPA); when its normal is the
+//     triangle's, the convex's features over that triangle give up to 4 points (a face
+//     contact), otherwise collide()'s one point (edge and vertex contacts).
+// Each manifold takes last step's impulses by key (shape pair, triangle) through warm_start().
+// Order: planes first (plane shape, then dynamic shape, by index), then pairs sorted by shape
+// index; the manifolds are finally sorted by key for the next step's lookup (binary search).
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "collision/contact_manifold.hpp"
+#include "collision/persistent_manifold.hpp"
+#include "collision/plane_manifold.hpp"
+#include "core/world_state.hpp"
+
+namespace simreel::sim::detail {
+namespace {
+
+/// (m) AABB fattening: pairs a little apart still reach the narrow phase, which decides.
+constexpr double kPad = 0.005;
+
+ConvexShape convex_of(const Collider& c) {
+  switch (c.shape) {
+    case Collider::Shape::sphere: return ConvexShape::sphere(c.radius);
+    case Collider::Shape::box: return ConvexShape::box(c.half_extents);
+    case Collider::Shape::capsule: return ConvexShape::capsule(c.half_height, c.radius);
+    case Collider::Shape::cylinder: return ConvexShape::cylinder(c.radius, c.half_height);
+    default: return {};
+  }
+}
+
+PosedShape posed(const Collider& c) { return {convex_of(c), c.R, c.center}; }
+
+/// Where each shape belongs: its body's dense index and its index within the body.
+struct Owner {
+  std::uint32_t body, local;
+};
+
+class Builder {
+ public:
+  explicit Builder(WorldState& w) : w_(w), d_(w.dyn), bodies_(w.bodies.dense()) {
+    owner_.resize(w.shapes.size());
+    for (std::uint32_t i = 0; i < bodies_.size(); ++i)
+      for (std::uint32_t k = 0; k < bodies_[i].shape_count; ++k)
+        owner_[bodies_[i].first_shape + k] = {i, k};
+  }
+
+  void run() {
+    d_.manifolds.clear();
+    d_.points.clear();
+    planes();
+    broad_phase();
+    for (const auto& [i, j] : d_.pairs) pair(i, j);
+    std::sort(d_.manifolds.begin(), d_.manifolds.end(),
+              [](const BodyManifold& a, const BodyManifold& b) { return a.key < b.key; });
+  }
+
+ private:
+  [[nodiscard]] const Body& body_of(std::uint32_t shape) const { return bodies_[owner_[shape].body]; }
+  [[nodiscard]] bool dynamic(std::uint32_t shape) const { return body_of(shape).dynamic(); }
+  [[nodiscard]] std::uint32_t rigid(std::uint32_t shape) const {
+    const Body& b = body_of(shape);
+    return b.rigid == kNoRigid ? kStaticBody : b.rigid;
+  }
+  [[nodiscard]] PairKey key(std::uint32_t a, std::uint32_t b, std::uint32_t sub) const {
+    return {w_.bodies.handle(owner_[a].body).packed(), owner_[a].local,
+            w_.bodies.handle(owner_[b].body).packed(), owner_[b].local, sub};
+  }
+
+  void planes() {
+    for (std::uint32_t p = 0; p < w_.shapes.size(); ++p) {
+      const Collider& plane = w_.shapes[p];
+      if (plane.shape != Collider::Shape::plane) continue;
+      for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
+        if (!dynamic(s)) continue;
+        add(key(p, s, 0), collide_plane(plane.point, plane.normal, posed(w_.shapes[s]),
+                                        kBodyContactMargin),
+            p, s);
+      }
+    }
+  }
+
+  void broad_phase() {
+    d_.proxies.clear();
+    d_.pairs.clear();
+    for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
+      const Collider& c = w_.shapes[s];
+      if (c.shape == Collider::Shape::plane) continue;
+      const Vec3 half = c.aabb_half + Vec3::Constant(kPad);
+      d_.proxies.push_back({c.aabb_center - half, c.aabb_center + half, s, owner_[s].body, dynamic(s)});
+    }
+    std::sort(d_.proxies.begin(), d_.proxies.end(), [](const Proxy& a, const Proxy& b) {
+      return a.lo.x() < b.lo.x() || (a.lo.x() == b.lo.x() && a.shape < b.shape);
+    });
+    const std::size_t n = d_.proxies.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Proxy& a = d_.proxies[i];
+      for (std::size_t j = i + 1; j < n && d_.proxies[j].lo.x() <= a.hi.x(); ++j) {
+        const Proxy& b = d_.proxies[j];
+        if (!(a.dynamic || b.dynamic) || a.body == b.body) continue;
+        if (a.lo.y() > b.hi.y() || b.lo.y() > a.hi.y() || a.lo.z() > b.hi.z() || b.lo.z() > a.hi.z())
+          continue;
+        d_.pairs.emplace_back(std::min(a.shape, b.shape), std::max(a.shape, b.shape));
+      }
+    }
+    std::sort(d_.pairs.begin(), d_.pairs.end());
+  }
+
+  void pair(std::uint32_t a, std::uint32_t b) {
+    const Collider& A = w_.shapes[a];
+    const Collider& B = w_.shapes[b];
+    if (A.shape == Collider::Shape::mesh) return mesh(a, b);
+    if (B.shape == Collider::Shape::mesh) return mesh(b, a);
+    ManifoldOptions options;
+    options.margin = kBodyContactMargin;
+    add(key(a, b, 0), collide_manifold(posed(A), posed(B), options), a, b);
+  }
+
+  void mesh(std::uint32_t m, std::uint32_t s) {
+    const Collider& M = w_.shapes[m];
+    const Collider& S = w_.shapes[s];
+    const PosedShape body = posed(S);
+    // The convex's box in the mesh frame (a box around the rotated box).
+    const Mat3 Rt = M.R.transpose();
+    const Vec3 c = Rt * (S.aabb_center - M.center);
+    const Vec3 half = Rt.cwiseAbs() * (S.aabb_half + Vec3::Constant(kPad));
+    M.mesh->bvh.query(c - half, c + half, [&](std::uint32_t t) {
+      const Triangle& tri = M.mesh->triangles[t];
+      const std::array<Vec3, 3> local{tri.a, tri.b, tri.c};
+      const PosedShape T(ConvexShape::hull(local), M.R, M.center);
+      const ConvexContact cc = collide(T, body, kBodyContactMargin);
+      if (!cc.touching) return;
+      const Vec3 n = M.R * tri.normal;
+      const double along = cc.normal.dot(n);
+      Manifold man;
+      if (std::abs(along) > 0.9) {
+        // A face contact: the triangle's plane, turned towards the body (two-sided mesh).
+        std::array<Vec3, 3> wv{T.to_world(tri.a), T.to_world(tri.b), T.to_world(tri.c)};
+        if (along < 0.0) std::swap(wv[1], wv[2]);
+        man = collide_plane(wv[0], along > 0.0 ? n : Vec3(-n), body, kBodyContactMargin, wv.data());
+      }
+      if (man.count == 0) man = manifold_from_contact(cc);
+      add(key(m, s, t + 1), man, m, s);
+    });
+  }
+
+  /// Appends manifold `m` of shapes a (A) and b (B): warm-started, its points handed to the solver.
+  void add(const PairKey& k, Manifold m, std::uint32_t a, std::uint32_t b) {
+    if (m.count == 0) return;
+    const auto it = std::lower_bound(d_.previous.begin(), d_.previous.end(), k,
+                                     [](const BodyManifold& x, const PairKey& y) { return x.key < y; });
+    if (it != d_.previous.end() && it->key == k) warm_start(it->manifold, m);
+    const Material& ma = w_.shapes[a].material;
+    const Material& mb = w_.shapes[b].material;
+    // Box2D's mixing: the bouncier side wins, friction is the geometric mean.
+    const double e = std::max(ma.restitution, mb.restitution);
+    const double mu = std::sqrt(ma.friction * mb.friction);
+    BodyManifold bm{k, m, rigid(a), rigid(b), std::uint32_t(d_.points.size())};
+    Vec3 t1, t2;
+    tangent_basis(m.normal, t1, t2);
+    for (int i = 0; i < m.count; ++i) {
+      const ManifoldPoint& p = m.points[i];
+      ContactPoint c;
+      c.body_a = bm.rigid_a;
+      c.body_b = bm.rigid_b;
+      c.point = 0.5 * (p.point_a + p.point_b);
+      c.normal = m.normal;
+      c.depth = -p.separation;
+      c.restitution = e;
+      c.friction = mu;
+      c.normal_impulse = p.normal_impulse;
+      c.tangent_impulse[0] = p.tangent_impulse.dot(t1);
+      c.tangent_impulse[1] = p.tangent_impulse.dot(t2);
+      d_.points.push_back(c);
+    }
+    d_.manifolds.push_back(bm);
+  }
+
+  WorldState& w_;
+  BodyDynamics& d_;
+  std::vector<Body>& bodies_;
+  std::vector<Owner> owner_;  // per step: small; the shapes' owners change only on add/remove
+};
+
+}  // namespace
+
+void find_body_contacts(WorldState& w) { Builder(w).run(); }
+
+}  // namespace simreel::sim::detail
