@@ -353,3 +353,32 @@ TEST(Robust, MemoryIsEstimatedUpFrontAgainstABudget) {
   EXPECT_GT(m.bytes, 1000u * 64u);
   EXPECT_LT(m.bytes, 1000u * 1024u);
 }
+
+TEST(Robust, SimulateStoppedByAnErrorOrASignalLeavesNoTemporary) {
+  TempDir d;
+  // Diverges (explicit Euler on a stiff spring): exit 1, no CSV, no temporary.
+  write_file(d / "nan.json", R"({"frames": 30, "emitters": [{"name": "a", "rate": 100, "integrator": "explicit_euler"}],
+    "attractor_springs": [{"system": "a", "stiffness": 1e12, "anchor": [0, 0, 1]}]})");
+  const auto r = run_simreel("simulate " + (d / "nan.json").string() + " --export " + (d / "out" / "o.csv").string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_TRUE(!fs::exists(d / "out") || fs::is_empty(d / "out"));
+  // Interrupted: the signal ends it and the temporary goes with it.
+  write_file(d / "long.json", R"({"frames": 1000000, "emitters": [{"name": "a", "rate": 2000}]})");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    (void)!std::freopen("/dev/null", "w", stdout);
+    (void)!std::freopen("/dev/null", "w", stderr);
+    const std::string scene = (d / "long.json").string(), csv = (d / "sig" / "o.csv").string();
+    ::execl(SIMREEL_BIN, SIMREEL_BIN, "simulate", scene.c_str(), "--export", csv.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int i = 0; i < 400 && !(fs::exists(d / "sig") && !fs::is_empty(d / "sig")); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  ASSERT_FALSE(fs::is_empty(d / "sig")) << "the temporary exists while it runs";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  EXPECT_TRUE(fs::is_empty(d / "sig")) << fs::directory_iterator(d / "sig")->path();
+}
