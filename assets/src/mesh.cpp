@@ -5,9 +5,15 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdio>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cstdint>
+#include <new>
 #include <string>
 
 namespace simreel::assets {
@@ -46,19 +52,70 @@ MeshMaterial read_material(const aiMaterial& m, const std::filesystem::path& fol
   return out;
 }
 
+/// Bytes of address space the process uses now (/proc/self/statm), 0 if unknown.
+std::uint64_t address_space_in_use() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return 0;
+  unsigned long long pages = 0;
+  const bool ok = std::fscanf(f, "%llu", &pages) == 1;
+  std::fclose(f);
+  const long page = ::sysconf(_SC_PAGESIZE);
+  return ok && page > 0 ? pages * std::uint64_t(page) : 0;
+}
+
+/// For its lifetime, caps the address space at what is in use plus `budget` bytes, so an import
+/// whose file declares billions of elements fails its allocation (std::bad_alloc) instead of
+/// taking the machine's memory. Nothing is changed where a limit is already set or the use is
+/// unknown. Imports run while the scene loads, before any other thread of simreel starts.
+class AddressSpaceBudget {
+ public:
+  explicit AddressSpaceBudget(std::uint64_t budget) {
+    const std::uint64_t used = address_space_in_use();
+    if (used == 0 || ::getrlimit(RLIMIT_AS, &old_) != 0 || old_.rlim_cur != RLIM_INFINITY) return;
+    rlimit capped = old_;
+    capped.rlim_cur = rlim_t(used + budget);
+    active_ = ::setrlimit(RLIMIT_AS, &capped) == 0;
+  }
+  ~AddressSpaceBudget() {
+    if (active_) ::setrlimit(RLIMIT_AS, &old_);
+  }
+  AddressSpaceBudget(const AddressSpaceBudget&) = delete;
+  AddressSpaceBudget& operator=(const AddressSpaceBudget&) = delete;
+
+ private:
+  rlimit old_{};
+  bool active_ = false;
+};
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::filesystem::path& path) {
   const std::string file = path.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw AssetError(file + ": cannot import mesh: no such file");
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) throw AssetError(file + ": cannot import mesh: no such file");
+  // A FIFO would block the import, /dev/zero would never end.
+  if (!std::filesystem::is_regular_file(status))
+    throw AssetError(file + ": cannot import mesh: not a regular file (a directory, device or FIFO)");
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (ec || bytes > kMaxMeshFileBytes)
+    throw AssetError(file + ": cannot import mesh: " + (ec ? ec.message() : std::to_string(bytes) + " bytes") +
+                     ", expected at most " + std::to_string(kMaxMeshFileBytes) + " (the mesh file size limit)");
   Assimp::Importer importer;
   // Points and lines are removed rather than imported as degenerate triangles.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
-                aiProcess_SortByPType | aiProcess_PreTransformVertices);
+  // ValidateDataStructure first: a malformed file (assimp's own corpus has some) becomes an error
+  // instead of a crash or an assertion in the later steps.
+  const aiScene* scene = nullptr;
+  try {
+    const AddressSpaceBudget budget(kMaxMeshImportBytes);
+    scene = importer.ReadFile(file, aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                        aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
+                                        aiProcess_SortByPType | aiProcess_PreTransformVertices);
+  } catch (const std::bad_alloc&) {
+    throw AssetError(file + ": cannot import mesh: needs more than " + std::to_string(kMaxMeshImportBytes >> 20) +
+                     " MiB of memory (the mesh import memory limit)");
+  }
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
     std::string reason = importer.GetErrorString();
     std::replace(reason.begin(), reason.end(), '\n', ' ');
@@ -69,6 +126,16 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
   auto to_z_up = [y_up](const aiVector3D& p) {
     return y_up ? Eigen::Vector3f(p.x, -p.z, p.y) : Eigen::Vector3f(p.x, p.y, p.z);
   };
+  std::uint64_t vertices = 0;
+  std::uint64_t triangles = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    vertices += scene->mMeshes[m]->mNumVertices;
+    triangles += scene->mMeshes[m]->mNumFaces;
+  }
+  if (vertices > kMaxMeshVertices || triangles > kMaxMeshTriangles)
+    throw AssetError(file + ": cannot import mesh: " + std::to_string(vertices) + " vertices and " +
+                     std::to_string(triangles) + " faces, expected at most " + std::to_string(kMaxMeshVertices) +
+                     " and " + std::to_string(kMaxMeshTriangles) + " (the mesh size limit)");
   TriangleMesh mesh;
   const std::filesystem::path folder = path.parent_path();
   for (unsigned k = 0; k < scene->mNumMaterials; ++k)

@@ -59,6 +59,33 @@ std::string frame_png_name(int frame) {
   return name;
 }
 
+/// True when `p` (relative) has no ".." component: it cannot climb out of its base.
+bool stays_below(const fs::path& p) {
+  if (p.is_absolute() || p.has_root_name() || p.has_root_directory()) return false;
+  return std::none_of(p.begin(), p.end(), [](const fs::path& part) { return part == ".."; });
+}
+
+/// The scene a golden names: relative to the golden's folder (or absolute), and it must resolve
+/// inside that folder (no "..", no symbolic link out) unless allow_outside. Goldens recorded
+/// before this rule name scenes relative to the working directory, which is used when the file
+/// is not beside the golden but is there and the path neither is absolute nor climbs.
+fs::path golden_scene_path(const fs::path& golden, const std::string& scene, bool allow_outside) {
+  const fs::path named(scene);
+  const fs::path folder = golden.parent_path().empty() ? fs::path(".") : golden.parent_path();
+  fs::path path = named.is_absolute() ? named : folder / named;
+  if (allow_outside) return path;
+  std::error_code ec;
+  if (!fs::exists(path, ec) && stays_below(named) && fs::exists(named, ec)) return named;
+  const fs::path real_folder = fs::weakly_canonical(folder, ec);
+  const fs::path real = fs::weakly_canonical(path, ec);
+  const fs::path rel = real.lexically_relative(real_folder);
+  if (ec || rel.empty() || !stays_below(rel))
+    throw SceneError(golden.string() + ": /scene: \"" + scene + "\" resolves to " + real.string() +
+                     ", outside the golden's folder " + real_folder.string() +
+                     "; expected a scene inside it, or pass --allow-outside");
+  return path;
+}
+
 }  // namespace
 
 int check_command(const CheckOptions& o) {
@@ -66,15 +93,26 @@ int check_command(const CheckOptions& o) {
   HashRecord golden = read_hash_record(golden_path);
   if (o.tolerance) golden.tolerance = {*o.tolerance, *o.tolerance, *o.tolerance};
   RunOptions run;
-  run.scene = golden.scene;
+  run.scene = golden_scene_path(golden_path, golden.scene, o.allow_outside).string();
   run.overrides = golden.overrides;
   run.frames = std::to_string(golden.first) + ":" + std::to_string(golden.end);
   run.fps = golden.fps;
   run.size = std::to_string(golden.width) + "x" + std::to_string(golden.height);
   run.seed = golden.seed;
   run.backend = o.backend ? *o.backend : golden.backend;
+  run.renders = true;
   int first = 0;
-  const Scene scene = prepare_scene(run, &first);
+  // The golden may be untrusted (a pull request): the file it names might be no scene at all,
+  // so its values are never echoed; `simreel validate` shows them to whoever wants to look.
+  const Scene scene = [&] {
+    try {
+      return prepare_scene(run, &first);
+    } catch (const SceneError& e) {
+      throw SceneError(o.golden + ": /scene: " + run.scene + " is not a valid scene (" +
+                       std::to_string(e.messages().size()) + " error(s), not shown: run `simreel validate " +
+                       run.scene + "` to see them)");
+    }
+  }();
   if (!o.update && golden.frames.empty())
     throw SceneError(o.golden + ": /hashes: the golden holds no hashes; record them with --update");
 

@@ -16,6 +16,7 @@
 #include "json_reader.hpp"
 #include "run_options.hpp"
 #include "scene_player.hpp"
+#include "simreel/render/atomic_file.hpp"
 #include "simreel/render/frame_sink.hpp"
 #include "simreel/render/text_overlay.hpp"
 
@@ -45,10 +46,21 @@ std::string format_duration(double s) {
 
 volatile std::sig_atomic_t g_stop_signal = 0;
 
-extern "C" void on_stop_signal(int signal) { g_stop_signal = signal; }
+/// The first signal sets the flag; a second is a hard stop: the ffmpeg children are killed and
+/// the temporaries removed (async-signal-safe), then the signal is re-raised with its default
+/// action, so the program ends at once as usual but leaves nothing behind.
+extern "C" void on_stop_signal(int signal) {
+  if (g_stop_signal == 0) {
+    g_stop_signal = signal;
+    return;
+  }
+  render::remove_temporaries_now();
+  ::signal(signal, SIG_DFL);
+  ::raise(signal);
+}
 
-/// SIGINT/SIGTERM set a flag that the frame loop reads between frames; the handler is one-shot
-/// (SA_RESETHAND), so a second Ctrl-C kills the program at once as usual.
+/// SIGINT/SIGTERM set a flag that the frame loop reads between frames; a second one ends the
+/// program at once (on_stop_signal).
 class StopSignals {
  public:
   StopSignals() {
@@ -56,7 +68,7 @@ class StopSignals {
     struct sigaction action {};
     action.sa_handler = on_stop_signal;
     sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESETHAND | SA_RESTART;
+    action.sa_flags = SA_RESTART;
     sigaction(SIGINT, &action, &old_int_);
     sigaction(SIGTERM, &action, &old_term_);
   }
@@ -88,12 +100,11 @@ void draw_overlay(render::Image& image, int frame, double fps) {
 
 /// COLSxROWS for --sheet. @throws SceneError.
 std::pair<int, int> parse_grid(const std::string& text) {
-  int c = 0, r = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &c, &x, &r, &extra) != 3 || (x != 'x' && x != 'X') || c < 1 || r < 1 ||
-      c > 64 || r > 64)
-    throw SceneError("--sheet " + text + ": expected COLSxROWS with each in [1, 64], e.g. 4x4");
-  return {c, r};
+  std::string grid = text;
+  for (char& c : grid) c = c == 'X' ? 'x' : c;
+  const auto cr = parse_pair(grid, 'x', 1, 64);
+  if (!cr) throw SceneError("--sheet " + text + ": expected COLSxROWS with each in [1, 64], e.g. 4x4");
+  return {int(cr->first), int(cr->second)};
 }
 
 bool is_fatal_output(const std::string& output) { return !is_video_path(output); }
@@ -149,12 +160,13 @@ int render_command(const RenderOptions& o) {
     } catch (const render::IoError& e) {
       exit_code = 1;
       if (!has_png) {
-        // Never lose the render: fall back to PNG frames beside the requested video.
+        // Never lose the render: fall back to PNG frames beside the requested video. The video's
+        // error is printed first, so a failing fallback (same unusable folder) cannot hide it.
         fs::path dir = fs::path(out).replace_extension("");
         dir += "_frames";
+        std::cerr << "simreel: " << e.what() << "; writing PNG frames to " << dir.string() << " instead\n";
         sinks.push_back(render::make_png_sequence(dir, o.png_compression));
         has_png = true;
-        std::cerr << "simreel: " << e.what() << "; writing PNG frames to " << dir.string() << " instead\n";
       } else {
         std::cerr << "simreel: " << e.what() << "; the PNG frames are still written\n";
       }

@@ -1,5 +1,6 @@
 // `simreel simulate`: run a scene without rendering and export particle and cloth state as CSV.
 #include <charconv>
+#include <csignal>
 #include <iostream>
 #include <string>
 
@@ -9,6 +10,18 @@
 
 namespace simreel::app {
 
+namespace {
+
+/// Ctrl-C or SIGTERM during an export: remove the CSV's temporary (async-signal-safe), then end
+/// by the signal as usual.
+extern "C" void on_simulate_signal(int signal) {
+  render::remove_temporaries_now();
+  ::signal(signal, SIG_DFL);
+  ::raise(signal);
+}
+
+}  // namespace
+
 int simulate_command(const RunOptions& o, const std::string& export_csv) {
   int first = 0;
   const Scene scene = prepare_scene(o, &first);
@@ -16,6 +29,8 @@ int simulate_command(const RunOptions& o, const std::string& export_csv) {
   // Written to a hidden temporary and renamed when complete, so a partial export never looks
   // finished (render::AtomicFile).
   render::AtomicFile file(export_csv);
+  std::signal(SIGINT, on_simulate_signal);
+  std::signal(SIGTERM, on_simulate_signal);
   std::string buf;
   buf.reserve(1 << 20);
   buf += "frame,time,system,id,x,y,z,vx,vy,vz\n";

@@ -20,6 +20,10 @@ struct RunOptions {
   std::optional<std::string> size;     ///< "WxH"
   std::optional<long long> seed;
   std::optional<std::string> backend;  ///< "osmesa" | "egl"
+  /// --memory-limit (or SIMREEL_MEMORY_LIMIT): bytes with an optional K, M or G suffix; the
+  /// scene's estimated memory must fit (default: half the physical memory).
+  std::optional<std::string> memory_limit;
+  bool renders = false;  ///< the command renders: framebuffers count in the estimate
 };
 
 struct RenderOptions : RunOptions {
@@ -42,6 +46,7 @@ struct CheckOptions {
   bool update = false;
   std::string out_dir;           ///< where comparison images go on mismatch ("" = nowhere)
   std::optional<std::string> backend;
+  bool allow_outside = false;    ///< the golden's scene may lie outside the golden's folder
 };
 
 /// Exit codes: 0, 1, 2 as above; 130 (128 + SIGINT) or 143 (SIGTERM) when interrupted, after

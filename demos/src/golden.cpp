@@ -1,6 +1,5 @@
 #include "golden.hpp"
 
-#include <cstdio>
 #include <fstream>
 #include <utility>
 
@@ -56,7 +55,7 @@ nlohmann::ordered_json to_json(const HashRecord& r) {
 
 HashRecord read_hash_record(const fs::path& path) {
   const std::string file = path.string();
-  const nlohmann::json doc = parse_json_file(path);
+  const nlohmann::json doc = parse_json_file(path, "golden");
   std::vector<std::string> errors;
   if (!doc.is_object()) throw SceneError(file + ": expected a JSON object, found " + describe(doc));
   ObjectReader top(doc, "", file, errors);
@@ -80,26 +79,20 @@ HashRecord read_hash_record(const fs::path& path) {
   }
   r.seed = top.integer("seed", 0, 0, std::numeric_limits<long long>::max());
   const std::string size = top.string("size", "");
-  {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(size.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 16 || h < 16 ||
-        w > 8192 || h > 8192) {
-      top.error_at("/size", "expected \"WIDTHxHEIGHT\" with each in [16, 8192], found \"" + size + "\"");
-    }
-    r.width = w;
-    r.height = h;
+  if (const auto wh = parse_pair(size, 'x', 16, 8192)) {
+    r.width = int(wh->first);
+    r.height = int(wh->second);
+  } else {
+    top.error_at("/size", "expected \"WIDTHxHEIGHT\" with each in [16, 8192], found \"" + size + "\"");
   }
   r.fps = top.number("fps", 30.0, 0.0, 1000.0, true);
   const std::string frames = top.string("frames", "");
-  {
-    int a = 0, b = 0;
-    char colon = 0, extra = 0;
-    if (std::sscanf(frames.c_str(), "%d%c%d%c", &a, &colon, &b, &extra) != 3 || colon != ':' || a < 0 || b <= a) {
-      top.error_at("/frames", "expected \"FIRST:END\" with 0 <= FIRST < END, found \"" + frames + "\"");
-    }
-    r.first = a;
-    r.end = b;
+  if (const auto fe = parse_pair(frames, ':', 0, kMaxFrames); fe && fe->first < fe->second) {
+    r.first = int(fe->first);
+    r.end = int(fe->second);
+  } else {
+    top.error_at("/frames", "expected \"FIRST:END\" with 0 <= FIRST < END <= " + std::to_string(kMaxFrames) +
+                                ", found \"" + frames + "\"");
   }
   r.every = int(top.integer("hash_every", 1, 1, 1000000));
   r.backend = top.choice("backend", "osmesa", {"osmesa", "egl"});

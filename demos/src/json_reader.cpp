@@ -1,6 +1,13 @@
 #include "json_reader.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -37,6 +44,46 @@ std::string format_number(double v) {
   s.precision(10);
   s << v;
   return s.str();
+}
+
+struct NumberAt {
+  std::size_t line = 1;
+  std::size_t col = 1;
+  std::string number;
+};
+
+/// The first number token of `text` (outside strings) that does not fit a double.
+NumberAt overflowing_number(const std::string& text) {
+  NumberAt at;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+        ++at.col;
+      } else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      std::size_t end = i;
+      while (end < text.size() && std::strchr("0123456789+-.eE", text[end]) != nullptr && text[end] != '\0') ++end;
+      const std::string token = text.substr(i, end - i);
+      if (!std::isfinite(std::strtod(token.c_str(), nullptr))) {
+        at.number = token.size() > 40 ? token.substr(0, 37) + "..." : token;
+        return at;
+      }
+      at.col += end - 1 - i;
+      i = end - 1;
+    }
+    if (i < text.size() && text[i] == '\n') {
+      ++at.line;
+      at.col = 1;
+    } else {
+      ++at.col;
+    }
+  }
+  return at;
 }
 
 }  // namespace
@@ -79,6 +126,11 @@ std::string describe(const json& v) {
 json parse_json_text(const std::string& text, const std::string& file) {
   try {
     return json::parse(text);
+  } catch (const json::out_of_range&) {
+    // nlohmann's "number overflow" (e.g. 1e400) carries no position: find the number.
+    auto [line, col, number] = overflowing_number(text);
+    throw SceneError(file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": number " + number +
+                     " is out of range, expected a finite number (at most about 1.8e308)");
   } catch (const json::parse_error& e) {
     // nlohmann reports a byte offset; users need line and column.
     std::size_t line = 1, col = 1;
@@ -101,17 +153,56 @@ json parse_json_text(const std::string& text, const std::string& file) {
   }
 }
 
-json parse_json_file(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    throw SceneError(path.string() + ": cannot read scene: no such file");
-  if (std::filesystem::is_directory(path, ec))
-    throw SceneError(path.string() + ": cannot read scene: is a directory, expected a JSON file");
+std::string read_regular_file(const std::filesystem::path& path, const std::string& what, std::uintmax_t limit) {
+  const std::string file = path.string();
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) throw SceneError(file + ": cannot read " + what + ": no such file");
+    throw SceneError(file + ": cannot read " + what + ": " + std::strerror(errno));
+  }
+  if (S_ISDIR(st.st_mode)) throw SceneError(file + ": cannot read " + what + ": is a directory, expected a JSON file");
+  // A FIFO would block, /dev/zero never ends: only regular files are read.
+  if (!S_ISREG(st.st_mode))
+    throw SceneError(file + ": cannot read " + what + ": not a regular file (a device, FIFO or socket), expected a JSON file");
+  if (std::uintmax_t(st.st_size) > limit)
+    throw SceneError(file + ": cannot read " + what + ": " + std::to_string(st.st_size) + " bytes, expected at most " +
+                     std::to_string(limit) + " (the JSON size limit)");
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path.string() + ": cannot read scene: permission denied or unreadable");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  return parse_json_text(buf.str(), path.string());
+  if (!in) throw SceneError(file + ": cannot read " + what + ": permission denied or unreadable");
+  // Read at most limit + 1 bytes: a file that grows while read is still bounded.
+  std::string text(std::size_t(st.st_size), '\0');
+  in.read(text.data(), std::streamsize(text.size()));
+  text.resize(std::size_t(in.gcount()));
+  char extra[4096];
+  while (in.read(extra, sizeof extra) || in.gcount() > 0) {
+    text.append(extra, std::size_t(in.gcount()));
+    if (text.size() > limit)
+      throw SceneError(file + ": cannot read " + what + ": more than " + std::to_string(limit) +
+                       " bytes (the JSON size limit)");
+  }
+  return text;
+}
+
+json parse_json_file(const std::filesystem::path& path, const std::string& what) {
+  return parse_json_text(read_regular_file(path, what, kMaxJsonBytes), path.string());
+}
+
+std::optional<long long> parse_integer(std::string_view text, long long min, long long max) {
+  long long v = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+  if (text.empty() || text.front() == '+' || ec != std::errc() || ptr != end || v < min || v > max) return std::nullopt;
+  return v;
+}
+
+std::optional<std::pair<long long, long long>> parse_pair(std::string_view text, char separator, long long min,
+                                                          long long max) {
+  const auto sep = text.find(separator);
+  if (sep == std::string_view::npos) return std::nullopt;
+  const auto a = parse_integer(text.substr(0, sep), min, max);
+  const auto b = parse_integer(text.substr(sep + 1), min, max);
+  if (!a || !b) return std::nullopt;
+  return std::pair{*a, *b};
 }
 
 void apply_override(json& doc, const std::string& assignment, const std::string& file) {
@@ -134,6 +225,9 @@ void apply_override(json& doc, const std::string& assignment, const std::string&
     value = json::parse(value_text);
   } catch (const json::parse_error&) {
     value = value_text;  // a bare word is a string
+  } catch (const json::out_of_range&) {
+    throw SceneError(where + ": " + ptr_text + ": number " + value_text +
+                     " is out of range, expected a finite number (at most about 1.8e308)");
   }
   if (doc.contains(ptr)) {
     doc[ptr] = value;
@@ -200,12 +294,27 @@ long long ObjectReader::integer(const std::string& key, long long fallback, long
     error(key, expected, *v);
     return fallback;
   }
-  const double d = v->get<double>();
-  if (d < double(min) || d > double(max)) {
+  // Integers are compared as integers; a float only below 2^63 (double(LLONG_MAX) rounds up to
+  // 2^63, which no long long holds), so no cast ever overflows.
+  long long x = 0;
+  bool in_range = false;
+  if (v->is_number_unsigned()) {
+    const auto u = v->get<std::uint64_t>();
+    in_range = u <= std::uint64_t(std::numeric_limits<long long>::max());
+    x = in_range ? static_cast<long long>(u) : 0;
+  } else if (v->is_number_integer()) {
+    x = v->get<long long>();
+    in_range = true;
+  } else {
+    const double d = v->get<double>();
+    in_range = d >= -0x1p63 && d < 0x1p63;
+    x = in_range ? static_cast<long long>(d) : 0;
+  }
+  if (!in_range || x < min || x > max) {
     error(key, expected, *v);
     return fallback;
   }
-  return static_cast<long long>(d);
+  return x;
 }
 
 bool ObjectReader::boolean(const std::string& key, bool fallback) {

@@ -12,6 +12,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -47,7 +48,26 @@ std::string describe(const json& value);
 /// Parses JSON text. @throws SceneError "FILE:LINE:COL: invalid JSON: ..." on a syntax error.
 json parse_json_text(const std::string& text, const std::string& file);
 /// Reads and parses a file. @throws SceneError naming the file if it cannot be read or parsed.
-json parse_json_file(const std::filesystem::path& path);
+json parse_json_file(const std::filesystem::path& path, const std::string& what = "scene");
+
+/// The largest JSON file (scene, golden) read: 64 MiB. Larger files are refused before reading.
+inline constexpr std::uintmax_t kMaxJsonBytes = 64ull << 20;
+
+/// The contents of `path`, which must be a regular file (not a FIFO, device or directory) of at
+/// most `limit` bytes. @throws SceneError "FILE: cannot read WHAT: why".
+std::string read_regular_file(const std::filesystem::path& path, const std::string& what, std::uintmax_t limit);
+
+/// The most frames a run may have: the scene's "frames", --frames N or A:B, and a golden's
+/// "frames" end (one cap for every way of giving a frame count).
+inline constexpr long long kMaxFrames = 1'000'000;
+
+/// The whole of `text` as a decimal integer in [min, max] (std::from_chars: no overflow, no
+/// sign other than '-', no spaces or trailing characters); nullopt otherwise.
+std::optional<long long> parse_integer(std::string_view text, long long min, long long max);
+
+/// "A<separator>B" with A and B each as parse_integer reads them; nullopt otherwise.
+std::optional<std::pair<long long, long long>> parse_pair(std::string_view text, char separator, long long min,
+                                                          long long max);
 
 /// Applies `--set POINTER=VALUE`: VALUE is read as JSON, and as a string if it is not JSON.
 /// The pointer must name an existing value or a new key of an existing object (the schema check

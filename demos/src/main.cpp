@@ -24,6 +24,9 @@ void add_run_options(CLI::App* cmd, simreel::app::RunOptions& o) {
                   "(VALUE is read as JSON; a bare word is a string)")
       ->take_all()
       ->allow_extra_args(false);
+  cmd->add_option("--memory-limit", o.memory_limit,
+                  "Refuse scenes whose estimated memory exceeds this many bytes (K, M, G suffixes; default "
+                  "$SIMREEL_MEMORY_LIMIT or half the physical memory)");
 }
 
 }  // namespace
@@ -95,7 +98,11 @@ int main(int argc, char** argv) {
                   "Rewrite the golden's hashes and its reference frames (GOLDEN.frames/NNNNN.png) from this run");
   check->add_option("--out", check_opts.out_dir, "On mismatch write expected | actual | difference images here");
   check->add_option("--backend", check_opts.backend, "OpenGL context (default: the golden's)");
+  check->add_flag("--allow-outside", check_opts.allow_outside,
+                  "Let the golden's scene path leave the golden's folder (absolute or with ..); off by default so "
+                  "an untrusted golden cannot make check read other files");
 
+  render_opts.renders = true;
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

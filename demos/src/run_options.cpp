@@ -1,18 +1,104 @@
 #include "run_options.hpp"
 
-#include <cstdio>
+#include "scene_read.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <limits>
+
 #include <stdexcept>
 
 namespace simreel::app {
 
 std::pair<int, int> parse_frames(const std::string& text) {
-  int a = 0, b = 0;
-  char colon = 0, extra = 0;
-  const int n = std::sscanf(text.c_str(), "%d%c%d%c", &a, &colon, &b, &extra);
-  if (n == 1 && a >= 1 && text.find_first_not_of("0123456789") == std::string::npos) return {0, a};
-  if (n == 3 && colon == ':' && a >= 0 && b > a && text.find_first_not_of("0123456789:") == std::string::npos)
-    return {a, b};
-  throw SceneError("--frames " + text + ": expected a count N >= 1 or a range A:B with 0 <= A < B");
+  if (text.find_first_not_of("0123456789:") == std::string::npos) {
+    if (const auto n = parse_integer(text, 1, kMaxFrames)) return {0, int(*n)};
+    if (const auto r = parse_pair(text, ':', 0, kMaxFrames); r && r->first < r->second)
+      return {int(r->first), int(r->second)};
+  }
+  throw SceneError("--frames " + text + ": expected a count N in [1, " + std::to_string(kMaxFrames) +
+                   "] or a range A:B with 0 <= A < B <= " + std::to_string(kMaxFrames));
+}
+
+namespace {
+
+// Rough costs, on the high side: a particle's engine arrays (SoA: position, velocity, force,
+// mass, radius, age, lifespan, colour, id, split depth), its renderer upload and the views; a
+// cloth vertex with its springs and the implicit solver's 3x3 blocks; a pixel's multisampled
+// colour and depth per sample plus the resolve, post-processing and writer-queue images.
+constexpr std::uint64_t kBytesPerParticle = 192;
+constexpr std::uint64_t kBytesPerClothVertex = 2048;
+constexpr std::uint64_t kBytesPerSample = 8;
+constexpr std::uint64_t kBytesPerPixel = 96;
+
+std::string mib(std::uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; }
+
+}  // namespace
+
+MemoryEstimate estimate_memory(const Scene& scene, bool renders) {
+  MemoryEstimate m;
+  auto add = [&m](std::string what, std::uint64_t bytes) {
+    m.bytes += bytes;
+    m.items.emplace_back(std::move(what), bytes);
+  };
+  for (std::size_t i = 0; i < scene.emitters.size(); ++i)
+    add("/emitters/" + std::to_string(i) + "/max_particles",
+        std::uint64_t(scene.emitters[i].system.emitter.max_particles) * kBytesPerParticle);
+  for (std::size_t i = 0; i < scene.cloths.size(); ++i)
+    add("/cloths/" + std::to_string(i) + "/rows, columns",
+        std::uint64_t(scene.cloths[i].def.rows) * scene.cloths[i].def.columns * kBytesPerClothVertex);
+  if (renders) {
+    const std::uint64_t pixels = std::uint64_t(scene.render.width) * std::uint64_t(scene.render.height);
+    const std::uint64_t samples = std::uint64_t(std::max(1, scene.render.msaa_samples));
+    add("/render/width, height, msaa (or --size)", pixels * (samples * kBytesPerSample + kBytesPerPixel));
+  }
+  return m;
+}
+
+std::uint64_t memory_limit(const std::optional<std::string>& option) {
+  std::string text;
+  std::string source;
+  if (option) {
+    text = *option;
+    source = "--memory-limit " + text;
+  } else if (const char* env = std::getenv("SIMREEL_MEMORY_LIMIT"); env != nullptr && *env != '\0') {
+    text = env;
+    source = std::string("SIMREEL_MEMORY_LIMIT=") + env;
+  } else {
+    const long pages = ::sysconf(_SC_PHYS_PAGES);
+    const long page = ::sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page <= 0) return std::numeric_limits<std::uint64_t>::max();
+    return std::uint64_t(pages) * std::uint64_t(page) / 2;
+  }
+  int shift = 0;
+  if (!text.empty()) {
+    switch (text.back()) {
+      case 'k': case 'K': shift = 10; break;
+      case 'm': case 'M': shift = 20; break;
+      case 'g': case 'G': shift = 30; break;
+      default: break;
+    }
+  }
+  const auto n = parse_integer(shift != 0 ? std::string_view(text).substr(0, text.size() - 1) : std::string_view(text),
+                               1, std::numeric_limits<long long>::max() >> shift);
+  if (!n) throw SceneError(source + ": expected a number of bytes >= 1 with an optional K, M or G suffix, e.g. 8G");
+  return std::uint64_t(*n) << shift;
+}
+
+void check_memory(const Scene& scene, const RunOptions& o) {
+  const std::uint64_t limit = memory_limit(o.memory_limit);
+  const MemoryEstimate m = estimate_memory(scene, o.renders);
+  if (m.bytes <= limit) return;
+  auto items = m.items;
+  std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::string largest;
+  for (std::size_t i = 0; i < items.size() && i < 3; ++i)
+    largest += (i ? ", " : "") + items[i].first + " (" + mib(items[i].second) + ")";
+  throw SceneError(scene.file + ": the scene needs about " + mib(m.bytes) + " of memory, expected at most " +
+                   mib(limit) + " (--memory-limit, SIMREEL_MEMORY_LIMIT, default half the physical memory); "
+                   "largest: " + largest);
 }
 
 Scene prepare_scene(const RunOptions& o, int* first) {
@@ -26,6 +112,8 @@ Scene prepare_scene(const RunOptions& o, int* first) {
   if (o.fps) {
     if (!(*o.fps > 0.0 && *o.fps <= 1000.0))
       throw SceneError("--fps " + std::to_string(*o.fps) + ": expected a number in (0, 1000]");
+    if (std::string m = scene_read::steps_per_frame_problem(*o.fps, scene.world.max_step); !m.empty())
+      throw SceneError("--fps " + std::to_string(*o.fps) + " with " + scene.file + ": /simulation/max_step: " + m);
     scene.fps = *o.fps;
   }
   if (o.seed) {
@@ -33,13 +121,12 @@ Scene prepare_scene(const RunOptions& o, int* first) {
     scene.seed = std::uint64_t(*o.seed);
   }
   if (o.size) {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(o.size->c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 16 ||
-        h < 16 || w > 8192 || h > 8192)
-      throw SceneError("--size " + *o.size + ": expected WIDTHxHEIGHT with each in [16, 8192], e.g. 1280x720");
-    scene.render.width = w;
-    scene.render.height = h;
+    std::string size = *o.size;
+    for (char& c : size) c = c == 'X' ? 'x' : c;
+    const auto wh = parse_pair(size, 'x', 16, 8192);
+    if (!wh) throw SceneError("--size " + *o.size + ": expected WIDTHxHEIGHT with each in [16, 8192], e.g. 1280x720");
+    scene.render.width = int(wh->first);
+    scene.render.height = int(wh->second);
   }
   if (o.backend) {
     try {
@@ -48,6 +135,7 @@ Scene prepare_scene(const RunOptions& o, int* first) {
       throw SceneError("--backend " + *o.backend + ": expected osmesa or egl");
     }
   }
+  check_memory(scene, o);
   return scene;
 }
 

@@ -3,7 +3,10 @@
 /// The command-line options shared by the commands that load and run a scene (RunOptions in
 /// commands.hpp): --frames parsing and the overrides of scene values, checked as usage errors.
 
+#include <cstdint>
+#include <optional>
 #include <utility>
+#include <vector>
 #include <string>
 
 #include "commands.hpp"
@@ -19,6 +22,21 @@ namespace simreel::app {
 
 /// --frames "N" or "A:B" -> [first, end). @throws SceneError.
 std::pair<int, int> parse_frames(const std::string& text);
+
+/// Bytes of memory a scene needs, estimated up front (particles, cloth vertices, framebuffers
+/// when rendering), and what each item is, naming its keys.
+struct MemoryEstimate {
+  std::uint64_t bytes = 0;
+  std::vector<std::pair<std::string, std::uint64_t>> items;  ///< "/emitters/0/max_particles", bytes
+};
+MemoryEstimate estimate_memory(const Scene& scene, bool renders);
+
+/// The budget: `option` (--memory-limit), else $SIMREEL_MEMORY_LIMIT, else half the physical
+/// memory. "2G", "512M", "1500000000". @throws SceneError naming the source of a bad value.
+std::uint64_t memory_limit(const std::optional<std::string>& option);
+
+/// @throws SceneError naming the largest items' keys when the estimate exceeds the budget.
+void check_memory(const Scene& scene, const RunOptions& o);
 
 /// Loads the scene with its --set overrides, then applies --frames, --fps, --seed, --size and
 /// --backend. `first` receives the first frame to output (frames before it are simulated only).

@@ -43,7 +43,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   r.string("description", "");
   scene.seed = std::uint64_t(r.integer("seed", 0, 0, std::numeric_limits<long long>::max()));
   scene.fps = r.number("fps", 30.0, 0.0, 1000.0, true);
-  scene.frames = int(r.integer("frames", 120, 1, 1'000'000));
+  scene.frames = int(r.integer("frames", 120, 1, kMaxFrames));
 
   sim::Vec3 gravity{0, 0, -9.81};
   if (const json* sim_j = object_member(r, "simulation")) {
@@ -54,6 +54,8 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     scene.world.threads = int(s.integer("threads", 0, 0, 1024));
     s.finish();
   }
+  if (std::string m = steps_per_frame_problem(scene.fps, scene.world.max_step); !m.empty())
+    errors.push_back(file + ": /fps, /simulation/max_step: " + m);
   render_settings(r, scene);
   camera(r, scene);
   light(r, scene);

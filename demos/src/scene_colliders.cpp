@@ -2,9 +2,11 @@
 // (Coutinho §3.6.1, §3.6.3); README "colliders[i]".
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 
 #include "scene_read.hpp"
 #include "simreel/assets/mesh.hpp"
+#include "simreel/sim/world.hpp"
 
 namespace simreel::app::scene_read {
 
@@ -132,6 +134,14 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
           c.mesh.vertices.emplace_back(p.x() * c.mesh_scale[0], p.y() * c.mesh_scale[1], p.z() * c.mesh_scale[2]);
         c.mesh.triangles = mesh->triangles;
         c.mesh_asset = std::move(mesh);
+        // The engine's own checks (finite vertices, some non-degenerate triangle), reported here
+        // with the file and pointer instead of later by build_world with neither.
+        try {
+          sim::World probe;
+          (void)probe.add_mesh(c.mesh);
+        } catch (const std::invalid_argument& e) {
+          r.error_at(r.pointer("file"), path.string() + ": " + e.what());
+        }
       } catch (const assets::AssetError& e) {
         r.error_at(r.pointer("file"), e.what());
       }

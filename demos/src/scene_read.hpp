@@ -37,6 +37,10 @@ inline render::Vec3f to_vec3f(const std::array<double, 4>& a) { return {float(a[
 /// rotation_deg = [rx, ry, rz]: rotations about the world x, then y, then z axes (R = Rz Ry Rx).
 sim::Quat rotation_from_deg(const std::array<double, 3>& r);
 
+/// "" if one frame (1 / fps s) takes at most sim::ranges::kMaxStepsPerAdvance internal steps of
+/// at most max_step s (World::advance refuses more); otherwise what is wrong and how to fix it.
+std::string steps_per_frame_problem(double fps, double max_step);
+
 /// Reads an object member; reports and returns nullptr if present but not an object.
 const json* object_member(ObjectReader& r, const std::string& key);
 

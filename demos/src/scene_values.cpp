@@ -1,5 +1,6 @@
 // Value readers shared by the scene loader's readers: rotations, distributions, keyframe paths.
 #include <cmath>
+#include <sstream>
 
 #include "scene_read.hpp"
 
@@ -9,6 +10,17 @@ sim::Quat rotation_from_deg(const std::array<double, 3>& r) {
   return sim::Quat(Eigen::AngleAxisd(r[2] * kDeg, sim::Vec3::UnitZ()) *
                    Eigen::AngleAxisd(r[1] * kDeg, sim::Vec3::UnitY()) *
                    Eigen::AngleAxisd(r[0] * kDeg, sim::Vec3::UnitX()));
+}
+
+std::string steps_per_frame_problem(double fps, double max_step) {
+  if (!(fps > 0.0) || !(max_step > 0.0)) return "";  // reported by the keys' own ranges
+  const double steps = std::ceil((1.0 / fps) / max_step);
+  if (steps <= double(ranges::kMaxStepsPerAdvance)) return "";
+  std::ostringstream m;
+  m << "one frame (1/fps = " << 1.0 / fps << " s) at max_step " << max_step << " s needs " << steps
+    << " internal steps, expected at most " << ranges::kMaxStepsPerAdvance
+    << " (raise fps or simulation.max_step)";
+  return m.str();
 }
 
 const json* object_member(ObjectReader& r, const std::string& key) {

@@ -178,6 +178,54 @@ TEST(RenderVideo, FfmpegFailureCarriesItsMessageAndLeavesNoFile) {
   EXPECT_EQ(dir.entries(), 0);
 }
 
+TEST(RenderVideo, AnFfmpegErrorOrACutFileFailsEvenWhenFfmpegExitsZero) {
+  // ffmpeg 5.1 on a full disk: "Error writing trailer: No space left on device", exit code 0,
+  // and an MP4 without its "moov" box. Each stand-in exits 0; none may leave a file behind.
+  const std::string truncated =
+      "printf '\\000\\000\\000\\030ftypisom\\000\\000\\002\\000isomiso2\\000\\000\\010\\000mdat' > \"$last\"\n";
+  const std::string whole_without_moov =
+      "printf '\\000\\000\\000\\030ftypisom\\000\\000\\002\\000isomiso2\\000\\000\\000\\010free' > \"$last\"\n";
+  struct Case {
+    std::string body;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {truncated + "echo 'Error writing trailer: No space left on device' >&2\n", "No space left on device"},
+      {truncated, "cut short"},
+      {whole_without_moov, "no \"moov\" box"},
+      {": > \"$last\"\n", "empty file"},
+  };
+  for (const Case& c : cases) {
+    const test::TempDir bin("fakebin-full");
+    const fs::path fake = bin.path() / "ffmpeg";
+    std::ofstream(fake) << "#!/bin/sh\ncat > /dev/null\nfor last; do :; done\n" << c.body << "exit 0\n";
+    fs::permissions(fake, fs::perms::owner_all);
+    const test::TempDir dir("full");
+    const ScopedPath path(bin.path().string() + ":/usr/bin:/bin");
+    std::string message;
+    try {
+      auto sink = make_video(dir.path() / "x.mp4", 32, 32, VideoOptions{});
+      for (int i = 0; i < 3; ++i) sink->write(frame(32, 32, i), i);
+      sink->finish();
+    } catch (const IoError& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find(c.expected), std::string::npos) << c.body << ": " << message;
+    EXPECT_NE(message.find("x.mp4"), std::string::npos) << message;
+    EXPECT_EQ(dir.entries(), 0) << "no video and no temporary: " << c.body;
+  }
+  // A GIF without its trailer byte is refused the same way.
+  const test::TempDir bin("fakebin-gif");
+  std::ofstream(bin.path() / "ffmpeg") << "#!/bin/sh\ncat > /dev/null\nfor last; do :; done\nprintf 'GIF89a' > \"$last\"\n";
+  fs::permissions(bin.path() / "ffmpeg", fs::perms::owner_all);
+  const test::TempDir dir("gif-cut");
+  const ScopedPath path(bin.path().string() + ":/usr/bin:/bin");
+  auto sink = make_video(dir.path() / "x.gif", 32, 32, VideoOptions{});
+  sink->write(frame(32, 32, 0), 0);
+  EXPECT_THROW(sink->finish(), IoError);
+  EXPECT_EQ(dir.entries(), 0);
+}
+
 TEST(RenderVideo, AFailedEncodeKeepsThePreviousVideoAndASuccessfulOneReplacesIt) {
   // ffmpeg writes AtomicFile's temporary: the final name changes only when ffmpeg exited 0.
   const test::TempDir dir("replace");

@@ -2,8 +2,10 @@
 #include "simreel/render/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <functional>
@@ -22,12 +24,77 @@ namespace {
   throw IoError("cannot write " + path.string() + ": " + why);
 }
 
+// The hard-stop registry: open temporaries and the children writing them, read by
+// remove_temporaries_now() from a signal handler, so only fixed arrays and atomics. A slot is
+// free (0), being filled (1) or ready (2); the handler reads ready slots only.
+constexpr int kTempSlots = 64;
+constexpr std::size_t kTempPathMax = 4096;
+std::atomic<int> g_temp_state[kTempSlots];
+char g_temp_path[kTempSlots][kTempPathMax];
+constexpr int kChildSlots = 16;
+std::atomic<pid_t> g_children[kChildSlots];
+
+int register_temporary(const fs::path& tmp) noexcept {
+  const std::string& text = tmp.native();
+  if (text.size() >= kTempPathMax) return -1;
+  for (int i = 0; i < kTempSlots; ++i) {
+    int expected = 0;
+    if (!g_temp_state[i].compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(g_temp_path[i], text.c_str(), text.size() + 1);
+    g_temp_state[i].store(2);
+    return i;
+  }
+  return -1;  // more than 64 at once: still removed on every ordinary path
+}
+
+void unregister_temporary(int slot) noexcept {
+  if (slot >= 0) g_temp_state[slot].store(0);
+}
+
 }  // namespace
+
+void register_child(pid_t pid) noexcept {
+  for (auto& c : g_children) {
+    pid_t expected = 0;
+    if (c.compare_exchange_strong(expected, pid)) return;
+  }
+}
+
+void unregister_child(pid_t pid) noexcept {
+  for (auto& c : g_children) {
+    pid_t expected = pid;
+    c.compare_exchange_strong(expected, 0);
+  }
+}
+
+void remove_temporaries_now() noexcept {
+  for (auto& c : g_children) {
+    const pid_t pid = c.load();
+    if (pid > 0) ::kill(-pid, SIGKILL);  // its own process group (the video sink spawns it so)
+  }
+  for (int i = 0; i < kTempSlots; ++i)
+    if (g_temp_state[i].load() == 2) ::unlink(g_temp_path[i]);
+}
+
+std::string make_parent_directories(const fs::path& path) {
+  const fs::path dir = path.parent_path();
+  if (dir.empty()) return "";
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (!ec) return "";
+  // Name the component that is in the way: "out.csv/x.csv" has a file where a folder must be.
+  for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+    std::error_code e;
+    const auto st = fs::status(p, e);
+    if (fs::exists(st) && !fs::is_directory(st)) return p.string() + " is a file, expected a directory";
+    if (p == p.parent_path()) break;
+  }
+  return "cannot create directory " + dir.string() + ": " + ec.message();
+}
 
 AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
   const fs::path dir = path_.parent_path();
-  std::error_code ec;
-  if (!dir.empty()) fs::create_directories(dir, ec);
+  if (const std::string problem = make_parent_directories(path_); !problem.empty()) fail(path_, problem);
   // Built piecewise: GCC 12 warns falsely on "." + string&&.
   std::string name = ".";
   name += path_.filename().string();
@@ -40,6 +107,7 @@ AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
   // the temporary open.
   file_ = std::fopen(tmp_.c_str(), "wbe");
   if (file_ == nullptr) fail(path_, std::strerror(errno));
+  slot_ = register_temporary(tmp_);
 }
 
 AtomicFile::~AtomicFile() {
@@ -72,6 +140,10 @@ void AtomicFile::commit() {
     fs::rename(tmp_, path_, ec);
     if (ec) error = ec.message();
   }
+  if (error.empty()) {
+    unregister_temporary(slot_);
+    slot_ = -1;
+  }
   if (!error.empty()) {
     discard();
     fail(path_, error);
@@ -84,6 +156,8 @@ void AtomicFile::discard() noexcept {
   file_ = nullptr;
   std::error_code ec;
   if (!tmp_.empty()) fs::remove(tmp_, ec);
+  unregister_temporary(slot_);
+  slot_ = -1;
   done_ = true;
 }
 

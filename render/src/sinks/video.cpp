@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <optional>
@@ -90,11 +91,65 @@ bool valid_bitrate(const std::string& text) {
   return i + 1 == text.size() && (text[i] == 'k' || text[i] == 'K' || text[i] == 'M');
 }
 
+std::uint64_t big_endian(const unsigned char* p, int n) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+/// "" if the finished file looks whole: not empty; an MP4's top-level boxes tile the file
+/// exactly and include "moov" (a full disk cuts the trailer, ffprobe then says "moov atom not
+/// found"); a GIF starts with "GIF8" and ends with its 0x3B trailer; a WebM starts with the
+/// EBML magic. Otherwise what is wrong.
+std::string container_problem(const fs::path& file, const std::string& ext) {
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (f == nullptr) return std::string("cannot read the encoded file: ") + std::strerror(errno);
+  std::vector<unsigned char> head(16);
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(file, ec);
+  std::string problem;
+  if (ec || size == 0) {
+    problem = "ffmpeg wrote an empty file";
+  } else if (ext == ".mp4") {
+    bool moov = false;
+    std::uint64_t at = 0;
+    while (at < size && problem.empty()) {
+      if (size - at < 8 || ::fseeko(f, off_t(at), SEEK_SET) != 0 || std::fread(head.data(), 1, 16, f) < 8) {
+        problem = "the MP4 ends inside a box header at byte " + std::to_string(at);
+        break;
+      }
+      std::uint64_t box = big_endian(head.data(), 4);
+      const std::string type(reinterpret_cast<const char*>(head.data()) + 4, 4);
+      if (box == 1) box = size - at >= 16 ? big_endian(head.data() + 8, 8) : 0;
+      else if (box == 0) box = size - at;
+      if (box < 8 || box > size - at) {
+        problem = "the MP4 is cut short: box \"" + type + "\" at byte " + std::to_string(at) + " claims " +
+                  std::to_string(box) + " bytes, " + std::to_string(size - at) + " remain";
+        break;
+      }
+      moov = moov || type == "moov";
+      at += box;
+    }
+    if (problem.empty() && !moov) problem = "the MP4 has no \"moov\" box (the trailer was not written)";
+  } else if (ext == ".gif") {
+    unsigned char last = 0;
+    const bool read = std::fread(head.data(), 1, 4, f) == 4 && ::fseeko(f, -1, SEEK_END) == 0 &&
+                      std::fread(&last, 1, 1, f) == 1;
+    if (!read || std::memcmp(head.data(), "GIF8", 4) != 0 || last != 0x3B)
+      problem = "the GIF is incomplete (no signature or no trailer byte)";
+  } else if (ext == ".webm") {
+    if (std::fread(head.data(), 1, 4, f) != 4 || big_endian(head.data(), 4) != 0x1A45DFA3u)
+      problem = "the WebM does not start with the EBML header";
+  }
+  std::fclose(f);
+  return problem;
+}
+
 class VideoSink final : public FrameSink {
  public:
   VideoSink(const fs::path& path, int width, int height, const VideoOptions& options)
-      : path_(path), width_(width), height_(height) {
-    const std::string ext = lower_extension(path);
+      : path_(path), ext_(lower_extension(path)), width_(width), height_(height) {
+    const std::string& ext = ext_;
     if (ext != ".mp4" && ext != ".gif" && ext != ".webm") {
       fail("unsupported extension \"" + path.extension().string() +
            "\" (expected .mp4, .webm or .gif)");
@@ -115,12 +170,7 @@ class VideoSink final : public FrameSink {
            "write .mp4 instead");
     }
 
-    const fs::path dir = path.parent_path();
-    if (!dir.empty()) {
-      std::error_code ec;
-      fs::create_directories(dir, ec);
-      if (ec) fail("cannot create directory " + dir.string() + ": " + ec.message());
-    }
+    if (const std::string problem = make_parent_directories(path); !problem.empty()) fail(problem);
     // ffmpeg writes the temporary (-y overwrites the empty file AtomicFile opened); finish()
     // renames it only after ffmpeg exited 0, so a failed or cut video never appears.
     file_.emplace(path);
@@ -193,10 +243,20 @@ class VideoSink final : public FrameSink {
   void finish() override {
     if (pid_ <= 0) fail("video already closed");
     const int status = close_and_wait();
+    const std::string log = stderr_tail();
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      const std::string log = stderr_tail();
       cleanup();
       fail("ffmpeg failed (" + describe_status(status) + ")" + (log.empty() ? "" : ": " + log));
+    }
+    // ffmpeg 5.1 prints "Error writing trailer: No space left on device" and exits 0: at
+    // -loglevel error anything it prints is an error, and the file itself is checked too.
+    if (!log.empty()) {
+      cleanup();
+      fail("ffmpeg reported an error though it exited 0: " + log);
+    }
+    if (const std::string problem = container_problem(file_->temporary(), ext_); !problem.empty()) {
+      cleanup();
+      fail(problem);
     }
     close_stderr();
     file_->commit();  // IoError naming the path; the temporary is removed
@@ -273,6 +333,7 @@ class VideoSink final : public FrameSink {
       fail("cannot start " + ffmpeg.string() + ": " + std::strerror(rc));
     }
     pid_ = pid;
+    register_child(pid);
     stdin_fd_ = fds[1];
   }
 
@@ -286,6 +347,7 @@ class VideoSink final : public FrameSink {
     if (pid_ > 0) {
       while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
       }
+      unregister_child(pid_);
       pid_ = -1;
     }
     return status;
@@ -341,6 +403,7 @@ class VideoSink final : public FrameSink {
   }
 
   fs::path path_;
+  std::string ext_;  ///< lower-case extension: .mp4, .webm or .gif
   std::optional<AtomicFile> file_;  // engaged once the checks passed
   int width_;
   int height_;

@@ -7,6 +7,7 @@
 
 #include "core/stages.hpp"
 #include "core/world_impl.hpp"
+#include "simreel/sim/ranges.hpp"
 
 namespace simreel::sim {
 
@@ -59,6 +60,14 @@ const std::vector<MovedObject>& World::advance(double sampling_time) {
     throw std::invalid_argument(m.str());
   }
   const double ratio = sampling_time / w.def.max_step;
+  // Checked before the cast: a ratio beyond the cap (or +inf) must never reach an integer.
+  if (!(ratio <= double(ranges::kMaxStepsPerAdvance) * (1.0 + kStepSlack))) {
+    std::ostringstream m;
+    m << "World::advance: sampling_time / max_step = " << sampling_time << " s / " << w.def.max_step
+      << " s needs more than " << ranges::kMaxStepsPerAdvance
+      << " internal steps per advance (raise max_step or shorten the sampling time)";
+    throw std::invalid_argument(m.str());
+  }
   const std::uint64_t n = std::max<std::uint64_t>(
       1, std::uint64_t(std::ceil(ratio - kStepSlack * std::max(1.0, ratio))));
   const double h = sampling_time / double(n);

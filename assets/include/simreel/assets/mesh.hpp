@@ -38,6 +38,14 @@ class AssetError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Bounds on an import: larger files are refused before assimp reads them; more vertices or
+/// faces (after triangulation, before joining) are refused after.
+inline constexpr std::uintmax_t kMaxMeshFileBytes = 256ull << 20;  ///< 256 MiB
+inline constexpr std::uint64_t kMaxMeshVertices = 10'000'000;
+inline constexpr std::uint64_t kMaxMeshTriangles = 10'000'000;
+/// Memory one import may take (address space beyond what the process used before it): 4 GiB.
+inline constexpr std::uint64_t kMaxMeshImportBytes = 4ull << 30;
+
 /// Imports every mesh of a file (OBJ, STL, PLY, glTF/GLB, FBX, DAE, ...) into one mesh: node
 /// transforms applied, triangulated, identical vertices joined, normals generated where missing
 /// (smooth), lines and points dropped.
@@ -46,8 +54,9 @@ class AssetError : public std::runtime_error {
 /// metadata says "UpAxis" = 1 (FBX, Collada) are y up; both are turned to z up by the rotation
 /// (x, y, z) -> (x, -z, y) (+90 degrees about x). OBJ, STL and PLY carry no up axis and are taken
 /// as written, i.e. z up.
-/// @throws AssetError naming the file when it is missing, unreadable, unsupported, broken or has
-///         no triangles.
+/// @throws AssetError naming the file when it is missing, not a regular file, unreadable,
+///         unsupported, broken (assimp's data-structure validation), beyond the limits above or
+///         has no triangles.
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
 }  // namespace simreel::assets

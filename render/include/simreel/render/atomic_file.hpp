@@ -5,6 +5,8 @@
 /// sees a half-written file under the final name. Used by every writer: PNG frames, contact
 /// sheets, videos (ffmpeg writes the temporary), CSV exports and golden JSON.
 
+#include <sys/types.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -46,7 +48,22 @@ class AtomicFile {
   std::filesystem::path tmp_;
   std::FILE* file_ = nullptr;
   bool done_ = false;
+  int slot_ = -1;  ///< in the hard-stop registry (remove_temporaries_now)
 };
+
+/// For a signal handler's hard stop (a second Ctrl-C): kills the process group of every
+/// registered child (ffmpeg writing a video's temporary) and unlinks every AtomicFile temporary
+/// not yet committed or discarded. Async-signal-safe; the caller then re-raises the signal.
+void remove_temporaries_now() noexcept;
+/// Registers a child process that leads its own process group (killed by
+/// remove_temporaries_now); unregister it once reaped. Never throws; at most 16 at once.
+void register_child(pid_t pid) noexcept;
+void unregister_child(pid_t pid) noexcept;
+
+/// Creates the directories above `path`; "" when they exist, otherwise why not, naming the
+/// component that is a file where a directory is needed ("out/a.csv is a file, expected a
+/// directory"). Never throws.
+std::string make_parent_directories(const std::filesystem::path& path);
 
 /// Writes `bytes` to `path` atomically (AtomicFile). @throws IoError naming the path.
 void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);

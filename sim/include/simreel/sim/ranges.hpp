@@ -50,7 +50,10 @@ inline constexpr Range kPositive{0.0, kInf, true};     ///< > 0 and finite
 inline constexpr Range kUnit{0.0, 1.0};                ///< [0, 1]
 
 // World (WorldDef; Coutinho §1.4.1: the engine picks internal steps inside one sampling time).
-inline constexpr Range kWorldMaxStep{0.0, 1.0, true};  ///< (s) largest internal step, (0, 1]
+inline constexpr Range kWorldMaxStep{1e-6, 1.0};  ///< (s) largest internal step, [1e-6, 1]
+/// Most internal steps one World::advance(sampling_time) may take (ceil(sampling_time /
+/// max_step)); more is refused with std::invalid_argument instead of running for hours.
+inline constexpr std::uint64_t kMaxStepsPerAdvance = 1'000'000;
 inline constexpr Range kWorldContactSpeed = kNonNegative;  ///< (m/s) resting-contact threshold (§3.6.3)
 
 // Keyframe paths (KeyframePath; kinematic objects, §1.4.1: the caller moves them).

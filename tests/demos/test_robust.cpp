@@ -1,0 +1,384 @@
+// Every input bounded, every failure clean (issue 15): ranges checked by one parser, bounded
+// reads, clean errors from outputs and imports, no temporaries left behind.
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <thread>
+#include <stdexcept>
+#include <string>
+
+#include "cli_util.hpp"
+#include "golden.hpp"
+#include "json_reader.hpp"
+#include "run_options.hpp"
+#include "scene.hpp"
+#include "simreel/sim/ranges.hpp"
+#include "simreel/sim/world.hpp"
+
+using simreel::app::json;
+using simreel::app::SceneError;
+using simreel::test::run_simreel;
+using simreel::test::TempDir;
+using simreel::test::write_file;
+namespace app = simreel::app;
+namespace sim = simreel::sim;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The loader's message for `doc`, "" if it loads.
+std::string loader_error(const std::string& doc) {
+  try {
+    (void)app::scene_from_json(json::parse(doc), "s.json");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string frames_error(const std::string& text) {
+  try {
+    (void)app::parse_frames(text);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+}  // namespace
+
+// --- ranges: one parser, one cap -------------------------------------------------------------
+
+TEST(Robust, FramesOptionParsedWithoutOverflowAndCappedLikeTheSceneKey) {
+  EXPECT_EQ(app::parse_frames("5"), (std::pair<int, int>{0, 5}));
+  EXPECT_EQ(app::parse_frames("2:7"), (std::pair<int, int>{2, 7}));
+  EXPECT_EQ(app::parse_frames("1000000"), (std::pair<int, int>{0, 1'000'000}));
+  for (const char* bad : {"1000001", "1000000000", "99999999999", "0:99999999999", "4294967297", "0:4294967297",
+                          "-1", "+5", " 5", "5 ", "0", "3:3", "4:2", "1:2:3", "", ":", "0x10"}) {
+    EXPECT_TRUE(has(frames_error(bad), "expected a count N in [1, 1000000]")) << "--frames " << bad;
+  }
+  // The scene key has the same cap.
+  EXPECT_TRUE(has(loader_error(R"({"frames": 1000001})"), "/frames")) << loader_error(R"({"frames": 1000001})");
+  EXPECT_EQ(loader_error(R"({"frames": 1000000})"), "");
+}
+
+TEST(Robust, FramesOptionBeyondTheCapExits2BeforeRunning) {
+  TempDir d;
+  const auto r = run_simreel("simulate demos/scenes/fountain.json --frames 99999999999 --export " +
+                             (d / "o.csv").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "--frames 99999999999")) << r.err;
+  EXPECT_TRUE(fs::is_empty(d.path)) << "nothing written, no temporary";
+}
+
+TEST(Robust, GoldenFramesAndSizeParsedWithoutOverflow) {
+  TempDir d;
+  const std::string base = R"({"simreel_hashes": 1, "scene": "demos/scenes/fountain.json", )";
+  for (const auto& [key, value] : {std::pair{"frames", "0:99999999999"}, std::pair{"frames", "0:4294967297"},
+                                   std::pair{"frames", "0:1000001"}, std::pair{"size", "4294967392x72"}}) {
+    write_file(d / "g.json", base + "\"size\": \"96x72\", \"frames\": \"0:9\", \"" + key + "\": \"" + value + "\"}");
+    // A duplicate key: nlohmann keeps the last, which is the bad value.
+    std::string err;
+    try {
+      (void)app::read_hash_record(d / "g.json");
+    } catch (const SceneError& e) {
+      err = e.what();
+    }
+    EXPECT_TRUE(has(err, std::string("/") + key + ": expected")) << key << "=" << value << ": " << err;
+  }
+}
+
+TEST(Robust, IntegerKeysNeverOverflowTheCast) {
+  // double(LLONG_MAX) == 2^63: accepted before, then cast to long long (undefined behaviour).
+  EXPECT_TRUE(has(loader_error(R"({"seed": 9223372036854775808.0})"), "/seed")) << "2^63";
+  EXPECT_TRUE(has(loader_error(R"({"seed": 1e300})"), "/seed"));
+  EXPECT_EQ(loader_error(R"({"seed": 9223372036854775807})"), "");
+}
+
+TEST(Robust, MaxStepHasALowerBoundSharedByLoaderAndEngine) {
+  EXPECT_DOUBLE_EQ(sim::ranges::kWorldMaxStep.min, 1e-6);
+  for (const char* v : {"1e-300", "1e-9", "9e-7", "0"})
+    EXPECT_TRUE(has(loader_error(std::string(R"({"simulation": {"max_step": )") + v + "}}"),
+                    "/simulation/max_step: expected a number in [1e-06, 1]"))
+        << v << ": " << loader_error(std::string(R"({"simulation": {"max_step": )") + v + "}}");
+  EXPECT_EQ(loader_error(R"({"simulation": {"max_step": 1e-6}})"), "");
+  sim::WorldDef def;
+  def.max_step = 1e-7;
+  EXPECT_THROW(sim::World{def}, std::invalid_argument);
+}
+
+TEST(Robust, InternalStepsPerFrameAreCapped) {
+  // Loader: 1/fps / max_step beyond the cap names both keys.
+  const std::string err = loader_error(R"({"fps": 0.5, "simulation": {"max_step": 1e-6}})");
+  EXPECT_TRUE(has(err, "/fps, /simulation/max_step")) << err;
+  EXPECT_TRUE(has(err, "at most 1000000")) << err;
+  EXPECT_EQ(loader_error(R"({"fps": 1, "simulation": {"max_step": 1e-6}})"), "") << "exactly the cap";
+  // Engine: refused before any step, not after hours.
+  sim::WorldDef def;
+  def.max_step = 1e-6;
+  sim::World world(def);
+  try {
+    (void)world.advance(2.0);
+    FAIL() << "advance(2 s) at max_step 1e-6 s ran 2e6 steps";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(has(e.what(), "max_step")) << e.what();
+    EXPECT_TRUE(has(e.what(), "1000000")) << e.what();
+  }
+  EXPECT_EQ(world.time(), 0.0);
+  // --fps on the command line is checked the same way, exit 2 naming the option and the key.
+  TempDir d;
+  write_file(d / "s.json", R"({"frames": 2, "simulation": {"max_step": 1e-6}})");
+  const auto r = run_simreel("simulate " + (d / "s.json").string() + " --fps 0.1 --export " + (d / "o.csv").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "--fps")) << r.err;
+  EXPECT_TRUE(has(r.err, "/simulation/max_step")) << r.err;
+}
+
+// --- bounded reads -----------------------------------------------------------------------------
+
+TEST(Robust, SceneAndGoldenMustBeRegularFilesOfBoundedSize) {
+  TempDir d;
+  const fs::path fifo = d / "pipe.json";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // Before: /dev/zero filled memory and a FIFO blocked forever (the test would hang).
+  auto r = run_simreel("validate /dev/zero");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "/dev/zero: cannot read scene: not a regular file")) << r.err;
+  r = run_simreel("validate " + fifo.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "pipe.json: cannot read scene: not a regular file")) << r.err;
+  r = run_simreel("check " + fifo.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "pipe.json: cannot read golden: not a regular file")) << r.err;
+  const fs::path big = d / "big.json";
+  write_file(big, "{}");
+  fs::resize_file(big, app::kMaxJsonBytes + 1);  // sparse
+  r = run_simreel("validate " + big.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "expected at most 67108864 (the JSON size limit)")) << r.err;
+}
+
+TEST(Robust, MeshColliderThatIsNotARegularFileIsRefusedWithPointer) {
+  TempDir d;
+  ASSERT_EQ(::mkfifo((d / "m.obj").c_str(), 0600), 0);
+  write_file(d / "s.json", R"({"colliders": [{"type": "mesh", "file": "m.obj"}]})");
+  const auto r = run_simreel("validate " + (d / "s.json").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "/colliders/0/file")) << r.err;
+  EXPECT_TRUE(has(r.err, "not a regular file")) << r.err;
+}
+
+// --- messages ----------------------------------------------------------------------------------
+
+TEST(Robust, NumberOverflowNamesFileLineAndColumnOrTheSetPointer) {
+  TempDir d;
+  write_file(d / "s.json", "{\n  \"description\": \"1e999 in a string is fine\",\n  \"fps\": 1e400\n}\n");
+  auto r = run_simreel("validate " + (d / "s.json").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "s.json:3:10: number 1e400 is out of range")) << r.err;
+  EXPECT_FALSE(has(r.err, "json.exception")) << r.err;
+  write_file(d / "ok.json", "{}");
+  r = run_simreel("validate " + (d / "ok.json").string() + " --set /fps=1e400");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "--set /fps=1e400: /fps: number 1e400 is out of range")) << r.err;
+  EXPECT_FALSE(has(r.err, "json.exception")) << r.err;
+}
+
+TEST(Robust, DegenerateMeshNamesTheFileAndPointer) {
+  TempDir d;
+  write_file(d / "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  write_file(d / "s.json", R"({"colliders": [{"type": "plane"}, {"type": "mesh", "file": "flat.obj"}]})");
+  const auto r = run_simreel("validate " + (d / "s.json").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "/colliders/1/file")) << r.err;
+  EXPECT_TRUE(has(r.err, "flat.obj")) << r.err;
+}
+
+TEST(Robust, OutputsUnderAFileNameTheOutputAndTheFile) {
+  TempDir d;
+  write_file(d / "f", "x");
+  auto r = run_simreel("simulate demos/scenes/fountain.json --frames 2 --export " + (d / "f" / "o.csv").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(has(r.err, "cannot write " + (d / "f" / "o.csv").string() + ": " + (d / "f").string() +
+                             " is a file, expected a directory"))
+      << r.err;
+  r = run_simreel("render demos/scenes/fountain.json --frames 2 --size 32x32 -q -o " + (d / "f" / "v.mp4").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(has(r.err, "cannot encode " + (d / "f" / "v.mp4").string() + ": " + (d / "f").string() +
+                             " is a file, expected a directory"))
+      << r.err;
+  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator()), 1) << "nothing but f";
+}
+
+TEST(Robust, FfmpegThatFailsButExitsZeroMakesRenderExit1WithNoVideo) {
+  TempDir d;
+  fs::create_directories(d / "bin");
+  write_file(d / "bin" / "ffmpeg",
+             "#!/bin/sh\ncat > /dev/null\nfor last; do :; done\nprintf 'partial' > \"$last\"\n"
+             "echo 'Error writing trailer: No space left on device' >&2\nexit 0\n");
+  fs::permissions(d / "bin" / "ffmpeg", fs::perms::owner_all);
+  const auto r = run_simreel("render demos/scenes/fountain.json --frames 3 --size 32x32 -q -o " + (d / "v.mp4").string(),
+                             "PATH=" + (d / "bin").string() + ":/usr/bin:/bin");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_TRUE(has(r.err, "No space left on device")) << r.err;
+  EXPECT_FALSE(fs::exists(d / "v.mp4"));
+  for (const auto& e : fs::directory_iterator(d.path))
+    EXPECT_FALSE(has(e.path().filename().string(), ".tmp-")) << e.path();
+}
+
+// --- goldens cannot read any file --------------------------------------------------------------
+
+TEST(Robust, GoldenScenePathsStayInsideTheGoldensFolder) {
+  TempDir d;
+  fs::create_directories(d / "g");
+  write_file(d / "secret.json", R"({"fps": "TOKEN-1234"})");
+  const std::string head = R"({"simreel_hashes": 1, "size": "32x32", "frames": "0:2", "hashes": [], "scene": )";
+  // Climbing out, absolute, and a symbolic link out are refused before anything is read.
+  for (const std::string& scene : {std::string("../secret.json"), (d / "secret.json").string(), std::string("link.json")}) {
+    write_file(d / "g" / "golden.json", head + "\"" + scene + "\"}");
+    fs::remove(d / "g" / "link.json");
+    fs::create_symlink(d / "secret.json", d / "g" / "link.json");
+    const auto r = run_simreel("check " + (d / "g" / "golden.json").string());
+    EXPECT_EQ(r.code, 2) << scene << ": " << r.err;
+    EXPECT_TRUE(has(r.err, "outside the golden's folder")) << r.err;
+    EXPECT_TRUE(has(r.err, "--allow-outside")) << r.err;
+    EXPECT_FALSE(has(r.err, "TOKEN-1234")) << r.err;
+  }
+  // With --allow-outside the file is read, but a non-scene's contents are still not echoed.
+  write_file(d / "g" / "golden.json", head + "\"../secret.json\"}");
+  auto r = run_simreel("check --allow-outside " + (d / "g" / "golden.json").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "is not a valid scene")) << r.err;
+  EXPECT_FALSE(has(r.err, "TOKEN-1234")) << r.err;
+  // /dev/zero as the scene: refused as not a regular file, not read until memory runs out.
+  write_file(d / "g" / "golden.json", head + "\"/dev/zero\"}");
+  r = run_simreel("check --allow-outside " + (d / "g" / "golden.json").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  // A scene beside the golden is found relative to the golden, whatever the working directory.
+  write_file(d / "g" / "s.json", R"({"frames": 2})");
+  write_file(d / "g" / "golden.json", head + "\"s.json\"}");
+  r = run_simreel("check " + (d / "g" / "golden.json").string());
+  EXPECT_TRUE(has(r.err, "holds no hashes")) << "the scene loaded, then the empty golden was refused: " << r.err;
+}
+
+// --- no temporaries left behind ----------------------------------------------------------------
+
+TEST(Robust, SecondInterruptEndsFfmpegAndRemovesTheTemporaries) {
+  TempDir d;
+  fs::create_directories(d / "bin");
+  // A stand-in ffmpeg that stores the frames and then takes long to "write its trailer".
+  write_file(d / "bin" / "ffmpeg", "#!/bin/sh\necho $$ > " + (d / "ffmpeg.pid").string() +
+                                       "\nfor last; do :; done\ncat > \"$last\"\nsleep 60\n");
+  fs::permissions(d / "bin" / "ffmpeg", fs::perms::owner_all);
+  write_file(d / "s.json", R"({"frames": 1000, "emitters": [{"name": "a", "rate": 50}]})");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string path = (d / "bin").string() + ":/usr/bin:/bin";
+    ::setenv("PATH", path.c_str(), 1);
+    (void)!std::freopen("/dev/null", "w", stdout);
+    (void)!std::freopen((d / "err.txt").c_str(), "w", stderr);
+    const std::string scene = (d / "s.json").string(), mp4 = (d / "out" / "v.mp4").string();
+    ::execl(SIMREEL_BIN, SIMREEL_BIN, "render", scene.c_str(), "-q", "--size", "32x32", "-o", mp4.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  auto temporaries = [&] {
+    int n = 0;
+    if (fs::exists(d / "out"))
+      for (const auto& e : fs::directory_iterator(d / "out")) n += has(e.path().filename().string(), ".tmp-") ? 1 : 0;
+    return n;
+  };
+  for (int i = 0; i < 400 && !(fs::exists(d / "ffmpeg.pid") && temporaries() > 0); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  ASSERT_GT(temporaries(), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(pid, SIGINT);  // first: finish the frame, close ffmpeg's input, wait for it
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ::kill(pid, SIGINT);  // second: hard stop while ffmpeg "writes its trailer"
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status << " " << simreel::test::slurp(d / "err.txt");
+  EXPECT_EQ(temporaries(), 0) << "the video's temporary was removed";
+  EXPECT_FALSE(fs::exists(d / "out" / "v.mp4"));
+  const pid_t ffmpeg = std::stoi(simreel::test::slurp(d / "ffmpeg.pid"));
+  bool gone = false;
+  for (int i = 0; i < 100 && !gone; ++i) {
+    gone = ::kill(ffmpeg, 0) != 0 || fs::exists("/proc/" + std::to_string(ffmpeg) + "/stat") == false ||
+           has(simreel::test::slurp("/proc/" + std::to_string(ffmpeg) + "/stat"), ") Z");
+    if (!gone) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_TRUE(gone) << "ffmpeg " << ffmpeg << " still runs";
+  if (!gone) ::kill(ffmpeg, SIGKILL);
+}
+
+// --- memory estimated up front -----------------------------------------------------------------
+
+TEST(Robust, MemoryIsEstimatedUpFrontAgainstABudget) {
+  TempDir d;
+  write_file(d / "s.json", R"({"frames": 2, "emitters": [{"name": "a", "rate": 1e9, "max_particles": 50000000}]})");
+  const std::string csv = " --export " + (d / "o.csv").string();
+  // 5e7 particles: about 9 GiB estimated, refused under a 1 GiB budget before anything runs.
+  auto r = run_simreel("simulate " + (d / "s.json").string() + " --memory-limit 1G" + csv);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "/emitters/0/max_particles")) << r.err;
+  EXPECT_TRUE(has(r.err, "expected at most 1024 MiB")) << r.err;
+  r = run_simreel("simulate " + (d / "s.json").string() + csv, "SIMREEL_MEMORY_LIMIT=512M");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "expected at most 512 MiB")) << r.err;
+  r = run_simreel("simulate " + (d / "s.json").string() + " --memory-limit lots" + csv);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "--memory-limit lots: expected a number of bytes")) << r.err;
+  // Framebuffers count when rendering: 8192x8192 with 16 samples.
+  write_file(d / "r.json", R"({"frames": 1, "render": {"msaa": 16}})");
+  r = run_simreel("render " + (d / "r.json").string() + " --size 8192x8192 --memory-limit 2G -q -o " +
+                  (d / "png").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "/render/width, height, msaa")) << r.err;
+  EXPECT_FALSE(fs::exists(d / "png"));
+  // The estimate itself.
+  const app::Scene small = app::scene_from_json(json::parse(R"({"emitters": [{"name": "a", "max_particles": 1000}]})"), "s");
+  const auto m = app::estimate_memory(small, false);
+  ASSERT_EQ(m.items.size(), 1u);
+  EXPECT_GT(m.bytes, 1000u * 64u);
+  EXPECT_LT(m.bytes, 1000u * 1024u);
+}
+
+TEST(Robust, SimulateStoppedByAnErrorOrASignalLeavesNoTemporary) {
+  TempDir d;
+  // Diverges (explicit Euler on a stiff spring): exit 1, no CSV, no temporary.
+  write_file(d / "nan.json", R"({"frames": 30, "emitters": [{"name": "a", "rate": 100, "integrator": "explicit_euler"}],
+    "attractor_springs": [{"system": "a", "stiffness": 1e12, "anchor": [0, 0, 1]}]})");
+  const auto r = run_simreel("simulate " + (d / "nan.json").string() + " --export " + (d / "out" / "o.csv").string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_TRUE(!fs::exists(d / "out") || fs::is_empty(d / "out"));
+  // Interrupted: the signal ends it and the temporary goes with it.
+  write_file(d / "long.json", R"({"frames": 1000000, "emitters": [{"name": "a", "rate": 2000}]})");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    (void)!std::freopen("/dev/null", "w", stdout);
+    (void)!std::freopen("/dev/null", "w", stderr);
+    const std::string scene = (d / "long.json").string(), csv = (d / "sig" / "o.csv").string();
+    ::execl(SIMREEL_BIN, SIMREEL_BIN, "simulate", scene.c_str(), "--export", csv.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int i = 0; i < 400 && !(fs::exists(d / "sig") && !fs::is_empty(d / "sig")); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  ASSERT_FALSE(fs::is_empty(d / "sig")) << "the temporary exists while it runs";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  EXPECT_TRUE(fs::is_empty(d / "sig")) << fs::directory_iterator(d / "sig")->path();
+}
