@@ -113,12 +113,53 @@ Scene load_scene(const std::filesystem::path& path, const std::vector<std::strin
   return scene_from_json(doc, path.string());
 }
 
+namespace {
+
+/// The body of a "motion": "dynamic" collider (box, sphere or cylinder; README "Rigid bodies").
+sim::BodyDef dynamic_body(const ColliderScene& c) {
+  sim::BodyDef b;
+  b.type = sim::BodyType::dynamic;
+  b.name = c.name;
+  sim::ShapeDef s;
+  switch (c.type) {
+    case ColliderScene::Type::box:
+      b.pose = c.box.transform;
+      s = sim::ShapeDef::box(c.box.half_extents);
+      s.material = c.box.material;
+      break;
+    case ColliderScene::Type::sphere:
+      b.pose = c.sphere.transform;
+      s = sim::ShapeDef::sphere(c.sphere.radius);
+      s.material = c.sphere.material;
+      break;
+    default:  // the reader allows nothing else
+      b.pose = c.cylinder.transform;
+      s = sim::ShapeDef::cylinder(c.cylinder.radius, c.cylinder.half_height);
+      s.material = c.cylinder.material;
+      break;
+  }
+  s.density = c.dynamic.density;
+  b.shapes.push_back(s);
+  b.mass = c.dynamic.mass;
+  b.linear_velocity = c.dynamic.velocity;
+  b.angular_velocity = c.dynamic.angular_velocity;
+  b.linear_damping = c.dynamic.linear_damping;
+  b.angular_damping = c.dynamic.angular_damping;
+  return b;
+}
+
+}  // namespace
+
 SceneWorld build_world(const Scene& scene) {
   sim::WorldDef def = scene.world;
   def.seed = scene.seed;
   SceneWorld out{sim::World(def), {}, {}, {}, {}, {}};
   try {
     for (const auto& c : scene.colliders) {
+      if (c.dynamic.enabled) {
+        out.colliders.push_back(out.world.add_body(dynamic_body(c)));
+        continue;
+      }
       switch (c.type) {
         case ColliderScene::Type::plane: out.colliders.push_back(out.world.add_plane(c.plane)); break;
         case ColliderScene::Type::box: out.colliders.push_back(out.world.add_box(c.box)); break;

@@ -19,6 +19,17 @@
 
 namespace simreel::app {
 
+/// A dynamic collider's keys (colliders[i] "motion": "dynamic"; README "Rigid bodies").
+struct DynamicScene {
+  bool enabled = false;
+  double density = 1000.0;  ///< (kg/m³)
+  double mass = 0.0;        ///< (kg) > 0 overrides the density's mass
+  sim::Vec3 velocity = sim::Vec3::Zero();          ///< (m/s) world
+  sim::Vec3 angular_velocity = sim::Vec3::Zero();  ///< (rad/s) world (JSON in deg/s)
+  double linear_damping = 0.0;                     ///< (1/s)
+  double angular_damping = 0.0;                    ///< (1/s)
+};
+
 struct ColliderScene {
   std::string name;
   enum class Type { plane, box, sphere, cylinder, mesh } type = Type::plane;
@@ -34,6 +45,7 @@ struct ColliderScene {
   render::Vec4f color{0.6f, 0.6f, 0.62f, 1.f};
   float checker_m = 0.f;        ///< (m) plane checker cell; 0 = plain
   float draw_half_size = 20.f;  ///< (m) drawn extent of an infinite plane
+  DynamicScene dynamic;         ///< "motion": "dynamic" (box, sphere, cylinder)
 };
 
 struct EmitterScene {

@@ -75,6 +75,9 @@ void camera(ObjectReader& r, Scene& scene);
 void light(ObjectReader& r, Scene& scene);
 
 // scene_colliders.cpp
+/// colliders[i] "motion" and the dynamic keys (scene_bodies.cpp); `type` is the collider type.
+void collider_motion(ObjectReader& r, const std::string& type, bool has_path, ColliderScene& c);
+
 ColliderScene collider(const json& j, const std::string& ptr, const std::string& file,
                        std::vector<std::string>& errors, std::size_t index);
 /// An emitter's own "on_hit" and its droplets "on_hit_split" (the emitter's "split" key is the
