@@ -4,6 +4,7 @@
 #include "scene.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 #include <utility>
 
 #include "effect_scene.hpp"
@@ -60,6 +61,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   auto read_array = [&](const std::string& key, auto&& each) { object_array(r, key, each); };
   read_array("colliders", [&](const json& j, const std::string& p, std::size_t i) {
     scene.colliders.push_back(collider(j, p, file, errors, i));
+    scene.colliders.back().dynamic.gravity = gravity;  // dynamic bodies fall with the scene's gravity
   });
   // Emitters, directly or as an effect preset (effects/presets/*.json) expanded into emitters and
   // force fields; names must be unique because fields and springs select systems by name.
@@ -113,10 +115,7 @@ Scene load_scene(const std::filesystem::path& path, const std::vector<std::strin
   return scene_from_json(doc, path.string());
 }
 
-namespace {
-
-/// The body of a "motion": "dynamic" collider (box, sphere or cylinder; README "Rigid bodies").
-sim::BodyDef dynamic_body(const ColliderScene& c) {
+sim::BodyDef dynamic_body_def(const ColliderScene& c) {
   sim::BodyDef b;
   b.type = sim::BodyType::dynamic;
   b.name = c.name;
@@ -132,11 +131,15 @@ sim::BodyDef dynamic_body(const ColliderScene& c) {
       s = sim::ShapeDef::sphere(c.sphere.radius);
       s.material = c.sphere.material;
       break;
-    default:  // the reader allows nothing else
+    case ColliderScene::Type::cylinder:
       b.pose = c.cylinder.transform;
       s = sim::ShapeDef::cylinder(c.cylinder.radius, c.cylinder.half_height);
       s.material = c.cylinder.material;
       break;
+    case ColliderScene::Type::plane:
+    case ColliderScene::Type::mesh:
+      // The reader rejects "dynamic" on these; the engine would reject the shape too.
+      throw std::invalid_argument("a dynamic collider must be a box, sphere or cylinder (" + c.name + ")");
   }
   s.density = c.dynamic.density;
   b.shapes.push_back(s);
@@ -145,10 +148,9 @@ sim::BodyDef dynamic_body(const ColliderScene& c) {
   b.angular_velocity = c.dynamic.angular_velocity;
   b.linear_damping = c.dynamic.linear_damping;
   b.angular_damping = c.dynamic.angular_damping;
+  b.gravity = c.dynamic.gravity;
   return b;
 }
-
-}  // namespace
 
 SceneWorld build_world(const Scene& scene) {
   sim::WorldDef def = scene.world;
@@ -157,7 +159,7 @@ SceneWorld build_world(const Scene& scene) {
   try {
     for (const auto& c : scene.colliders) {
       if (c.dynamic.enabled) {
-        out.colliders.push_back(out.world.add_body(dynamic_body(c)));
+        out.colliders.push_back(out.world.add_body(dynamic_body_def(c)));
         continue;
       }
       switch (c.type) {

@@ -6,6 +6,7 @@
 ///   scene_values.cpp     shared value readers: distributions (Coutinho §3.8), keyframe paths
 ///   scene_camera.cpp     "render", "camera" (path / orbit), "light"
 ///   scene_colliders.cpp  "colliders" and their response materials (§3.6.1, §3.6.3)
+///   scene_bodies.cpp     colliders' "motion" and the keys of a dynamic collider (Ch. 4)
 ///   scene_emitters.cpp   "emitters" (§3.8-3.9.1): shape, rate, distributions, colours, split
 ///   scene_forces.cpp     per-system forces and integrators, "force_fields", "attractor_springs"
 ///                        (§3.3, App. B)
