@@ -4,6 +4,7 @@
 #include "scene.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 #include <utility>
 
 #include "effect_scene.hpp"
@@ -62,6 +63,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   auto read_array = [&](const std::string& key, auto&& each) { object_array(r, key, each); };
   read_array("colliders", [&](const json& j, const std::string& p, std::size_t i) {
     scene.colliders.push_back(collider(j, p, file, errors, i));
+    scene.colliders.back().dynamic.gravity = gravity;  // dynamic bodies fall with the scene's gravity
   });
   // Emitters, directly or as an effect preset (effects/presets/*.json) expanded into emitters and
   // force fields; names must be unique because fields and springs select systems by name.
@@ -115,12 +117,53 @@ Scene load_scene(const std::filesystem::path& path, const std::vector<std::strin
   return scene_from_json(doc, path.string());
 }
 
+sim::BodyDef dynamic_body_def(const ColliderScene& c) {
+  sim::BodyDef b;
+  b.type = sim::BodyType::dynamic;
+  b.name = c.name;
+  sim::ShapeDef s;
+  switch (c.type) {
+    case ColliderScene::Type::box:
+      b.pose = c.box.transform;
+      s = sim::ShapeDef::box(c.box.half_extents);
+      s.material = c.box.material;
+      break;
+    case ColliderScene::Type::sphere:
+      b.pose = c.sphere.transform;
+      s = sim::ShapeDef::sphere(c.sphere.radius);
+      s.material = c.sphere.material;
+      break;
+    case ColliderScene::Type::cylinder:
+      b.pose = c.cylinder.transform;
+      s = sim::ShapeDef::cylinder(c.cylinder.radius, c.cylinder.half_height);
+      s.material = c.cylinder.material;
+      break;
+    case ColliderScene::Type::plane:
+    case ColliderScene::Type::mesh:
+      // The reader rejects "dynamic" on these; the engine would reject the shape too.
+      throw std::invalid_argument("a dynamic collider must be a box, sphere or cylinder (" + c.name + ")");
+  }
+  s.density = c.dynamic.density;
+  b.shapes.push_back(s);
+  b.mass = c.dynamic.mass;
+  b.linear_velocity = c.dynamic.velocity;
+  b.angular_velocity = c.dynamic.angular_velocity;
+  b.linear_damping = c.dynamic.linear_damping;
+  b.angular_damping = c.dynamic.angular_damping;
+  b.gravity = c.dynamic.gravity;
+  return b;
+}
+
 SceneWorld build_world(const Scene& scene) {
   sim::WorldDef def = scene.world;
   def.seed = scene.seed;
   SceneWorld out{sim::World(def), {}, {}, {}, {}, {}};
   try {
     for (const auto& c : scene.colliders) {
+      if (c.dynamic.enabled) {
+        out.colliders.push_back(out.world.add_body(dynamic_body_def(c)));
+        continue;
+      }
       switch (c.type) {
         case ColliderScene::Type::plane: out.colliders.push_back(out.world.add_plane(c.plane)); break;
         case ColliderScene::Type::box: out.colliders.push_back(out.world.add_box(c.box)); break;

@@ -19,6 +19,18 @@
 
 namespace simreel::app {
 
+/// A dynamic collider's keys (colliders[i] "motion": "dynamic"; README "Rigid bodies").
+struct DynamicScene {
+  bool enabled = false;
+  double density = 1000.0;  ///< (kg/m³)
+  double mass = 0.0;        ///< (kg) > 0 overrides the density's mass; 0 = from the density
+  sim::Vec3 velocity = sim::Vec3::Zero();          ///< (m/s) world
+  sim::Vec3 angular_velocity = sim::Vec3::Zero();  ///< (rad/s) world (JSON in deg/s)
+  double linear_damping = 0.0;                     ///< (1/s)
+  double angular_damping = 0.0;                    ///< (1/s)
+  sim::Vec3 gravity{0.0, 0.0, -9.81};              ///< (m/s²) the scene's "simulation"/"gravity"
+};
+
 struct ColliderScene {
   std::string name;
   enum class Type { plane, box, sphere, cylinder, mesh } type = Type::plane;
@@ -34,6 +46,7 @@ struct ColliderScene {
   render::Vec4f color{0.6f, 0.6f, 0.62f, 1.f};
   float checker_m = 0.f;        ///< (m) plane checker cell; 0 = plain
   float draw_half_size = 20.f;  ///< (m) drawn extent of an infinite plane
+  DynamicScene dynamic;         ///< "motion": "dynamic" (box, sphere, cylinder)
 };
 
 struct EmitterScene {
@@ -96,6 +109,12 @@ struct SceneWorld {
   std::vector<sim::ForceFieldHandle> force_fields;            ///< scene order
   std::vector<sim::AttractorSpringHandle> attractor_springs;  ///< scene order
 };
+
+/// The engine body of a `"motion": "dynamic"` collider (`c.dynamic.enabled`; box, sphere or
+/// cylinder): one shape of the collider's geometry and response material at an identity offset,
+/// pose from the collider, density or mass, velocities (rad/s), damping and the scene's gravity.
+/// @throws std::invalid_argument for a plane or mesh (the loader never produces one).
+sim::BodyDef dynamic_body_def(const ColliderScene& c);
 
 /// @throws SceneError if the engine rejects a definition (should not happen after checking).
 SceneWorld build_world(const Scene& scene);

@@ -147,6 +147,7 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
       }
     }
   }
+  if (type != "") collider_motion(r, type, r.has("path"), c);
   r.finish();
   return c;
 }

@@ -6,6 +6,7 @@
 ///   scene_values.cpp     shared value readers: distributions (Coutinho §3.8), keyframe paths
 ///   scene_camera.cpp     "render", "camera" (path / orbit), "light"
 ///   scene_colliders.cpp  "colliders" and their response materials (§3.6.1, §3.6.3)
+///   scene_bodies.cpp     colliders' "motion" and the keys of a dynamic collider (Ch. 4)
 ///   scene_emitters.cpp   "emitters" (§3.8-3.9.1): shape, rate, distributions, colours, split
 ///   scene_forces.cpp     per-system forces and integrators, "force_fields", "attractor_springs"
 ///                        (§3.3, App. B)
@@ -79,6 +80,9 @@ void camera(ObjectReader& r, Scene& scene);
 void light(ObjectReader& r, Scene& scene);
 
 // scene_colliders.cpp
+/// colliders[i] "motion" and the dynamic keys (scene_bodies.cpp); `type` is the collider type.
+void collider_motion(ObjectReader& r, const std::string& type, bool has_path, ColliderScene& c);
+
 ColliderScene collider(const json& j, const std::string& ptr, const std::string& file,
                        std::vector<std::string>& errors, std::size_t index);
 /// An emitter's own "on_hit" and its droplets "on_hit_split" (the emitter's "split" key is the

@@ -103,6 +103,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"shells", 0x8a1217b730d9acf0ull},
       {"smoke", 0x2086b98773430fbdull},
       {"sprinkler", 0x6220092ecaf51080ull},
+      {"tumble", 0x18749a58470b7a9cull},
   };
   return table;
 }

@@ -71,7 +71,7 @@ void validate_body(const BodyDef& def, const Names& names) {
     if (!def.linear_velocity.allFinite() || !def.angular_velocity.allFinite() ||
         !def.gravity.allFinite())
       throw std::invalid_argument("BodyDef.linear_velocity, angular_velocity and gravity must be finite");
-    if (!(std::isfinite(def.mass) && def.mass >= 0.0)) {
+    if (!(def.mass == 0.0 || ranges::kBodyMass.contains(def.mass))) {
       std::ostringstream m;
       m << "BodyDef.mass must be >= 0 and finite (0: from the densities) (got " << def.mass << ")";
       throw std::invalid_argument(m.str());
@@ -80,8 +80,8 @@ void validate_body(const BodyDef& def, const Names& names) {
     require_zero(def.linear_velocity, def.type, "linear_velocity");
     require_zero(def.angular_velocity, def.type, "angular_velocity");
   }
-  require_in(def.linear_damping, ranges::kNonNegative, "BodyDef.linear_damping");
-  require_in(def.angular_damping, ranges::kNonNegative, "BodyDef.angular_damping");
+  require_in(def.linear_damping, ranges::kBodyDamping, "BodyDef.linear_damping");
+  require_in(def.angular_damping, ranges::kBodyDamping, "BodyDef.angular_damping");
 }
 
 /// Mass properties of a dynamic body in its body frame from its shapes (Coutinho §4.1, App. D):
@@ -92,7 +92,7 @@ MassProperties body_mass(const BodyDef& def, const std::string& shape_name, bool
   for (std::size_t i = 0; i < def.shapes.size(); ++i) {
     const ShapeDef& s = def.shapes[i];
     const std::string what = indexed ? shape_name + "[" + std::to_string(i) + "]" : shape_name;
-    if (!(std::isfinite(s.density) && s.density > 0.0)) {
+    if (!ranges::kBodyDensity.contains(s.density)) {
       std::ostringstream m;
       m << what << ".density must be > 0 and finite (kg/m³) (got " << s.density << ")";
       throw std::invalid_argument(m.str());

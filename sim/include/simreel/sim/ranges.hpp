@@ -114,6 +114,12 @@ inline constexpr Range kHitSplitMinRadius = kNonNegative;  ///< (m)
 // Colliders (§2: shapes).
 inline constexpr Range kColliderSize = kPositive;        ///< (m) box half extents, sphere and cylinder radius, half height
 
+// Dynamic bodies (BodyDef, ShapeDef; Ch. 4 rigid-body dynamics, App. D mass properties).
+inline constexpr Range kBodyDensity = kPositive;         ///< (kg/m³) ShapeDef::density
+/// (kg) a body's total mass when given (BodyDef::mass; the field's 0 means "from the densities").
+inline constexpr Range kBodyMass = kPositive;
+inline constexpr Range kBodyDamping = kNonNegative;      ///< (1/s) linear and angular damping
+
 // Cloths (ClothDef; §3.9.2).
 inline constexpr IntRange kClothGrid{1, 1024};           ///< rows, columns (vertices)
 inline constexpr Range kClothSize = kPositive;           ///< (m) width, height
