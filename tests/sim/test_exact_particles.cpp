@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "sim_test_util.hpp"
@@ -221,6 +222,60 @@ TEST(ExactSliding, DisplacementIsTheIntegralOfVelocityOnEveryColliderKind) {
         }
       }
     }
+  }
+}
+
+}  // namespace
+}  // namespace simreel::sim
+
+namespace simreel::sim {
+namespace {
+
+// -- Divergence (issue 15): a blow-up stops the run like NaN does ------------------------------
+
+TEST(Divergence, ExplicitEulerOnAStiffRopeStopsNamingSystemStepAndTime) {
+  // A 10-link rope of 10 g beads and 1e5 N/m springs, stretched 10%: h ω = (1/240) sqrt(1e5 /
+  // 0.01) = 13, far past explicit Euler's stability. Before, it reached 1e26 m and went on.
+  World world;
+  ParticleSystemDef def = test::spawn_only_system("rope");
+  def.integrator = Integrator::explicit_euler;
+  for (int k = 0; k < 10; ++k) {
+    InitialParticle p;
+    p.position = Vec3(0.11 * k, 0, 1);
+    p.mass = 0.01;
+    def.initial_particles.push_back(p);
+  }
+  for (std::uint64_t k = 0; k + 1 < 10; ++k)
+    def.springs.push_back(SpringDef{k, k + 1, 1e5, 0.0, 0.1});
+  world.add_particle_system(def);
+  try {
+    for (int f = 0; f < 120; ++f) world.advance(1.0 / 60);
+    FAIL() << "no NonFiniteState";
+  } catch (const NonFiniteState& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("'rope'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("diverged"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("max_speed"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("internal step"), std::string::npos) << msg;
+    EXPECT_LT(world.time(), 1.0) << msg;
+  }
+}
+
+TEST(Divergence, BoundsAreConfigurableAndAFastButSaneParticleRuns) {
+  // A 2 km/s bullet is fine under the default 1e4 m/s; with max_speed = 1000 it stops.
+  for (const double vmax : {1e4, 1e3}) {
+    WorldDef wd;
+    wd.max_speed = vmax;
+    World world(wd);
+    const auto ps = world.add_particle_system(test::spawn_only_system("bullet"));
+    world.spawn_particle(ps, Vec3::Zero(), Vec3(2000, 0, 0), 0.01, 0.01, 100);
+    bool stopped = false;
+    try {
+      world.advance(0.1);
+    } catch (const NonFiniteState&) {
+      stopped = true;
+    }
+    EXPECT_EQ(stopped, vmax < 2000) << vmax;
   }
 }
 

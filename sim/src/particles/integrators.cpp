@@ -264,8 +264,8 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
   float* __restrict pv = s.velocity.data() + 3 * begin;
 #pragma omp parallel for schedule(static) num_threads(th) reduction(| : bad) if (par)
   for (std::size_t k = 0; k < m; ++k) {
-    bad |= unsigned(!(std::abs(x[k]) <= double(FLT_MAX))) |
-           unsigned(!(std::abs(v[k]) <= double(FLT_MAX)));
+    bad |= unsigned(!(std::abs(x[k]) <= dyn.max_distance)) |
+           unsigned(!(std::abs(v[k]) <= dyn.max_speed));
     px[k] = float(x[k]);
     pv[k] = float(v[k]);
   }

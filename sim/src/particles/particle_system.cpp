@@ -150,6 +150,7 @@ unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t en
     hhg[j] = 0.5f * h * h * f.gravity[j % 3];
   }
   const float hk = h * f.drag;
+  const float vmax = f.max_speed, xmax = f.max_distance;
 
   unsigned bad = 0;
   for (std::size_t i0 = begin; i0 < end; i0 += kChunk) {
@@ -183,8 +184,8 @@ unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t en
       }
       vb[j] = vv;
       xb[j] = xx;
-      // Not (|.| <= FLT_MAX): true for inf and NaN; a compare the loop vectorises.
-      bad |= unsigned(!(std::fabs(vv) <= FLT_MAX)) | unsigned(!(std::fabs(xx) <= FLT_MAX));
+      // Not (|.| <= bound): true for inf, NaN and a blow-up; a compare the loop vectorises.
+      bad |= unsigned(!(std::fabs(vv) <= vmax)) | unsigned(!(std::fabs(xx) <= xmax));
     }
     for (std::size_t k = 0; k < n; ++k) age[i0 + k] += h;
   }
@@ -219,8 +220,9 @@ inline unsigned rk4_one(float* x, float* v, double m, double h, const ForceParam
     }
     v[j] = float(vj);
     x[j] = float(xj);
-    // Checked on the doubles: NaN, inf, or too large for float storage.
-    bad |= unsigned(!(std::abs(vj) <= double(FLT_MAX)) || !(std::abs(xj) <= double(FLT_MAX)));
+    // Checked on the doubles: NaN, inf, or beyond the divergence bounds.
+    bad |= unsigned(!(std::abs(vj) <= double(f.max_speed)) ||
+                    !(std::abs(xj) <= double(f.max_distance)));
   }
   return bad;
 }
@@ -276,7 +278,7 @@ bool integrate_one(ParticleStore& s, std::size_t i, double dt, const ForceParams
     if (drag) vv = vv * damp;
     v[j] = vv;
     x[j] = x[j] + hv * vv - 0.5f * h * h * f.gravity[j] * d2;
-    bad |= unsigned(!(std::fabs(v[j]) <= FLT_MAX)) | unsigned(!(std::fabs(x[j]) <= FLT_MAX));
+    bad |= unsigned(!(std::fabs(v[j]) <= f.max_speed)) | unsigned(!(std::fabs(x[j]) <= f.max_distance));
   }
   return bad != 0;
 }

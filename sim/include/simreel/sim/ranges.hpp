@@ -52,6 +52,8 @@ inline constexpr Range kUnit{0.0, 1.0};                ///< [0, 1]
 // World (WorldDef; Coutinho §1.4.1: the engine picks internal steps inside one sampling time).
 inline constexpr Range kWorldMaxStep{0.0, 1.0, true};  ///< (s) largest internal step, (0, 1]
 inline constexpr Range kWorldContactSpeed = kNonNegative;  ///< (m/s) resting-contact threshold (§3.6.3)
+inline constexpr Range kWorldMaxSpeed{0.0, 3e38, true};     ///< (m/s) divergence bound on |v_k|
+inline constexpr Range kWorldMaxDistance{0.0, 3e38, true};  ///< (m) divergence bound on |x_k|
 
 // Keyframe paths (KeyframePath; kinematic objects, §1.4.1: the caller moves them).
 inline constexpr Range kKeyframeTime = kNonNegative;    ///< (s) scene time of a key
