@@ -51,6 +51,8 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     ObjectReader s(*sim_j, r.pointer("simulation"), file, errors);
     scene.world.max_step = s.number("max_step", scene.world.max_step, sim::ranges::kWorldMaxStep);
     scene.world.contact_speed = s.number("contact_speed", scene.world.contact_speed, sim::ranges::kWorldContactSpeed);
+    scene.world.max_speed = s.number("max_speed", scene.world.max_speed, sim::ranges::kWorldMaxSpeed);
+    scene.world.max_distance = s.number("max_distance", scene.world.max_distance, sim::ranges::kWorldMaxDistance);
     gravity = to_vec(s.vec3("gravity", {0, 0, -9.81}));
     scene.world.threads = int(s.integer("threads", 0, 0, 1024));
     s.finish();

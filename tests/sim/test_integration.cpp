@@ -44,16 +44,16 @@ State exact(double t, const Vec3& x0, const Vec3& v0, const Vec3& g, double k, d
 
 const Vec3 kG(0, 0, -9.81);
 
-TEST(SimIntegration, SemiImplicitEulerFreeFallHasTheKnownFirstOrderError) {
-  // x_n = x0 + v0 t + g t^2/2 + g h t/2 exactly for the scheme v += g h; x += h v.
+TEST(SimIntegration, SemiImplicitEulerFreeFallIsExact) {
+  // v += g h; x += h v - h² g / 2 = x + h v0 + h² g / 2: exact under constant gravity (issue 15;
+  // the plain scheme x += h v was g h t / 2 off).
   const Vec3 x0(1, 2, 10), v0(3, -1, 4);
   const double T = 1.0;
   for (double h : {1.0 / 60, 1.0 / 240}) {
     const State s = simulate(Integrator::semi_implicit_euler, h, T, x0, v0, kG, 0.0, 1.0);
     const State e = exact(T, x0, v0, kG, 0.0, 1.0);
-    EXPECT_NEAR(s.x.z() - e.x.z(), 0.5 * kG.z() * h * T, 2e-5) << h;
-    EXPECT_NEAR(s.x.x(), e.x.x(), 2e-5);
-    EXPECT_LT((s.v - e.v).norm(), 2e-5) << h;  // velocity is exact under constant gravity
+    EXPECT_LT((s.x - e.x).norm(), 1e-4) << h;  // float storage at 10 m (ulp 1e-6), not the method
+    EXPECT_LT((s.v - e.v).norm(), 2e-5) << h;
   }
 }
 

@@ -138,9 +138,15 @@ struct SurfaceContact {
 int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
                      SurfaceContact* out, int max_out);
 
-/// Impulse response of a particle against an immovable collider, see collider.cpp. Exposed for
-/// the tests of the critical-friction case.
+/// Is a contact with relative normal velocity vn (m/s, < 0 approaching) resting (§3.6.3): slower
+/// than contact_speed plus the inward part of one step's kick (kick_n, m/s, the normal component
+/// of the velocity the forces add over a step)?
+bool is_resting(double vn, double kick_n, double contact_speed);
+
+/// Impulse response of a particle against an immovable collider, see particle_response.cpp.
+/// `force_resting`: treat the contact as resting whatever its speed. Exposed for the tests of the
+/// critical-friction case.
 Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, double contact_speed,
-             const Vec3& kick);
+             const Vec3& kick, bool force_resting = false);
 
 }  // namespace simreel::sim::detail

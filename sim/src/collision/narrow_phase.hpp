@@ -6,6 +6,7 @@
 // time of contact. Triangles are two-sided: the face normal is taken on the side of the start
 // point. Private; header-only so the tests can check it against brute force.
 
+#include <algorithm>
 #include <cmath>
 
 #include "collision/bvh.hpp"
@@ -22,13 +23,23 @@ struct SweepHit {
 
 namespace np {
 
+/// (m) How deep a segment that starts on a surface must go into it to count as a contact: a
+/// particle moving along a face, or off a round surface along its tangent, is not re-hit at s = 0
+/// through the rounding of its start point (which would use up its contacts and stall it).
+inline constexpr double kSkin = 1e-9;
+
 /// First time s in [0, 1] at which a point m + s d enters the ball |x| <= rho, given
 /// A = |d|², B = m·d, C = |m|² - rho² (the closed form of a swept sphere against a vertex,
 /// an edge's axis or a sphere, Coutinho §3.5). A start inside (C <= 0) counts at s = 0 when it
-/// moves further in. Returns false when there is no such entry.
-inline bool first_entry(double A, double B, double C, double& s) {
+/// moves further in, deeper than kSkin somewhere along the segment. Returns false when there is
+/// no such entry.
+inline bool first_entry(double A, double B, double C, double rho, double& s) {
   if (!(B < 0.0)) return false;
   if (C <= 0.0) {
+    // |m + t d|² - rho² = C + 2 B t + A t², least at t* = -B / A (within [0, 1]); a depth delta
+    // below the surface is about 2 rho delta there.
+    const double t = A > 0.0 ? std::min(1.0, -B / A) : 1.0;
+    if (!(C + t * (2.0 * B + A * t) < -2.0 * rho * kSkin)) return false;
     s = 0.0;
     return true;
   }
@@ -45,7 +56,7 @@ inline void sweep_vertex(const Vec3& v, const Vec3& a, const Vec3& d, double r, 
   const Vec3 m = a - v;
   const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - r * r;
   double s;
-  if (!first_entry(A, B, C, s)) return;
+  if (!first_entry(A, B, C, r, s)) return;
   if (!(s < best.s)) return;
   const Vec3 p = a + s * d;
   const Vec3 off = p - v;
@@ -66,7 +77,7 @@ inline void sweep_edge(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3
   const Vec3 dp = d - (d.dot(e) / ee) * e;
   const double A = dp.squaredNorm(), B = mp.dot(dp), C = mp.squaredNorm() - r * r;
   double s;
-  if (!first_entry(A, B, C, s)) return;
+  if (!first_entry(A, B, C, r, s)) return;
   if (!(s < best.s)) return;
   const Vec3 p = a + s * d;
   const double u = (p - p0).dot(e) / ee;
@@ -97,6 +108,7 @@ inline void sweep_face(const Triangle& t, const Vec3& a, const Vec3& d, double r
     dd = -dd;
   }
   if (!(dd < 0.0)) return;  // not approaching
+  if (d0 <= r && !(r - (d0 + dd) > kSkin)) return;  // on the face, moving along it
   const double s = d0 > r ? (d0 - r) / -dd : 0.0;
   if (s > 1.0 || !(s < best.s)) return;
   Vec3 p = a + s * d;

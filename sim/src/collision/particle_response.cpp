@@ -24,14 +24,17 @@ namespace simreel::sim::detail {
 /// angle theta when mu_s >= tan theta, and otherwise slides with a = g (sin theta - mu_d cos theta).
 /// `kick` is the velocity one step of acceleration adds (g h for a particle lying on the floor):
 /// its normal part is not counted as impact speed, so resting is recognised at any step size.
+bool is_resting(double vn, double kick_n, double contact_speed) {
+  return -vn < contact_speed + std::max(0.0, -kick_n);
+}
+
 Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, double contact_speed,
-             const Vec3& kick) {
+             const Vec3& kick, bool force_resting) {
   const Vec3 vr = v - vc;
   const double vn = vr.dot(n);
   if (vn >= 0.0) return v;  // already separating
-  const double kick_n = std::max(0.0, -kick.dot(n));
   const double kick_t = (kick - kick.dot(n) * n).norm();
-  const bool resting = -vn < contact_speed + kick_n;
+  const bool resting = force_resting || is_resting(vn, kick.dot(n), contact_speed);
   double e = resting ? 0.0 : m.restitution;
   const Vec3 vt = vr - vn * n;
   const double vt_len = vt.norm();
@@ -75,15 +78,23 @@ Vec3 load_stored(const float* pf) {
   return Vec3(v[0], v[1], v[2]);
 }
 
-/// Where particle i was at the start of its step: stored (RK4) or, for semi-implicit Euler,
-/// recovered from x1 = x0 + dt v1 (within float rounding of x1, which surface_tol absorbs).
+/// (m/s²) The acceleration taken as constant over a particle's step, evaluated at its end
+/// velocity v1: gravity and the drag -k_d v1 / m (the forces semi-implicit Euler integrates).
+Vec3 step_acceleration(const ForceParams& f, double mass, const Vec3& v1) {
+  return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (double(f.drag) / mass) * v1;
+}
+
+/// Where particle i was at the start of its step: stored (the other integrators) or, for
+/// semi-implicit Euler, recovered from its position update x1 = x0 + dt v1 - dt²/2 a(v1) d²,
+/// d = 1 / (1 + dt k_d / m) (within float rounding of x1, which surface_tol absorbs).
 Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const Vec3& v1,
-                   double dt) {
+                   double dt, const ForceParams& f) {
   if (s.track_prev) {
     const float* q = &s.prev_position[3 * i];
     return Vec3(q[0], q[1], q[2]);
   }
-  return p1 - dt * v1;
+  const double m = s.mass[i], d = m / (m + dt * double(f.drag));
+  return p1 - dt * v1 + (0.5 * dt * dt * d * d) * step_acceleration(f, m, v1);
 }
 
 /// Droplets of a split hit (HitAction::split): see SplitOnHit.
@@ -109,17 +120,25 @@ void splash(const Material& m, const Vec3& contact, const Vec3& n, const Vec3& v
   }
 }
 
-/// The slow path for one particle that may touch something this step.
+/// The slow path for one particle that may touch something this step. The step is taken as
+/// one of constant acceleration A = g - k_d v1 / m (step_acceleration): a contact at fraction s
+/// of the swept segment happens at time s dt with the velocity v(s) = v1 - (1 - s) dt A, which
+/// the response reflects (§3.6.1); the remainder r = (1 - s) dt is then integrated with the
+/// forces, v = v' + r A and x = x_c + r (v' + v) / 2 (exact for a constant acceleration), so the
+/// energy of a bounce does not depend on where in the step it falls. A resting contact (§3.6.3)
+/// holds over the whole remainder: its normal velocity and acceleration are cancelled and the
+/// friction acts on the normal impulse of both (the response of the velocity at the end of the
+/// remainder), and the particle moves along the surface by the mean of its velocities.
 void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Collider>& colliders,
              CollisionContext& ctx, const ForceParams& f) {
   float* pf = &s.position[3 * i];
   float* vf = &s.velocity[3 * i];
   Vec3 b(pf[0], pf[1], pf[2]);
   Vec3 v(vf[0], vf[1], vf[2]);
-  Vec3 a = start_of_step(s, i, b, v, dt);
+  Vec3 a = start_of_step(s, i, b, v, dt, f);
   const double r = s.radius[i];
-  const double c_drag = double(f.drag) / double(s.mass[i]);
-  const Vec3 g(f.gravity[0], f.gravity[1], f.gravity[2]);
+  const Vec3 A = step_acceleration(f, s.mass[i], v);
+  const Vec3 kick = A * dt;  // the velocity one whole step of the forces adds
   bool dead = false;
 
   for (int contact = 0;; ++contact) {
@@ -132,22 +151,39 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
       mat.split = *ctx.on_hit_split;
     }
     const Vec3 vc = hit.collider->point_velocity(hit.point);
+    const double rest = (1.0 - hit.s) * dt;
+    const Vec3 v_hit = v - rest * A;  // the velocity at the time of impact
     if (mat.on_hit == HitAction::kill || mat.on_hit == HitAction::split) {
       if (mat.on_hit == HitAction::split)
-        splash(mat, hit.point, hit.normal, v - vc, vc, r, s.mass[i], ctx);
+        splash(mat, hit.point, hit.normal, v_hit - vc, vc, r, s.mass[i], ctx);
       dead = true;
       b = hit.point;
       break;
     }
-    const Vec3 kick = (g - c_drag * v) * dt;
-    v = respond(v, vc, hit.normal, mat, ctx.contact_speed, kick);
-    // The rest of the step with the new velocity against the collider held at its end pose
-    // (§3.4), never back into the surface just left. (Not relative to a moving collider: a
-    // particle at rest on a box sliding under it must stay where it is, not slide backwards.)
-    const double rest = (1.0 - hit.s) * dt;
-    Vec3 disp = rest * v;
-    const double dn = disp.dot(hit.normal);
-    if (dn < 0.0) disp -= dn * hit.normal;
+    const Vec3& n = hit.normal;
+    const double vn_hit = (v_hit - vc).dot(n);
+    const bool resting = is_resting(vn_hit, kick.dot(n), ctx.contact_speed) ||
+                         mat.on_hit == HitAction::stick;
+    Vec3 v0, v1;  // just after the impact, and at the end of the remainder
+    if (resting) {
+      // The contact holds for the remainder: one response to everything pressing in over it.
+      v1 = respond(v_hit + rest * A, vc, n, mat, ctx.contact_speed, kick, true);
+      const double vn0 = (v_hit - vc).dot(n);
+      v0 = vn0 < 0.0 ? Vec3(v_hit - vn0 * n) : v_hit;
+    } else {
+      v0 = respond(v_hit, vc, n, mat, ctx.contact_speed, kick, false);
+      v1 = v0 + rest * A;
+      // Gravity turning a weak bounce back within the remainder: it lies on the surface.
+      const double vn1 = (v1 - vc).dot(n);
+      if (vn1 < 0.0) v1 -= vn1 * n;
+    }
+    v = v1;
+    // The rest of the step against the collider held at its end pose (§3.4), never back into
+    // the surface just left. (Not relative to a moving collider: a particle at rest on a box
+    // sliding under it must stay where it is, not slide backwards.)
+    Vec3 disp = (0.5 * rest) * (v0 + v1);
+    const double dn = disp.dot(n);
+    if (dn < 0.0) disp -= dn * n;
     a = hit.point;
     dt = rest;
     if (contact + 1 == kMaxContacts) {
@@ -218,7 +254,7 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         near = c.normal.dot(p1 - c.point) - r < 0.0;
       } else {
         const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
-        const Vec3 p0 = start_of_step(s, i, p1, v1, dt);
+        const Vec3 p0 = start_of_step(s, i, p1, v1, dt, f);
         const Vec3 lo = p0.cwiseMin(p1) - c.aabb_center;
         const Vec3 hi = p0.cwiseMax(p1) - c.aabb_center;
         const Vec3 ext = c.aabb_half + Vec3::Constant(r + surface_tol(p1));

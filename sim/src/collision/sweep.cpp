@@ -12,7 +12,7 @@ namespace simreel::sim::detail {
 
 namespace {
 
-constexpr double kSkin = 1e-9;   // (m) penetration a plane sweep ignores (rounding, not motion)
+constexpr double kSkin = np::kSkin;  // (m) penetration a sweep ignores (rounding, not motion)
 
 /// Sphere of radius r moving a -> b against the plane offset by r (closed form, Coutinho §3.4
 /// with App. A's segment–plane intersection). A start point already below counts as a contact
@@ -61,6 +61,9 @@ void sweep_box(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& b
   }
   if (!(tmin < best.s)) return;
   const double sign = d[axis] > 0.0 ? -1.0 : 1.0;
+  // Moving along the face (or ending within the skin of it): not a contact. Depth is linear
+  // along the segment, so the end point's is the deepest.
+  if (!(E[axis] - sign * (la[axis] + d[axis]) > kSkin)) return;
   Vec3 lp = la + tmin * d;
   lp[axis] = sign * E[axis];
   best = Hit{tmin, Vec3(sign * c.R.col(axis)), Vec3(c.center + c.R * lp), &c};
@@ -85,7 +88,7 @@ void sweep_sphere(const Collider& c, const Vec3& a, const Vec3& b, double r, boo
   const double A = d.squaredNorm(), B = m.dot(d), C = m.squaredNorm() - Rg * Rg;
   if (C <= 0.0 && m.norm() < c.radius) return;  // inside the sphere itself: §3.4.2 removal
   double s;
-  if (!np::first_entry(A, B, C, s)) return;
+  if (!np::first_entry(A, B, C, Rg, s)) return;
   if (!(s < best.s)) return;
   const Vec3 n = c.R * (m + s * d).normalized();
   best = Hit{s, n, Vec3(c.center + Rg * n), &c};
@@ -128,6 +131,15 @@ void sweep_cylinder(const Collider& c, const Vec3& a, const Vec3& b, double r, b
     if (rho < c.radius && std::abs(la.z()) < c.half_height) return;  // inside: removal
     side = Rg - rho < Hg - std::abs(la.z());
     s = 0.0;
+    // It must go deeper than the skin past the surface it starts on: not along the top face
+    // (depth linear in s) nor off the round side along its tangent (least |.|² at -B / A).
+    if (side) {
+      const double t = A > 0.0 ? std::min(1.0, std::max(0.0, -B / A)) : 1.0;
+      if (!(C + t * (2.0 * B + A * t) < -2.0 * Rg * kSkin)) return;
+    } else {
+      const double zs = la.z() >= 0.0 ? 1.0 : -1.0;
+      if (!(Hg - zs * (la.z() + ld.z()) > kSkin)) return;
+    }
   }
   if (!(s < best.s)) return;
   Vec3 lp = la + s * ld;
@@ -164,7 +176,7 @@ void sweep_capsule(const Collider& c, const Vec3& a, const Vec3& b, double r, bo
   Vec3 axis_point = Vec3::Zero();  // the segment point the contact normal leaves from
   double s;
   if (np::first_entry(d.head<2>().squaredNorm(), m.head<2>().dot(d.head<2>()),
-                      m.head<2>().squaredNorm() - Rg * Rg, s) &&
+                      m.head<2>().squaredNorm() - Rg * Rg, Rg, s) &&
       std::abs(m.z() + s * d.z()) <= H) {
     s_best = s;
     axis_point = Vec3(0.0, 0.0, m.z() + s * d.z());
@@ -172,7 +184,8 @@ void sweep_capsule(const Collider& c, const Vec3& a, const Vec3& b, double r, bo
   for (const double z : {-H, H}) {
     const Vec3 e(0.0, 0.0, z);
     const Vec3 me = m - e;
-    if (np::first_entry(d.squaredNorm(), me.dot(d), me.squaredNorm() - Rg * Rg, s) && s < s_best) {
+    if (np::first_entry(d.squaredNorm(), me.dot(d), me.squaredNorm() - Rg * Rg, Rg, s) &&
+        s < s_best) {
       s_best = s;
       axis_point = e;
     }

@@ -45,6 +45,8 @@ void WorldState::build_dynamics(std::size_t index, bool interactions) {
   Dynamics& d = ps.dynamics;
   d.gravity = ps.def.gravity;
   d.drag = ps.def.drag;
+  d.max_speed = ps.forces.max_speed;
+  d.max_distance = ps.forces.max_distance;
   d.threads = threads;
   d.pair = ps.def.pair_forces;
   if (!interactions) d.pair.gravitational_G = d.pair.coulomb_K = 0.0;
@@ -80,19 +82,34 @@ void WorldState::non_finite(std::size_t index, std::size_t begin, std::size_t en
                             double t1) const {
   const ParticleSystemState& ps = systems.at(index);
   const ParticleStore& st = ps.store;
+  const float vmax = ps.forces.max_speed, xmax = ps.forces.max_distance;
   std::size_t i = begin;
+  bool finite = true;
   for (; i < end; ++i) {
-    bool ok = true;
-    for (int k = 0; k < 3; ++k)
-      ok = ok && std::isfinite(st.position[3 * i + std::size_t(k)]) &&
-           std::isfinite(st.velocity[3 * i + std::size_t(k)]);
-    if (!ok) break;
+    bool fin = true, bounded = true;
+    for (int k = 0; k < 3; ++k) {
+      const float x = st.position[3 * i + std::size_t(k)], v = st.velocity[3 * i + std::size_t(k)];
+      fin = fin && std::isfinite(x) && std::isfinite(v);
+      bounded = bounded && std::abs(x) <= xmax && std::abs(v) <= vmax;
+    }
+    if (!fin || !bounded) {
+      finite = fin;
+      break;
+    }
   }
   std::ostringstream m;
   m.precision(9);
-  m << "particle system '" << ps.def.name << "' (index " << index
-    << "): non-finite particle state";
-  if (i < end) m << " (particle id " << st.id[i] << ")";
+  m << "particle system '" << ps.def.name << "' (index " << index << "): ";
+  if (i < end && finite) {
+    const Vec3 x(st.position[3 * i], st.position[3 * i + 1], st.position[3 * i + 2]);
+    const Vec3 v(st.velocity[3 * i], st.velocity[3 * i + 1], st.velocity[3 * i + 2]);
+    m << "diverged (particle id " << st.id[i] << " at |x| = " << x.norm() << " m, |v| = "
+      << v.norm() << " m/s; bounds simulation.max_distance = " << xmax
+      << " m, simulation.max_speed = " << vmax << " m/s per component)";
+  } else {
+    m << "non-finite particle state";
+    if (i < end) m << " (particle id " << st.id[i] << ")";
+  }
   m << " at internal step " << steps + 1 << ", t = " << t1 << " s";
   throw NonFiniteState(m.str());
 }

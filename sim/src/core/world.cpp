@@ -20,6 +20,8 @@ namespace detail {
 void validate(const WorldDef& def) {
   require_in(def.max_step, ranges::kWorldMaxStep, "WorldDef.max_step");
   require_in(def.contact_speed, ranges::kWorldContactSpeed, "WorldDef.contact_speed");
+  require_in(def.max_speed, ranges::kWorldMaxSpeed, "WorldDef.max_speed");
+  require_in(def.max_distance, ranges::kWorldMaxDistance, "WorldDef.max_distance");
 }
 
 }  // namespace detail
@@ -72,6 +74,8 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   ps.split_rng = Rng(impl_->def.seed, (std::uint64_t{1} << 32) + index);
   for (int k = 0; k < 3; ++k) ps.forces.gravity[k] = float(def.gravity[k]);
   ps.forces.drag = float(def.drag);
+  ps.forces.max_speed = float(impl_->def.max_speed);
+  ps.forces.max_distance = float(impl_->def.max_distance);
   // Initial particles: ids 0..k-1, immortal; springs between them by index = id.
   for (const InitialParticle& p : def.initial_particles) {
     detail::ParticleStore& st = ps.store;

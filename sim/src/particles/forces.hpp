@@ -44,6 +44,8 @@ struct Dynamics {
   const double* charge = nullptr;   // (n) or nullptr
   Vec3 gravity = Vec3::Zero();
   double drag = 0.0;
+  double max_speed = 1e4;      ///< (m/s) divergence bound on each velocity component
+  double max_distance = 1e6;   ///< (m) divergence bound on each coordinate
   PairForceDef pair;
   std::vector<FieldState*> fields;
   std::vector<Spring> springs;

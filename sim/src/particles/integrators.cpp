@@ -45,7 +45,10 @@ void rk4_step(Dynamics& dyn, double t, double h, const double* x, const double* 
 }
 
 /// Linearised backward Euler (Baraff & Witkin 1998; Coutinho App. B, implicit Euler):
-///   (M - h ∂f/∂v - h² ∂f/∂x) Δv = h (f + h ∂f/∂x v),  v += Δv,  x += h v.
+///   (M - h ∂f/∂v - h² ∂f/∂x) Δv = h (f + h ∂f/∂x v),  v += Δv,  x += h v - h²/2 (g - k_d v / m) d²
+/// with d = 1 / (1 + h k_d / m).
+/// The last term (as in semi-implicit Euler) makes free flight exact for a constant acceleration
+/// and vanishes at the terminal velocity; it is a constant offset for the springs' stability.
 /// ∂f/∂x and ∂f/∂v come from the springs (the transverse term of a compressed spring is dropped,
 /// which keeps the matrix symmetric positive definite for conjugate gradients), the drag and the
 /// attractor springs; fields and pair forces are taken explicitly (only in f).
@@ -77,7 +80,8 @@ void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v
         const std::size_t c = 3 * i + std::size_t(k);
         const double b = h * (m * a[c] - h * ks_diag[i] * v[c]);
         v[c] += b / d;
-        x[c] += h * v[c];
+        const double dd = m / (m + h * dyn.drag);
+        x[c] += h * v[c] - 0.5 * h * h * (dyn.gravity[k] - dyn.drag / m * v[c]) * dd * dd;
       }
     }
     return;
@@ -127,7 +131,8 @@ void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v
   const Eigen::VectorXd dv = cg.solve(rhs);
   for (std::size_t c = 0; c < 3 * n; ++c) {
     v[c] += dv[Eigen::Index(c)];
-    x[c] += h * v[c];
+    const double m = dyn.mass[c / 3], dd = m / (m + h * dyn.drag);
+    x[c] += h * v[c] - 0.5 * h * h * (dyn.gravity[int(c % 3)] - dyn.drag / m * v[c]) * dd * dd;
   }
 }
 
@@ -179,14 +184,18 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
       break;
     }
     case Integrator::semi_implicit_euler: {
-      // Drag at the new velocity (see Integrator::semi_implicit_euler), the rest explicit.
+      // Drag at the new velocity (see Integrator::semi_implicit_euler), the rest explicit; the
+      // position takes -h²/2 (g - k_d v' / m) d², exact for a constant acceleration (the springs,
+      // fields and pair forces stay symplectic Euler: their stability is unchanged).
       dyn.eval(t0, x, v, w.a1.data(), false);
 #pragma omp parallel for schedule(static) num_threads(th) if (par)
       for (std::size_t i = 0; i < n; ++i) {
-        const double damp = 1.0 / (1.0 + h * dyn.drag / w.m[i]);
+        const double c = dyn.drag / w.m[i];
+        const double damp = 1.0 / (1.0 + h * c);
         for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
           v[k] = (v[k] + h * w.a1[k]) * damp;
-          x[k] += h * v[k];
+          const double g = dyn.gravity[int(k - 3 * i)];
+          x[k] += h * v[k] - 0.5 * h * h * (g - c * v[k]) * damp * damp;
         }
       }
       ++state.substeps;
@@ -255,8 +264,8 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
   float* __restrict pv = s.velocity.data() + 3 * begin;
 #pragma omp parallel for schedule(static) num_threads(th) reduction(| : bad) if (par)
   for (std::size_t k = 0; k < m; ++k) {
-    bad |= unsigned(!(std::abs(x[k]) <= double(FLT_MAX))) |
-           unsigned(!(std::abs(v[k]) <= double(FLT_MAX)));
+    bad |= unsigned(!(std::abs(x[k]) <= dyn.max_distance)) |
+           unsigned(!(std::abs(v[k]) <= dyn.max_speed));
     px[k] = float(x[k]);
     pv[k] = float(v[k]);
   }

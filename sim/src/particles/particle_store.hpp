@@ -51,6 +51,10 @@ struct ParticleStore {
 struct ForceParams {
   float gravity[3];
   float drag;  ///< k_d (kg/s)
+  /// Divergence bounds (WorldDef): a velocity component beyond max_speed (m/s) or a coordinate
+  /// beyond max_distance (m), like NaN and inf, makes the integrators report a bad state.
+  float max_speed = 1e4f;
+  float max_distance = 1e6f;
 };
 
 /// The fast path for gravity + drag only (semi_implicit_euler or rk4): advances particles

@@ -124,10 +124,13 @@ ParticleView ParticleStore::view() const {
 namespace {
 
 /// Semi-implicit (symplectic) Euler, Coutinho App. B / §3.3 — with the drag taken at the new
-/// velocity:  v' = (v + h g) / (1 + h k_d / m);  x' = x + h v'.  Explicit drag multiplies v by
-/// (1 - h k_d / m) each step, which diverges once h k_d / m > 2 (a light particle drawn near its
-/// mass floor in heavy drag); the implicit form is stable for any drag, keeps the exact terminal
-/// velocity m g / k_d as its fixed point, and stays first order.
+/// velocity:  v' = (v + h g) / (1 + h k_d / m);  x' = x + h v' - h²/2 (g - k_d v' / m) d² with
+/// d = 1 / (1 + h k_d / m). Explicit drag multiplies v by (1 - h k_d / m) each step, which
+/// diverges once h k_d / m > 2 (a light particle drawn near its mass floor in heavy drag); the
+/// implicit form is stable for any drag and keeps the exact terminal velocity m g / k_d as its
+/// fixed point. The position term -h²/2 a(v') d² makes a ballistic arc exact (x' = x + h v +
+/// h² g / 2 without drag), is zero at the terminal velocity, and fades (d²) where the drag is
+/// stiff, so a heavily damped transient still moves by about v0 m / k_d.
 /// Chunks of particles are processed as flat float arrays (x and v are (n x 3) interleaved), with
 /// the gravity and drag terms spread to a per-float pattern first, so the main loop is a plain
 /// element-wise loop the compiler vectorises without shuffles. Float throughout: the method's
@@ -140,9 +143,14 @@ unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t en
   float* __restrict v = s.velocity.data();
   float* __restrict age = s.age.data();
   const float* __restrict m = s.mass.data();
-  alignas(16) float hg[3 * kChunk];  // h g, repeating x y z
-  for (std::size_t j = 0; j < 3 * kChunk; ++j) hg[j] = h * f.gravity[j % 3];
+  alignas(16) float hg[3 * kChunk];   // h g, repeating x y z
+  alignas(16) float hhg[3 * kChunk];  // h² g / 2, repeating x y z
+  for (std::size_t j = 0; j < 3 * kChunk; ++j) {
+    hg[j] = h * f.gravity[j % 3];
+    hhg[j] = 0.5f * h * h * f.gravity[j % 3];
+  }
   const float hk = h * f.drag;
+  const float vmax = f.max_speed, xmax = f.max_distance;
 
   unsigned bad = 0;
   for (std::size_t i0 = begin; i0 < end; i0 += kChunk) {
@@ -150,20 +158,34 @@ unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t en
     float* __restrict xb = x + 3 * i0;
     float* __restrict vb = v + 3 * i0;
     alignas(16) float damp3[3 * kChunk];  // m / (m + h k_d) = 1 / (1 + h k_d / m), per float
+    alignas(16) float hv3[3 * kChunk];    // h + h² (k_d / 2m) damp²: x' = x + hv3 v' - hhg3
+    alignas(16) float hhg3[3 * kChunk];   // h² g damp² / 2
     if constexpr (kDrag) {
       alignas(16) float damp[kChunk];
       for (std::size_t k = 0; k < n; ++k) damp[k] = m[i0 + k] / (m[i0 + k] + hk);
-      for (std::size_t k = 0; k < n; ++k)
-        damp3[3 * k] = damp3[3 * k + 1] = damp3[3 * k + 2] = damp[k];
+      for (std::size_t k = 0; k < n; ++k) {
+        const float d2 = damp[k] * damp[k];
+        const float hv = h + 0.5f * h * hk / m[i0 + k] * d2;
+        for (std::size_t c = 3 * k; c < 3 * k + 3; ++c) {
+          damp3[c] = damp[k];
+          hv3[c] = hv;
+          hhg3[c] = hhg[c] * d2;
+        }
+      }
     }
     for (std::size_t j = 0; j < 3 * n; ++j) {
       float vv = vb[j] + hg[j];
-      if constexpr (kDrag) vv = vv * damp3[j];
-      const float xx = xb[j] + h * vv;
+      float xx;
+      if constexpr (kDrag) {
+        vv = vv * damp3[j];
+        xx = xb[j] + hv3[j] * vv - hhg3[j];
+      } else {
+        xx = xb[j] + h * vv - hhg[j];
+      }
       vb[j] = vv;
       xb[j] = xx;
-      // Not (|.| <= FLT_MAX): true for inf and NaN; a compare the loop vectorises.
-      bad |= unsigned(!(std::fabs(vv) <= FLT_MAX)) | unsigned(!(std::fabs(xx) <= FLT_MAX));
+      // Not (|.| <= bound): true for inf, NaN and a blow-up; a compare the loop vectorises.
+      bad |= unsigned(!(std::fabs(vv) <= vmax)) | unsigned(!(std::fabs(xx) <= xmax));
     }
     for (std::size_t k = 0; k < n; ++k) age[i0 + k] += h;
   }
@@ -198,8 +220,9 @@ inline unsigned rk4_one(float* x, float* v, double m, double h, const ForceParam
     }
     v[j] = float(vj);
     x[j] = float(xj);
-    // Checked on the doubles: NaN, inf, or too large for float storage.
-    bad |= unsigned(!(std::abs(vj) <= double(FLT_MAX)) || !(std::abs(xj) <= double(FLT_MAX)));
+    // Checked on the doubles: NaN, inf, or beyond the divergence bounds.
+    bad |= unsigned(!(std::abs(vj) <= double(f.max_speed)) ||
+                    !(std::abs(xj) <= double(f.max_distance)));
   }
   return bad;
 }
@@ -247,13 +270,15 @@ bool integrate_one(ParticleStore& s, std::size_t i, double dt, const ForceParams
   const float h = float(dt);
   const bool drag = f.drag != 0.0f;
   const float damp = drag ? s.mass[i] / (s.mass[i] + h * f.drag) : 1.0f;
+  const float d2 = damp * damp;
+  const float hv = drag ? h + 0.5f * h * (h * f.drag) / s.mass[i] * d2 : h;
   unsigned bad = 0;
   for (int j = 0; j < 3; ++j) {
     float vv = v[j] + h * f.gravity[j];
     if (drag) vv = vv * damp;
     v[j] = vv;
-    x[j] = x[j] + h * vv;
-    bad |= unsigned(!(std::fabs(v[j]) <= FLT_MAX)) | unsigned(!(std::fabs(x[j]) <= FLT_MAX));
+    x[j] = x[j] + hv * vv - 0.5f * h * h * f.gravity[j] * d2;
+    bad |= unsigned(!(std::fabs(v[j]) <= f.max_speed)) | unsigned(!(std::fabs(x[j]) <= f.max_distance));
   }
   return bad != 0;
 }

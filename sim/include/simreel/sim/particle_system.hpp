@@ -19,9 +19,11 @@ namespace simreel::sim {
 /// ODE integrators (Coutinho Appendix B). All of them advance the whole system at once through
 /// one shared force evaluation (springs, fields and pair forces work with every one of them).
 enum class Integrator {
-  semi_implicit_euler,  ///< v += a h; x += v h (symplectic, first order; the default). Drag is
-                        ///< taken at the new velocity, v = (v + a' h) / (1 + h k_d / m) with a'
-                        ///< every other acceleration, so it is stable for any drag and mass
+  semi_implicit_euler,  ///< v += a h; x += v h - h²/2 (g - k_d v / m) d², d = 1 / (1 + h k_d / m)
+                        ///< Drag is taken at the new velocity, v = (v + a' h) / (1 + h k_d / m)
+                        ///< with a' every other acceleration, so it is stable for any drag and
+                        ///< mass (the default); the position term makes ballistic arcs exact (x += h v0 +
+                        ///< h² g / 2) and vanishes at the terminal velocity
   rk4,                  ///< classical fourth-order Runge–Kutta on (x, v); with gravity + drag
                         ///< only, a particle with h k_d / m > 0.5 takes ceil(2 h k_d / m)
                         ///< sub-steps (explicit RK4 diverges past 2.78)
