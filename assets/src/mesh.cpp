@@ -70,6 +70,15 @@ std::uint64_t address_space_in_use() {
 class AddressSpaceBudget {
  public:
   explicit AddressSpaceBudget(std::uint64_t budget) {
+#if defined(__SANITIZE_ADDRESS__)
+    // AddressSanitizer reserves terabytes of shadow address space and must grow it freely: an
+    // address-space cap makes every later allocation fail. Sanitizer builds import uncapped.
+    return;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+    return;  // clang's spelling of the same check
+#endif
+#endif
     const std::uint64_t used = address_space_in_use();
     if (used == 0 || ::getrlimit(RLIMIT_AS, &old_) != 0 || old_.rlim_cur != RLIM_INFINITY) return;
     rlimit capped = old_;
