@@ -176,6 +176,7 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   emitter_extras(r, em);
   s.gravity = to_vec(r.vec3("gravity", {gravity.x(), gravity.y(), gravity.z()}));
   s.drag = r.number("drag", 0.0, ranges::kSystemDrag);
+  s.drag_quadratic = r.number("drag_quadratic", 0.0, ranges::kSystemDragQuadratic);
   particle_forces(r, s);  // integrator, tolerance, charge, pair_forces, initial_particles, springs
   s.collide = r.boolean("collide", true);
   // Particle–particle collisions (Coutinho §2.3.1, §3.6.1–3.6.2).

@@ -193,15 +193,16 @@ Derived fire_smoke(const json& k, const std::string& name) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Rain (§3.9.1): an emitter surface covering the area; gravity plus viscous drag give a
-// constant fall speed v_t = m g / k_d; intensity and drop size set count and mass.
+// Rain (§3.9.1): an emitter surface covering the area; gravity plus quadratic air drag
+// c_2 = ½ ρ_air C_d π r² (sphere, C_d = 0.47, ρ_air = 1.225 kg/m³) give the fall speed
+// v_t = √(m g / c_2); intensity and drop size set count and mass.
 
 Derived rain(const json& k, const std::string& name, double g) {
   Derived d;
   const double dmm = num(k, "drop_diameter_mm");
   const double m = drop_mass(dmm);
-  const double vt = raindrop_terminal_velocity(dmm);
-  const double kd = drag_for_terminal_velocity(m, vt, g);
+  const double c2 = sphere_quadratic_drag(dmm);
+  const double vt = std::sqrt(m * g / c2);
   const auto area = vec3(k, "area_m");
   const auto c = vec3(k, "center");
   const auto w = vec3(k, "wind_m_s");
@@ -227,7 +228,7 @@ Derived rain(const json& k, const std::string& name, double g) {
             // Drawn radius: a real 2 mm drop is under a pixel at video sizes; the streak (motion
             // blur over streak_s seconds, about a camera shutter) carries it.
             {"particle_radius", dist(0.5 * dmm * 1e-3 * 3.0, 0.0)},
-            {"drag", kd},
+            {"drag_quadratic", c2},
             {"color", json::array({0.80, 0.85, 0.95, 0.75})},
             {"render_style", "streak"},
             {"streak_s", 0.045},
@@ -245,11 +246,15 @@ Derived rain(const json& k, const std::string& name, double g) {
     e["on_hit"] = "kill";  // drops soak in
   }
   d.emitters.push_back(e);
-  // Wind: a uniform force k_d w makes the terminal velocity w + m g / k_d (drag relative to air).
-  if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0)
+  // Wind: the drag acts on the ground-frame velocity, so a uniform force
+  // F = c_2 |v*| v* - m g_vec makes v* = (w_x, w_y, w_z - v_t) (the drop drifting with the air at
+  // its still-air fall speed) the steady velocity: horizontally c_2 |v*| w.
+  if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) {
+    const double s = c2 * speed;
     d.force_fields.push_back({{"type", "uniform"},
-                              {"force", json::array({kd * w[0], kd * w[1], kd * w[2]})},
+                              {"force", json::array({s * v[0], s * v[1], s * v[2] + m * g})},
                               {"systems", json::array({name})}});
+  }
   return d;
 }
 

@@ -30,6 +30,13 @@ double drag_for_terminal_velocity(double mass, double terminal_speed, double g) 
   return mass * g / terminal_speed;
 }
 
+double sphere_quadratic_drag(double diameter_mm, double air_density, double drag_coefficient) {
+  if (!(diameter_mm > 0.0) || !(air_density > 0.0) || !(drag_coefficient > 0.0))
+    bad("sphere_quadratic_drag: expected diameter_mm, air_density and drag_coefficient > 0");
+  const double r = 0.5e-3 * diameter_mm;
+  return 0.5 * air_density * drag_coefficient * 3.14159265358979323846 * r * r;
+}
+
 double rain_drops_per_m2_s(double intensity_mm_h, double diameter_mm) {
   if (!(intensity_mm_h > 0.0) || !(diameter_mm > 0.0))
     bad("rain_drops_per_m2_s: expected intensity_mm_h > 0 and diameter_mm > 0");

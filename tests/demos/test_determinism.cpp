@@ -100,7 +100,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"fountain", 0xd4671e765a7bda8aull},
       {"jet", 0x32e133308e45664full},
       {"pour", 0x2e0974bddbb765a4ull},
-      {"rain", 0x53558a8fb1378b91ull},
+      {"rain", 0xb2c0900519690b5full},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
       {"shells", 0x003602055f40fe62ull},
       {"smoke", 0x40ec5f645362abb2ull},

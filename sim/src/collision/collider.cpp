@@ -34,6 +34,43 @@ bool MeshShape::contains(const Vec3& p) const {
 
 namespace {
 
+/// Squared distance from p to triangle t (closest point by Voronoi regions, Ericson 2005 §5.1.5).
+double distance2_to_triangle(const Triangle& t, const Vec3& p) {
+  const Vec3 ab = t.b - t.a, ac = t.c - t.a, ap = p - t.a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return ap.squaredNorm();
+  const Vec3 bp = p - t.b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - (d1 / (d1 - d3)) * ab).squaredNorm();
+  const Vec3 cp = p - t.c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - (d2 / (d2 - d6)) * ac).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return (bp - ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (t.c - t.b)).squaredNorm();
+  const double den = va + vb + vc;
+  if (!(den != 0.0)) return std::min({ap.squaredNorm(), bp.squaredNorm(), cp.squaredNorm()});
+  const double v = vb / den, w = vc / den;
+  return (ap - v * ab - w * ac).squaredNorm();
+}
+
+}  // namespace
+
+bool MeshShape::near_surface(const Vec3& p, double tol) const {
+  const Vec3 e = Vec3::Constant(tol);
+  bool near = false;
+  bvh.query(p - e, p + e, [&](std::uint32_t t) {
+    near = near || distance2_to_triangle(triangles[t], p) <= tol * tol;
+  });
+  return near;
+}
+
+namespace {
+
 [[nodiscard]] bool is_identity(const Quat& q) {
   return q.x() == 0.0 && q.y() == 0.0 && q.z() == 0.0 && q.w() == 1.0;
 }

@@ -28,6 +28,9 @@ struct MeshShape {
   Vec3 local_half = Vec3::Zero();
   /// Parity of crossings of a fixed, slightly oblique ray from p (local frame): inside a closed mesh.
   [[nodiscard]] bool contains(const Vec3& p) const;
+  /// Is p (local frame) within `tol` (m) of some triangle? (§3.4.2: a point on the surface, within
+  /// float rounding, is not inside.)
+  [[nodiscard]] bool near_surface(const Vec3& p, double tol) const;
 };
 
 /// One shape of a body at run time, posed in the world: geometry in the shape frame, material,

@@ -81,7 +81,8 @@ Vec3 load_stored(const float* pf) {
 /// (m/s²) The acceleration taken as constant over a particle's step, evaluated at its end
 /// velocity v1: gravity and the drag -k_d v1 / m (the forces semi-implicit Euler integrates).
 Vec3 step_acceleration(const ForceParams& f, double mass, const Vec3& v1) {
-  return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (double(f.drag) / mass) * v1;
+  return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) -
+         ((double(f.drag) + double(f.drag_quadratic) * v1.norm()) / mass) * v1;
 }
 
 /// Where particle i was at the start of its step: stored (the other integrators) or, for
@@ -93,7 +94,8 @@ Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const 
     const float* q = &s.prev_position[3 * i];
     return Vec3(q[0], q[1], q[2]);
   }
-  const double m = s.mass[i], d = m / (m + dt * double(f.drag));
+  const double m = s.mass[i],
+               d = m / (m + dt * (double(f.drag) + double(f.drag_quadratic) * v1.norm()));
   return p1 - dt * v1 + (0.5 * dt * dt * d * d) * step_acceleration(f, m, v1);
 }
 

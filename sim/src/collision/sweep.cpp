@@ -231,18 +231,29 @@ void sweep(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first
 
 bool inside_solid(const Collider& c, const Vec3& p) {
   switch (c.shape) {
-    case Collider::Shape::sphere: return (p - c.center).squaredNorm() < c.radius * c.radius;
+    case Collider::Shape::sphere: {
+      const double tol = inside_tol(p, c.radius);
+      const double ri = c.radius - tol;
+      return ri > 0.0 && (p - c.center).squaredNorm() < ri * ri;
+    }
     case Collider::Shape::cylinder: {
+      const double tol = inside_tol(p, std::max(c.radius, c.half_height));
       const Vec3 l = c.R.transpose() * (p - c.center);
-      return l.head<2>().squaredNorm() < c.radius * c.radius && std::abs(l.z()) < c.half_height;
+      const double ri = c.radius - tol;
+      return ri > 0.0 && l.head<2>().squaredNorm() < ri * ri && std::abs(l.z()) < c.half_height - tol;
     }
     case Collider::Shape::capsule: {
+      const double tol = inside_tol(p, c.radius + c.half_height);
       const Vec3 l = c.R.transpose() * (p - c.center);
       const double z = std::clamp(l.z(), -c.half_height, c.half_height);
-      return (l - Vec3(0.0, 0.0, z)).squaredNorm() < c.radius * c.radius;
+      const double ri = c.radius - tol;
+      return ri > 0.0 && (l - Vec3(0.0, 0.0, z)).squaredNorm() < ri * ri;
     }
-    case Collider::Shape::mesh:
-      return c.mesh->closed && c.mesh->contains(c.R.transpose() * (p - c.center));
+    case Collider::Shape::mesh: {
+      if (!c.mesh->closed) return false;
+      const Vec3 l = c.R.transpose() * (p - c.center);
+      return c.mesh->contains(l) && !c.mesh->near_surface(l, inside_tol(p, c.mesh->local_half.norm()));
+    }
     default: return false;
   }
 }

@@ -45,6 +45,7 @@ void WorldState::build_dynamics(std::size_t index, bool interactions) {
   Dynamics& d = ps.dynamics;
   d.gravity = ps.def.gravity;
   d.drag = ps.def.drag;
+  d.drag_quadratic = ps.def.drag_quadratic;
   d.max_speed = ps.forces.max_speed;
   d.max_distance = ps.forces.max_distance;
   d.threads = threads;

@@ -74,6 +74,7 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   ps.split_rng = Rng(impl_->def.seed, (std::uint64_t{1} << 32) + index);
   for (int k = 0; k < 3; ++k) ps.forces.gravity[k] = float(def.gravity[k]);
   ps.forces.drag = float(def.drag);
+  ps.forces.drag_quadratic = float(def.drag_quadratic);
   ps.forces.max_speed = float(impl_->def.max_speed);
   ps.forces.max_distance = float(impl_->def.max_distance);
   // Initial particles: ids 0..k-1, immortal; springs between them by index = id.

@@ -401,6 +401,7 @@ void validate(const ParticleSystemDef& def) {
   const EmitterDef& e = def.emitter;
   if (!def.gravity.allFinite()) fail(sys + ": gravity must be finite");
   require_in(def.drag, ranges::kSystemDrag, sys + ": drag");
+  require_in(def.drag_quadratic, ranges::kSystemDragQuadratic, sys + ": drag_quadratic");
   if (e.shape == EmitterShape::disk) {
     require_in(e.disk_radius, ranges::kEmitterSize, sys + ": emitter.disk_radius");
   } else if (e.shape == EmitterShape::quad) {

@@ -91,7 +91,7 @@ void Dynamics::eval(double t, const double* x, const double* v, double* a, bool 
   const bool has_fields = !fields.empty();
 #pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
   for (std::size_t i = 0; i < n; ++i) {
-    const double c = with_drag ? drag / mass[i] : 0.0;
+    const double c = with_drag ? drag_at(v + 3 * i) / mass[i] : 0.0;
     double ax = g0 - c * v[3 * i], ay = g1 - c * v[3 * i + 1], az = g2 - c * v[3 * i + 2];
     if (has_fields) {
       const Vec3 xi(x[3 * i], x[3 * i + 1], x[3 * i + 2]);

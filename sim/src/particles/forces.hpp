@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cmath>
 #include <vector>
 
 #include "particles/noise.hpp"
@@ -44,6 +45,7 @@ struct Dynamics {
   const double* charge = nullptr;   // (n) or nullptr
   Vec3 gravity = Vec3::Zero();
   double drag = 0.0;
+  double drag_quadratic = 0.0;  ///< c_2 (kg/m): F = -c_2 |v| v
   double max_speed = 1e4;      ///< (m/s) divergence bound on each velocity component
   double max_distance = 1e6;   ///< (m) divergence bound on each coordinate
   PairForceDef pair;
@@ -52,9 +54,16 @@ struct Dynamics {
   std::vector<Pull> pulls;
   int threads = 1;
 
-  /// a (n x 3) = accelerations at time t for positions x and velocities v (n x 3 each). Linear
-  /// drag -k_d v / m is included only when `with_drag` (semi-implicit Euler takes it implicitly).
+  /// a (n x 3) = accelerations at time t for positions x and velocities v (n x 3 each). The drag
+  /// -(k_d + c_2 |v|) v / m is included only when `with_drag` (semi-implicit Euler takes it
+  /// implicitly).
   void eval(double t, const double* x, const double* v, double* a, bool with_drag);
+
+  /// (kg/s) The effective linear drag coefficient k_d + c_2 |v| at velocity v.
+  [[nodiscard]] double drag_at(const double* v3) const {
+    if (drag_quadratic == 0.0) return drag;
+    return drag + drag_quadratic * std::sqrt(v3[0] * v3[0] + v3[1] * v3[1] + v3[2] * v3[2]);
+  }
 
   /// Pair-force accelerations only, added to a (for tests through eval).
   void add_pair_forces(const double* x, double* a);
@@ -66,6 +75,16 @@ struct Dynamics {
   std::vector<std::uint64_t> cell_keys_;    // occupied cells' keys, increasing
   std::vector<std::uint32_t> cell_start_;   // first particle (in order_) of each cell, + n
 };
+
+/// The velocity factor of a step with the drag taken at the new velocity v' = u d,
+/// v' = u / (1 + h (k_d + c_2 |v'|) / m): with a = 1 + h k_d / m, b = h c_2 / m and s = |u|,
+/// |v'| solves a |v'| + b |v'|² = s, so d = 2 / (a + √(a² + 4 b s)) (no cancellation; 1 / a when
+/// c_2 = 0). Stable for any drag (0 < d <= 1) and the terminal speed √(m g / c_2) is its exact
+/// fixed point.
+inline double quadratic_drag_damp(double h, double m, double kd, double c2, double s) {
+  const double a = 1.0 + h * kd / m, b = h * c2 / m;
+  return 2.0 / (a + std::sqrt(a * a + 4.0 * b * s));
+}
 
 /// Validation of the force-related definitions: std::invalid_argument naming the field.
 void validate_forces(const ParticleSystemDef& def);

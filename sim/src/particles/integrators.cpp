@@ -61,7 +61,9 @@ void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v
   Vec& ks_diag = w.a2;  // reuse scratch: first n entries
   Vec& kd_diag = w.a3;
   std::fill(ks_diag.begin(), ks_diag.begin() + std::ptrdiff_t(n), 0.0);
-  std::fill(kd_diag.begin(), kd_diag.begin() + std::ptrdiff_t(n), dyn.drag);
+  // The quadratic drag enters the damping as its secant coefficient c_2 |v| (its full force is
+  // in a, so the terminal speed stays the fixed point).
+  for (std::size_t i = 0; i < n; ++i) kd_diag[i] = dyn.drag_at(v + 3 * i);
   for (const Dynamics::Pull& p : dyn.pulls) {
     auto add = [&](std::size_t i) {
       ks_diag[i] += p.def->stiffness;
@@ -80,8 +82,11 @@ void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v
         const std::size_t c = 3 * i + std::size_t(k);
         const double b = h * (m * a[c] - h * ks_diag[i] * v[c]);
         v[c] += b / d;
-        const double dd = m / (m + h * dyn.drag);
-        x[c] += h * v[c] - 0.5 * h * h * (dyn.gravity[k] - dyn.drag / m * v[c]) * dd * dd;
+      }
+      const double kd = dyn.drag_at(v + 3 * i), dd = m / (m + h * kd);
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t c = 3 * i + std::size_t(k);
+        x[c] += h * v[c] - 0.5 * h * h * (dyn.gravity[k] - kd / m * v[c]) * dd * dd;
       }
     }
     return;
@@ -129,10 +134,10 @@ void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v
   cg.setTolerance(1e-12);
   cg.compute(A);
   const Eigen::VectorXd dv = cg.solve(rhs);
+  for (std::size_t c = 0; c < 3 * n; ++c) v[c] += dv[Eigen::Index(c)];
   for (std::size_t c = 0; c < 3 * n; ++c) {
-    v[c] += dv[Eigen::Index(c)];
-    const double m = dyn.mass[c / 3], dd = m / (m + h * dyn.drag);
-    x[c] += h * v[c] - 0.5 * h * h * (dyn.gravity[int(c % 3)] - dyn.drag / m * v[c]) * dd * dd;
+    const double m = dyn.mass[c / 3], kd = dyn.drag_at(v + 3 * (c / 3)), dd = m / (m + h * kd);
+    x[c] += h * v[c] - 0.5 * h * h * (dyn.gravity[int(c % 3)] - kd / m * v[c]) * dd * dd;
   }
 }
 
@@ -190,8 +195,17 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
       dyn.eval(t0, x, v, w.a1.data(), false);
 #pragma omp parallel for schedule(static) num_threads(th) if (par)
       for (std::size_t i = 0; i < n; ++i) {
-        const double c = dyn.drag / w.m[i];
-        const double damp = 1.0 / (1.0 + h * c);
+        double c = dyn.drag / w.m[i];
+        double damp = 1.0 / (1.0 + h * c);
+        if (dyn.drag_quadratic != 0.0) {
+          // v' = u / (1 + h (k_d + c_2 |v'|) / m), u = v + h a: |v'| solves a quadratic.
+          double u[3];
+          for (int k = 0; k < 3; ++k) u[k] = v[3 * i + std::size_t(k)] + h * w.a1[3 * i + std::size_t(k)];
+          damp = quadratic_drag_damp(h, w.m[i], dyn.drag, dyn.drag_quadratic,
+                                     std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+          const double s1 = damp * std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+          c = (dyn.drag + dyn.drag_quadratic * s1) / w.m[i];
+        }
         for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
           v[k] = (v[k] + h * w.a1[k]) * damp;
           const double g = dyn.gravity[int(k - 3 * i)];

@@ -47,10 +47,12 @@ struct ParticleStore {
   [[nodiscard]] ParticleView view() const;
 };
 
-/// Gravity + viscous drag parameters of a system (§3.3.1–3.3.2): a = g - (k_d / m) v.
+/// Gravity + viscous and quadratic drag parameters of a system (§3.3.1–3.3.2):
+/// a = g - (k_d + c_2 |v|) v / m.
 struct ForceParams {
   float gravity[3];
   float drag;  ///< k_d (kg/s)
+  float drag_quadratic = 0.0f;  ///< c_2 (kg/m): F = -c_2 |v| v
   /// Divergence bounds (WorldDef): a velocity component beyond max_speed (m/s) or a coordinate
   /// beyond max_distance (m), like NaN and inf, makes the integrators report a bad state.
   float max_speed = 1e4f;

@@ -192,12 +192,84 @@ unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t en
   return bad;
 }
 
+/// Semi-implicit Euler with quadratic drag (c_2 != 0): as above with the drag taken at the new
+/// velocity, v' = (v + h g) d, d = 1 / (1 + h (k_d + c_2 |v'|) / m) solved in closed form
+/// (quadratic_drag_damp, float here), and x' = x + h v' - h²/2 (g - (k_d + c_2 |v'|) v' / m) d².
+/// Exact for a constant acceleration, stable for any drag, and the terminal speed √(m g / c_2)
+/// is its fixed point. One square root per particle.
+unsigned semi_implicit_euler_quadratic(ParticleStore& s, std::size_t begin, std::size_t end,
+                                       float h, const ForceParams& f) {
+  float* __restrict x = s.position.data();
+  float* __restrict v = s.velocity.data();
+  const float hg[3] = {h * f.gravity[0], h * f.gravity[1], h * f.gravity[2]};
+  const float hhg[3] = {0.5f * h * h * f.gravity[0], 0.5f * h * h * f.gravity[1],
+                        0.5f * h * h * f.gravity[2]};
+  const float vmax = f.max_speed, xmax = f.max_distance;
+  unsigned bad = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    float* xi = x + 3 * i;
+    float* vi = v + 3 * i;
+    const float m = s.mass[i];
+    const float u0 = vi[0] + hg[0], u1 = vi[1] + hg[1], u2 = vi[2] + hg[2];
+    const float su = std::sqrt(u0 * u0 + u1 * u1 + u2 * u2);
+    const float a = 1.0f + h * f.drag / m, b = h * f.drag_quadratic / m;
+    const float d = 2.0f / (a + std::sqrt(a * a + 4.0f * b * su));
+    const float kd = f.drag + f.drag_quadratic * (su * d);
+    const float d2 = d * d;
+    const float hv = h + 0.5f * h * (h * kd) / m * d2;
+    const float u[3] = {u0, u1, u2};
+    for (int j = 0; j < 3; ++j) {
+      const float vv = u[j] * d;
+      const float xx = xi[j] + hv * vv - hhg[j] * d2;
+      vi[j] = vv;
+      xi[j] = xx;
+      bad |= unsigned(!(std::fabs(vv) <= vmax)) | unsigned(!(std::fabs(xx) <= xmax));
+    }
+    s.age[i] += h;
+  }
+  return bad;
+}
+
+/// RK4 with quadratic drag: a(v) = g - (k_d + c_2 |v|) v / m couples the components, so the
+/// state is the 3-vector pair (x, v), in double; sub-steps as in rk4_one, with z from the
+/// effective coefficient at the start speed plus the speed gravity adds over the step.
+inline unsigned rk4_quadratic(float* x, float* v, double m, double h, const ForceParams& f) {
+  const Vec3 g(f.gravity[0], f.gravity[1], f.gravity[2]);
+  const double kd = f.drag, c2 = f.drag_quadratic;
+  Vec3 xv(x[0], x[1], x[2]), vv(v[0], v[1], v[2]);
+  const auto acc = [&](const Vec3& w) { return Vec3(g - (kd + c2 * w.norm()) / m * w); };
+  const double z = (kd + c2 * (vv.norm() + g.norm() * h)) / m * h;
+  const int n = z > 0.5 ? int(std::min(std::ceil(z / 0.5), 65536.0)) : 1;
+  const double hs = h / n;
+  for (int k = 0; k < n; ++k) {
+    const Vec3 v0 = vv;
+    const Vec3 k1 = acc(v0);
+    const Vec3 v2 = v0 + 0.5 * hs * k1;
+    const Vec3 k2 = acc(v2);
+    const Vec3 v3 = v0 + 0.5 * hs * k2;
+    const Vec3 k3 = acc(v3);
+    const Vec3 v4 = v0 + hs * k3;
+    const Vec3 k4 = acc(v4);
+    vv = v0 + (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    xv = xv + (hs / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
+  }
+  unsigned bad = 0;
+  for (int j = 0; j < 3; ++j) {
+    v[j] = float(vv[j]);
+    x[j] = float(xv[j]);
+    bad |= unsigned(!(std::abs(vv[j]) <= double(f.max_speed)) ||
+                    !(std::abs(xv[j]) <= double(f.max_distance)));
+  }
+  return bad;
+}
+
 /// Classical RK4 (Coutinho App. B) on (x, v) with a(v) = g - c v, c = k_d / m, in double. The
 /// components are decoupled (drag is linear), so each is a scalar 2-state system. RK4 is explicit
 /// and diverges once z = c h > 2.78, so a particle whose own z exceeds 0.5 takes ceil(z / 0.5)
 /// equal sub-steps (at most 65536): a per-particle fixed refinement, deterministic, in the spirit
 /// of App. B's step control; ordinary particles take exactly one classical step.
 inline unsigned rk4_one(float* x, float* v, double m, double h, const ForceParams& f) {
+  if (f.drag_quadratic != 0.0f) return rk4_quadratic(x, v, m, h, f);
   const double c = double(f.drag) / m;
   const double z = c * h;
   const int n = z > 0.5 ? int(std::min(std::ceil(z / 0.5), 65536.0)) : 1;
@@ -245,8 +317,9 @@ bool integrate(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       const std::size_t b = begin + std::min(n, std::size_t(p) * per);
       const std::size_t e = begin + std::min(n, std::size_t(p + 1) * per);
       if (b < e)
-        bad |= f.drag != 0.0f ? semi_implicit_euler<true>(s, b, e, hf, f)
-                              : semi_implicit_euler<false>(s, b, e, hf, f);
+        bad |= f.drag_quadratic != 0.0f ? semi_implicit_euler_quadratic(s, b, e, hf, f)
+               : f.drag != 0.0f         ? semi_implicit_euler<true>(s, b, e, hf, f)
+                                        : semi_implicit_euler<false>(s, b, e, hf, f);
     }
   } else {
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(| : bad) \
@@ -267,6 +340,12 @@ bool integrate_one(ParticleStore& s, std::size_t i, double dt, const ForceParams
   float* v = &s.velocity[3 * i];
   if (integrator == Integrator::rk4) return rk4_one(x, v, s.mass[i], dt, f) != 0;
   // Same float arithmetic as the bulk kernel, with this particle's own step.
+  if (f.drag_quadratic != 0.0f) {
+    const float a0 = s.age[i];
+    const unsigned bad = semi_implicit_euler_quadratic(s, i, i + 1, float(dt), f);
+    s.age[i] = a0;  // the age is not changed here
+    return bad != 0;
+  }
   const float h = float(dt);
   const bool drag = f.drag != 0.0f;
   const float damp = drag ? s.mass[i] / (s.mass[i] + h * f.drag) : 1.0f;

@@ -193,6 +193,9 @@ struct ParticleSystemDef {
   EmitterDef emitter;
   Vec3 gravity{0.0, 0.0, -9.81};   ///< (m/s²) gravitational acceleration, world frame
   double drag = 0.0;               ///< viscous drag coefficient k_d (kg/s): F = -k_d v (§3.3.2)
+  /// Quadratic (air) drag coefficient c_2 (kg/m): F = -c_2 |v| v, beside `drag`; c_2 = ½ ρ C_d A
+  /// for a body of frontal area A in a fluid of density ρ; terminal speed √(m g / c_2).
+  double drag_quadratic = 0.0;
   Integrator integrator = Integrator::semi_implicit_euler;
   double tolerance = 1e-4;         ///< (m) adaptive integrator: largest position error per step
   bool collide = true;             ///< collide with the world's colliders

@@ -83,6 +83,8 @@ inline constexpr Range kSplitLifetimeDeviation = kNonNegative;  ///< (s)
 
 // Particle-system forces and integrators (ParticleSystemDef; §3.3 forces, App. B integrators).
 inline constexpr Range kSystemDrag = kNonNegative;       ///< (kg/s) viscous drag, f = -drag v
+/// (kg/m) quadratic drag, f = -drag_quadratic |v| v
+inline constexpr Range kSystemDragQuadratic = kNonNegative;
 inline constexpr Range kSystemTolerance = kPositive;     ///< (m) adaptive integrator's error bound
 inline constexpr Range kPairG = kNonNegative;            ///< (N m²/kg²) gravitational constant
 inline constexpr Range kPairK = kNonNegative;            ///< (N m²/C²) Coulomb constant
