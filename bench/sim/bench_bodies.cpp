@@ -54,8 +54,12 @@ double cpu_seconds() {
 struct Result {
   double seconds_per_step = 0.0;
   double top_drift = 0.0;  // (m) pyramid only
-  int tunnelled = 0;
+  int tunnelled = 0;       // below the ground or the terrain surface under it (by > 5 cm)
+  int off_edge = 0;        // terrain: rolled off the edge of the 40 m mesh (not a tunnelling)
 };
+
+/// Terrain scene: counts a body at p as off the edge or as tunnelled (below the surface).
+void classify_terrain(const Vec3& p, Result& r);
 
 /// Pyramid box k (row r, column c): rows sit exactly on each other, columns kGap apart.
 std::vector<Vec3> pyramid_centres() {
@@ -69,6 +73,13 @@ std::vector<Vec3> pyramid_centres() {
 }
 
 double terrain_height(double x, double y) { return 0.8 * std::sin(0.35 * x) * std::cos(0.3 * y); }
+
+void classify_terrain(const Vec3& p, Result& r) {
+  if (std::abs(p.x()) > 0.5 * kTerrainSize || std::abs(p.y()) > 0.5 * kTerrainSize)
+    ++r.off_edge;
+  else if (p.z() < terrain_height(p.x(), p.y()) - 0.05)
+    ++r.tunnelled;
+}
 
 void terrain_mesh(std::vector<Vec3>& v, std::vector<std::array<std::uint32_t, 3>>& t) {
   const int n = kTerrainCells;
@@ -156,10 +167,7 @@ Result run_simreel_terrain() {
   for (int s = 0; s < kSteps; ++s) (void)world.advance(kStep);
   Result r;
   r.seconds_per_step = (cpu_seconds() - t0) / kSteps;
-  for (const BodyHandle h : bodies) {
-    const Vec3 p = world.pose(h).translation;
-    r.tunnelled += p.z() < terrain_height(p.x(), p.y()) - 0.05 ? 1 : 0;
-  }
+  for (const BodyHandle h : bodies) classify_terrain(world.pose(h).translation, r);
   return r;
 }
 
@@ -264,10 +272,7 @@ Result run_bullet_terrain() {
   w.run();
   Result r;
   r.seconds_per_step = (cpu_seconds() - t0) / kSteps;
-  for (const btRigidBody* b : bodies) {
-    const Vec3 p = position(b);
-    r.tunnelled += p.z() < terrain_height(p.x(), p.y()) - 0.05 ? 1 : 0;
-  }
+  for (const btRigidBody* b : bodies) classify_terrain(position(b), r);
   return r;
 }
 #endif
@@ -281,14 +286,14 @@ void report(const char* scene, const std::vector<Result>& ours, const std::vecto
   std::vector<double> a, b;
   for (const Result& r : ours) a.push_back(r.seconds_per_step);
   for (const Result& r : peer) b.push_back(r.seconds_per_step);
-  std::printf("%-8s simreel %8.3f ms/step  top drift %.4f m  tunnelled %d\n", scene, 1e3 * median(a),
-              ours.back().top_drift, ours.back().tunnelled);
+  std::printf("%-8s simreel %8.3f ms/step  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
+              1e3 * median(a), ours.back().top_drift, ours.back().tunnelled, ours.back().off_edge);
   if (peer.empty()) {
     std::printf("%-8s Bullet   not built (libbullet-dev not found)\n", scene);
     return;
   }
-  std::printf("%-8s Bullet  %8.3f ms/step  top drift %.4f m  tunnelled %d\n", scene, 1e3 * median(b),
-              peer.back().top_drift, peer.back().tunnelled);
+  std::printf("%-8s Bullet  %8.3f ms/step  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
+              1e3 * median(b), peer.back().top_drift, peer.back().tunnelled, peer.back().off_edge);
   std::printf("%-8s ratio simreel / Bullet = %.2f (median of %zu rounds, CPU time)\n", scene,
               median(a) / median(b), a.size());
 }
