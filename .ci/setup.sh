@@ -4,7 +4,7 @@
 set -euo pipefail
 PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev libpng-dev
       libassimp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg
-      assimp-testmodels)
+      assimp-testmodels python3-jsonschema)
 missing=()
 for p in "${PKGS[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
