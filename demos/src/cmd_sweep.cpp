@@ -78,7 +78,16 @@ Axis parse_vary(const std::string& text) {
   a.values = split_values(text.substr(eq + 1));
   for (const auto& v : a.values)
     if (v.empty()) throw SceneError("--vary " + text + ": expected a value between every two commas, found an empty one");
-  a.label = a.pointer.substr(a.pointer.rfind('/') + 1);
+  // The label: the tokens after the last array index ("/emitters/0/start_speed/mean" ->
+  // "start_speed/mean"), or the whole pointer without its leading '/'.
+  std::size_t from = 1;
+  for (std::size_t i = 1; i < a.pointer.size();) {
+    const std::size_t next = std::min(a.pointer.find('/', i), a.pointer.size());
+    const std::string token = a.pointer.substr(i, next - i);
+    if (!token.empty() && token.find_first_not_of("0123456789") == std::string::npos) from = next + 1;
+    i = next + 1;
+  }
+  a.label = from < a.pointer.size() ? a.pointer.substr(from) : a.pointer.substr(1);
   return a;
 }
 
@@ -271,7 +280,7 @@ int sweep_command(const SweepOptions& o) {
       else v.sets.push_back(axes[a].pointer + "=" + value);
       if (a > 0) v.label.append(" ");
       v.label.append(axes[a].label).append("=").append(value);
-      v.name.append("_").append(file_safe(axes[a].label.substr(axes[a].label.rfind('/') + 1)));
+      v.name.append("_").append(file_safe(axes[a].label));
       v.name.append("-").append(file_safe(value));
     }
     RunOptions run = o;
