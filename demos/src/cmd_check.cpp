@@ -77,6 +77,15 @@ fs::path golden_scene_path(const fs::path& golden, const HashRecord& record, con
                      ", outside the golden's folder; expected a scene inside " + where +
                      (record.format >= 2 ? "; pass --root DIR to trust DIR" : "") + ", or pass --allow-outside");
   }
+  // Only now, inside the trusted folders, may the answer depend on what exists.
+  if (!fs::exists(path, ec)) {
+    const std::string where = record.format == 1
+                                  ? " (format 1: looked beside the golden, at " + path.string() +
+                                        ", and from the working directory; run check where `render --hash` ran, "
+                                        "or record the golden again)"
+                                  : " (relative to the golden's folder: " + path.string() + ")";
+    throw SceneError(golden.string() + ": /scene: \"" + scene + "\": no such file" + where);
+  }
   return path;
 }
 

@@ -130,6 +130,12 @@ TEST(Workflow, CheckUsageErrorsExit2WithOneLine) {
     EXPECT_EQ(count_lines(r.err), 1) << args << ": " << r.err;
   }
   EXPECT_TRUE(has(run_simreel("check " + (d / "empty").string()).err, "no goldens found"));
+  // A golden whose scene is missing says so, naming where it looked.
+  write_file(d / "g.json", R"({"simreel_hashes": 2, "scene": "nope.json", "size": "64x48", "frames": "0:9", "hashes": []})");
+  const auto r = run_simreel("check " + (d / "g.json").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(has(r.err, "/scene: \"nope.json\": no such file (relative to the golden's folder: ")) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
 }
 
 // --- presets ----------------------------------------------------------------------------------
