@@ -197,12 +197,22 @@ Names names_of(const std::string& def) {
 void remove_rigid(WorldState& w, std::uint32_t i) {
   const std::uint32_t last = std::uint32_t(w.dyn.rigid.size() - 1);
   swap_remove(w.dyn.rigid, i);
+  BodyDynamics& d = w.dyn;
+  if (d.rest_time.size() == last + 1) {
+    d.rest_time[i] = d.rest_time[last];
+    d.rest_time.pop_back();
+    d.island[i] = d.island[last];
+    d.island.pop_back();
+  }
   if (i == last) return;
   for (Body& b : w.bodies.dense())
     if (b.rigid == last) b.rigid = i;
 }
 
 void remove_body(WorldState& w, const Handle& h) {
+  // Whatever rested on the body must be free to fall (and island ids name rigid indices, which
+  // the swap-remove below changes).
+  wake_all(w);
   const Body& gone = w.bodies[h];
   if (gone.dynamic()) --w.dyn.dynamic_count;
   if (gone.rigid != kNoRigid) remove_rigid(w, gone.rigid);
@@ -266,6 +276,21 @@ MovedObject World::pose(BodyHandle h) const {
   MovedObject m = impl_->bodies[h.id].report_pose(impl_->shapes);
   m.handle = h.id;
   return m;
+}
+
+bool World::is_awake(BodyHandle h) const {
+  const detail::Body& b = impl_->bodies[h.id];
+  return !b.dynamic() || !impl_->dyn.rigid.asleep[b.rigid];
+}
+
+void World::wake(BodyHandle h) {
+  const detail::Body& b = impl_->bodies[h.id];
+  if (b.dynamic()) detail::wake_island(*impl_, b.rigid);
+}
+
+std::pair<Vec3, Vec3> World::velocity(BodyHandle h) const {
+  const detail::Body& b = impl_->bodies[h.id];
+  return {b.velocity, b.angular_velocity};
 }
 
 std::vector<BodyHandle> World::colliders() const {
