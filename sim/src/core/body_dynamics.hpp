@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "collision/body_impulses.hpp"
 #include "collision/manifold.hpp"
 #include "rigid/body_state.hpp"
 #include "rigid/contact_solver.hpp"
@@ -63,7 +64,23 @@ struct BodyDynamics {
   std::vector<ContactPoint> points;
   std::vector<Proxy> proxies;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;  ///< proxy index pairs
+  /// Impulses from particles and cloth on the dynamic bodies over the current step (§3.7),
+  /// applied and cleared by the bodies stage.
+  BodyImpulses coupling;
 };
+
+/// Readies w.dyn.coupling for this step (body_coupling.cpp): which shapes belong to dynamic
+/// bodies, an empty log. Called at the start of the particle collisions.
+void prepare_coupling(WorldState& w);
+
+/// The log the passes of this step append to, or nullptr when there is no dynamic body.
+BodyImpulses* coupling_log(WorldState& w);
+
+/// Adds to the dynamic bodies' force and torque accumulators, for the step [t0, t1]: the
+/// impulses logged this step (as the constant force J/h over it: the same change of momentum
+/// as an impulse at its start, Coutinho §3.7), and the force fields (body_coupling.cpp). Clears
+/// the log.
+void apply_coupling(WorldState& w, double t0, double t1);
 
 /// (m) Contact margin: pairs closer than this give (speculative) points. Kept at zero-ish so
 /// restitution sees the true impact speed (a speculative point would slow the body first).

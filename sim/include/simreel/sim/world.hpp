@@ -164,6 +164,9 @@ class World {
   /// rotation taking local +z to its normal.
   /// @throws std::out_of_range if stale.
   [[nodiscard]] MovedObject pose(BodyHandle h) const;
+  /// Mass, centre of mass, velocities and momenta of a dynamic body (world frame).
+  /// @throws std::out_of_range if stale; std::invalid_argument if the body is not dynamic.
+  [[nodiscard]] BodyMotion motion(BodyHandle h) const;
   /// Live particles of a system. @throws std::out_of_range if the handle is stale.
   [[nodiscard]] ParticleView particles(ParticleSystemHandle h) const;
   [[nodiscard]] const ParticleSystemDef& definition(ParticleSystemHandle h) const;
