@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "simreel/sim/world.hpp"
@@ -95,13 +96,16 @@ TEST(BodyCoupling, JetMomentumChangeEqualsBoxMomentumWithinOnePercent) {
   // particles' loss, P_box = -Σ m Δv (the issue asks for 1%; the float storage of the particle
   // velocities is the only difference).
   for (double h : {1.0 / 120.0, 1.0 / 480.0}) {
-    const JetResult r = run_jet(Jet{}, 2.0, h);
+    const JetResult r = run_jet(Jet{}, 20.0, h);
     const double lost = -r.particles_dp.x();
     ASSERT_GT(lost, 0.0);
-    // An immovable wall would take m u (1 + e) per particle; the box recedes a little, so less.
+    // An immovable wall would take m u (1 + e) per particle; the box recedes (to ~0.4 m/s), so
+    // a little less.
     const double wall = 20 * 16 * 2e-3 * 8.0 * 1.6;
     EXPECT_GT(lost, 0.9 * wall);
     EXPECT_LE(lost, wall * (1.0 + 1e-6));
+    RecordProperty("balance_error_h" + std::to_string(int(std::lround(1.0 / h))),
+                   std::to_string(std::abs(r.box_p.x() - lost) / lost));
     EXPECT_NEAR(r.box_p.x(), lost, 0.01 * lost) << "h = " << h;
     EXPECT_NEAR(r.box_p.x(), lost, 1e-5 * lost) << "h = " << h;  // in fact to float rounding
     EXPECT_NEAR(r.box_p.y(), -r.particles_dp.y(), 1e-6 * lost);
@@ -113,15 +117,17 @@ TEST(BodyCoupling, JetMomentumChangeEqualsBoxMomentumWithinOnePercent) {
 
 TEST(BodyCoupling, OffCentreJetSpinsTheBoxWithRCrossJ) {
   // The jet hits the face x = -0.2 at y = 0.1: the impulse J (along +x) acts at r = (-0.2, 0.1, 0)
-  // from the centre of mass, so L = r × J = (0, 0, -0.1 J). A heavy box moves and turns little
-  // while the jet lasts, so the lever stays 0.1 m to within a percent or two.
+  // from the centre of mass, so L = r × J = (0, 0, -0.1 J). A short jet (two frames) on a heavy
+  // box: it turns by ~1e-3 rad while hit, so the lever stays 0.1 m to well within 1%.
   Jet jet;
   jet.y0 = 0.1;
-  const JetResult r = run_jet(jet, 20.0, 1.0 / 240.0);
+  jet.frames = 2;
+  const JetResult r = run_jet(jet, 100.0, 1.0 / 240.0);
   const double J = r.box_p.x();
   ASSERT_GT(J, 0.0);
-  EXPECT_NEAR(r.box_L.z(), -0.1 * J, 0.03 * 0.1 * J);
-  EXPECT_LT(std::abs(r.box_L.x()) + std::abs(r.box_L.y()), 0.02 * 0.1 * J);
+  EXPECT_NEAR(r.box_L.z(), -0.1 * J, 0.01 * 0.1 * J);
+  EXPECT_LT(std::abs(r.box_L.x()) + std::abs(r.box_L.y()), 0.01 * 0.1 * J);
+  RecordProperty("lever_error", std::to_string(std::abs(r.box_L.z() / (-0.1 * J)) - 1.0));
 }
 
 TEST(BodyCoupling, AbsorbedRainHandsOverAllItsMomentum) {
@@ -165,10 +171,13 @@ TEST(BodyCoupling, BodyInUniformWindAcceleratesAtFOverM) {
   const double F = 0.5 * 1.225 * Cd * kPi * r * r * u * u;
   EXPECT_NEAR(m.linear_velocity.x() / h, F / m.mass, 1e-12 * F / m.mass);
   EXPECT_NEAR(m.linear_velocity.y(), 0.0, 1e-15);
-  // It then approaches the wind speed, the force falling as (u - v)².
-  for (int i = 0; i < 600; ++i) w.advance(1.0 / 30.0);
+  // It then approaches the wind speed, the force falling as (u - v)²: with a0 = F / M,
+  // u - v = u / (1 + a0 t / u) (first-order error in h: within 1% at this step).
+  const double T = 20.0;
+  for (int i = 0; i < 600; ++i) w.advance(T / 600.0);
   const double v = w.motion(body).linear_velocity.x();
-  EXPECT_GT(v, 0.9 * u);
+  const double a0 = F / m.mass, exact = u - u / (1.0 + a0 * (T + h) / u);
+  EXPECT_NEAR(v, exact, 0.01 * exact);
   EXPECT_LT(v, u);
 }
 
@@ -223,18 +232,21 @@ TEST(BodyCoupling, BlastPushesBodiesRadiallyWithTheOneOverDSquaredShare) {
 }
 
 TEST(BodyCoupling, ClothFallingOnALightBoxPushesItDownAndConservesMomentum) {
-  // A floating 0.1 kg box under a 0.4 kg cloth falling from 0.2 m: the cloth lands, the box is
-  // pushed down. Gravity acts on the cloth only, so P_cloth + P_box = M_cloth g t, and the box
-  // takes the downward momentum the cloth loses. (Semi-implicit cloth without damping, drag or
-  // the strain limit, whose internal forces cancel exactly.)
+  // A floating (gravity-free) 1 kg box, wider than the 0.2 kg cloth falling onto it from
+  // 0.2 m: the cloth lands (inelastic) and presses it down. Gravity acts on the cloth only, so
+  // P_cloth + P_box = M_cloth g t, and once the two move together the box holds its mass share,
+  // P_box = M_box / (M_box + M_cloth) M_cloth g t. (Semi-implicit cloth without damping, drag or
+  // the strain limit, whose internal forces cancel exactly.) The vertices are responded to with
+  // the box held fixed (§3.7), which is right while what lands in one step is much lighter than
+  // the box; a box lighter than the cloth would be thrown off with all of its momentum.
   const double h = 1.0 / 480.0;
   World w(def_with_step(h));
-  const BodyHandle box = w.add_body(floating_box({0.15, 0.15, 0.05}, Vec3::Zero(), 0.1, Material{}));
+  const BodyHandle box = w.add_body(floating_box({0.3, 0.3, 0.05}, Vec3::Zero(), 1.0, Material{}));
   ClothDef c;
   c.rows = c.columns = 9;
   c.width = c.height = 0.5;
-  c.mass = 0.4;
-  c.transform.translation = {-0.25, -0.25, 0.25};
+  c.mass = 0.2;
+  c.transform.translation = {0.0, 0.0, 0.25};  // the grid is centred on its frame
   c.integrator = ClothIntegrator::semi_implicit_euler;
   c.stretch = {200.0, 0.0};
   c.shear = {50.0, 0.0};
@@ -249,12 +261,15 @@ TEST(BodyCoupling, ClothFallingOnALightBoxPushesItDownAndConservesMomentum) {
   for (int i = 0; i < frames; ++i) w.advance(T / frames);
   const Vec3 pc = w.cloth_stats(cloth).momentum;
   const BodyMotion bm = w.motion(box);
-  const Vec3 expected(0.0, 0.0, -0.4 * 9.81 * T);
+  const Vec3 expected(0.0, 0.0, -0.2 * 9.81 * T);
   EXPECT_LT(bm.linear_momentum.z(), -0.05);  // pushed down
   EXPECT_LT(bm.center_of_mass.z(), -0.01);
   EXPECT_NEAR((pc + bm.linear_momentum - expected).norm(), 0.0, 0.01 * expected.norm());
-  // The box took a sizeable share: the cloth is not falling freely any more.
-  EXPECT_GT(-bm.linear_momentum.z(), 0.1 * -expected.z());
+  const double share = 1.0 / 1.2 * expected.z();
+  EXPECT_NEAR(bm.linear_momentum.z(), share, 0.05 * -share);
+  RecordProperty("box_share_error", std::to_string(bm.linear_momentum.z() / share - 1.0));
+  RecordProperty("total_momentum_error",
+                 std::to_string((pc + bm.linear_momentum - expected).norm() / expected.norm()));
 }
 
 TEST(BodyCoupling, SameStateAtOneTwoAndFourThreads) {
