@@ -133,5 +133,18 @@ TEST(Sleeping, ASlidingOrSpinningBodyNeverSleeps) {
   EXPECT_NEAR(w.pose(h).translation.x(), 0.5, 1e-3);
 }
 
+TEST(Sleeping, AFreeBodyDriftingSlowlyKeepsItsMomentum) {
+  // No gravity, no contact, 1 cm/s: slower than the tolerance, but nothing holds it, so it must
+  // not sleep (sleeping would zero its momentum).
+  World w(def(true));
+  BodyDef b = box_at({0.0, 0.0, 5.0});
+  b.gravity = Vec3::Zero();
+  b.linear_velocity = {0.01, 0.0, 0.0};
+  const BodyHandle h = w.add_body(b);
+  for (int k = 0; k < 180; ++k) (void)w.advance(1.0 / 60.0);
+  EXPECT_TRUE(w.is_awake(h));
+  EXPECT_NEAR(w.pose(h).translation.x(), 0.03, 1e-9);
+}
+
 }  // namespace
 }  // namespace simreel::sim

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "collision/body_impulses.hpp"
 #include "collision/manifold.hpp"
 #include "rigid/body_state.hpp"
 #include "rigid/contact_solver.hpp"
@@ -62,8 +63,8 @@ struct Proxy {
 };
 
 /// Sleeping (Box2D's b2_linearSleepTolerance / b2_angularSleepTolerance / b2_timeToSleep, the
-/// same idea as Bullet's deactivation): a dynamic body slower than both tolerances accumulates
-/// rest time; an island of bodies in contact sleeps once every one of them has rested
+/// same idea as Bullet's deactivation): a dynamic body that touches something and is slower
+/// than both tolerances accumulates rest time (a free body never sleeps: it keeps its drift); an island of bodies in contact sleeps once every one of them has rested
 /// kTimeToSleep. Sleeping bodies are frozen (rigid/body_state.hpp sleep()) and cost nothing: no
 /// integration, no narrow phase among themselves, no solver rows. An island wakes whole when an
 /// awake dynamic body or a moving kinematic body touches one of its bodies, when a body of it is
@@ -86,7 +87,27 @@ struct BodyDynamics {
   std::vector<double> rest_time;
   std::vector<std::uint32_t> island;
   std::vector<std::uint32_t> parent;  ///< union–find scratch over rigid entries, reused
+  /// Impulses from particles and cloth on the dynamic bodies over the current step (§3.7),
+  /// applied and cleared by the bodies stage.
+  BodyImpulses coupling;
 };
+
+/// Readies w.dyn.coupling for this step (body_coupling.cpp): which shapes belong to dynamic
+/// bodies, an empty log. Called at the start of the particle collisions.
+void prepare_coupling(WorldState& w);
+
+/// The log the passes of this step append to, or nullptr when there is no dynamic body.
+BodyImpulses* coupling_log(WorldState& w);
+
+/// Adds to the dynamic bodies' force and torque accumulators, for the step [t0, t1]: the
+/// impulses logged this step (as the constant force J/h over it: the same change of momentum
+/// as an impulse at its start, Coutinho §3.7), and the force fields (body_coupling.cpp). Clears
+/// the log.
+void apply_coupling(WorldState& w, double t0, double t1);
+
+/// Wakes the island of every sleeping body with an entry in this step's impulse log or a
+/// non-zero force from a field over [t0, t1] (Box2D wakes a body a force is applied to).
+void wake_coupled(WorldState& w, double t0, double t1);
 
 /// (m) Contact margin: pairs closer than this give (speculative) points. Kept at zero-ish so
 /// restitution sees the true impact speed (a speculative point would slow the body first).

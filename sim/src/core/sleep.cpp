@@ -90,13 +90,22 @@ void update_sleep(WorldState& w, double h) {
   fit(d);
   const std::uint32_t n = std::uint32_t(r.size());
   d.parent.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) d.parent[i] = i;
+  // Only a body that touches something rests: a free body costs nothing to integrate, and one
+  // drifting slowly through space (or floating without gravity) must keep its momentum.
+  for (std::uint32_t i = 0; i < n; ++i) d.parent[i] = kStaticBody;  // "touching" marks for now
+  for (const BodyManifold& m : d.manifolds) {
+    if (m.manifold.count == 0 || m.first_point == kCarriedManifold) continue;
+    if (m.rigid_a != kStaticBody) d.parent[m.rigid_a] = 0;
+    if (m.rigid_b != kStaticBody) d.parent[m.rigid_b] = 0;
+  }
   for (std::uint32_t i = 0; i < n; ++i) {
     if (!r.is_dynamic(i)) continue;
-    const bool resting = r.linear_velocity[i].squaredNorm() <= kSleepLinearSpeed * kSleepLinearSpeed &&
+    const bool resting = d.parent[i] == 0 &&
+                         r.linear_velocity[i].squaredNorm() <= kSleepLinearSpeed * kSleepLinearSpeed &&
                          r.angular_velocity[i].squaredNorm() <= kSleepAngularSpeed * kSleepAngularSpeed;
     d.rest_time[i] = resting && d.allow_sleeping ? d.rest_time[i] + h : 0.0;
   }
+  for (std::uint32_t i = 0; i < n; ++i) d.parent[i] = i;
   // Islands: dynamic bodies joined by a contact; static and kinematic bodies do not join
   // islands (a floor does not make everything on it one island). A body touching a moving
   // kinematic body never rests.

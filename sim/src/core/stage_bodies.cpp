@@ -1,7 +1,8 @@
 // Stage "bodies" (stages.hpp; Coutinho Ch. 4): dynamic bodies over one step h —
 //   kinematic bodies' rigid entries take their path velocity (§3.7: it enters the contacts),
 //   broad and narrow phase with warm-started manifolds (body_contacts.cpp, §4.4–4.7),
-//   gravity, then prepare -> integrate velocities (forces, drag §4.3) -> sequential impulses
+//   gravity, the impulses of particles and cloth logged this step and the force fields
+//   (body_coupling.cpp, §3.7), then prepare -> integrate velocities (forces, drag §4.3) -> sequential impulses
 //   (§4.8) -> integrate positions (§4.2, App. C) as rigid/contact_solver.hpp's step_with_contacts,
 //   the impulses kept in the manifolds for the next step's warm start,
 //   each dynamic body's frame and shapes placed from its centre of mass.
@@ -27,12 +28,17 @@ void stage_bodies(WorldState& w, double t0, double t1) {
       r.linear_velocity[b.rigid] = b.velocity;
       r.angular_velocity[b.rigid] = b.angular_velocity;
     }
+  // Bodies that particles or cloth pushed, or that a force field acts on, wake before their
+  // contacts are found.
+  wake_coupled(w, t0, t1);
   find_body_contacts(w);
   // A sleeping island touched by something moving wakes; its own contacts were skipped, so
   // they are found again with it awake.
   if (wake_touched(w)) find_body_contacts(w);
   for (const Body& b : bodies)
     if (b.dynamic() && r.is_dynamic(b.rigid)) apply_force(r, b.rigid, r.mass[b.rigid] * b.gravity);
+  // Particles' and cloth's impulses of this step, force fields (§3.7; body_coupling.cpp).
+  apply_coupling(w, t0, t1);
   d.solver.prepare(r, d.points, h);
   integrate_velocities(r, h);
   d.solver.solve(r, d.points);

@@ -179,6 +179,10 @@ class World {
   /// (m/s, rad/s) Linear velocity of a body's frame origin and angular velocity, world frame
   /// (zero for a static body, the path's for a kinematic one). @throws std::out_of_range if stale.
   [[nodiscard]] std::pair<Vec3, Vec3> velocity(BodyHandle h) const;
+
+  /// Mass, centre of mass, velocities and momenta of a dynamic body (world frame).
+  /// @throws std::out_of_range if stale; std::invalid_argument if the body is not dynamic.
+  [[nodiscard]] BodyMotion motion(BodyHandle h) const;
   /// Live particles of a system. @throws std::out_of_range if the handle is stale.
   [[nodiscard]] ParticleView particles(ParticleSystemHandle h) const;
   [[nodiscard]] const ParticleSystemDef& definition(ParticleSystemHandle h) const;
