@@ -6,8 +6,11 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
+#include <sstream>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -153,6 +156,48 @@ TEST(Cli, BadClothValueExits2NamingPointer) {
   r = run_simreel("validate " + (d / "t.json").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("did you mean \"stiffness\""), std::string::npos) << r.err;
+}
+
+// Quadratic drag (issue 15) as a user sets it: `drag_quadratic` (c2, kg/m) in the scene or by
+// --set. A 2 g particle dropped from 500 m falls at v(t) = v_t tanh(g t / v_t) with the terminal
+// speed v_t = sqrt(m g / c2): 9.897 m/s at t = 4 s for c2 = 2e-4 kg/m (v_t = 9.905), and half of
+// that with --set c2 = 8e-4. Without the key it would fall at 39 m/s. A negative value exits 2
+// naming the pointer.
+const char* kQuadraticDragScene = R"({
+  "fps": 30, "frames": 121,
+  "emitters": [{"name": "drop", "rate": 0, "bursts": [{"time": 0, "count": 1}],
+                "start_speed": 0, "mass": 0.002, "lifetime": 10, "position": [0, 0, 500],
+                "drag_quadratic": 2e-4}]
+})";
+
+double last_vz(const std::string& csv) {
+  const auto start = csv.rfind('\n', csv.size() - 2) + 1;
+  std::stringstream row(csv.substr(start));
+  std::string cell;
+  std::vector<std::string> cells;
+  while (std::getline(row, cell, ',')) cells.push_back(cell);
+  return cells.size() == 10 ? std::stod(cells[9]) : 0.0;
+}
+
+TEST(Cli, QuadraticDragKeyGivesTheTerminalSpeed) {
+  TempDir d;
+  write_file(d / "s.json", kQuadraticDragScene);
+  const auto speed_at_4s = [](double c2) {
+    const double g = 9.81, vt = std::sqrt(0.002 * g / c2);
+    return vt * std::tanh(g * 4.0 / vt);
+  };
+  auto r = run_simreel("simulate " + (d / "s.json").string() + " --export " + (d / "a.csv").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NEAR(-last_vz(slurp(d / "a.csv")) / speed_at_4s(2e-4), 1.0, 2e-4);
+  r = run_simreel("simulate " + (d / "s.json").string() +
+                  " --set /emitters/0/drag_quadratic=8e-4 --export " + (d / "b.csv").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NEAR(-last_vz(slurp(d / "b.csv")) / speed_at_4s(8e-4), 1.0, 2e-4);
+  r = run_simreel("validate " + (d / "s.json").string() + " --set /emitters/0/drag_quadratic=-1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find((d / "s.json").string() + ": /emitters/0/drag_quadratic: expected a number"),
+            std::string::npos)
+      << r.err;
 }
 
 TEST(Cli, SameSeedSameCsvOtherSeedDiffers) {

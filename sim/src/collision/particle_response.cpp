@@ -78,25 +78,31 @@ Vec3 load_stored(const float* pf) {
   return Vec3(v[0], v[1], v[2]);
 }
 
+/// (kg/s) The drag coefficient at speed |v1|: k_d + c_2 |v1| (the square root only when c_2 is
+/// set, which keeps the linear-drag contact path as cheap as before quadratic drag existed).
+double drag_at(const ForceParams& f, const Vec3& v1) {
+  return f.drag_quadratic != 0.0f ? double(f.drag) + double(f.drag_quadratic) * v1.norm()
+                                  : double(f.drag);
+}
+
 /// (m/s²) The acceleration taken as constant over a particle's step, evaluated at its end
-/// velocity v1: gravity and the drag -k_d v1 / m (the forces semi-implicit Euler integrates).
+/// velocity v1: gravity and the drag -k v1 / m (the forces semi-implicit Euler integrates).
 Vec3 step_acceleration(const ForceParams& f, double mass, const Vec3& v1) {
-  return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) -
-         ((double(f.drag) + double(f.drag_quadratic) * v1.norm()) / mass) * v1;
+  return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (drag_at(f, v1) / mass) * v1;
 }
 
 /// Where particle i was at the start of its step: stored (the other integrators) or, for
 /// semi-implicit Euler, recovered from its position update x1 = x0 + dt v1 - dt²/2 a(v1) d²,
-/// d = 1 / (1 + dt k_d / m) (within float rounding of x1, which surface_tol absorbs).
+/// d = 1 / (1 + dt k / m) (within float rounding of x1, which surface_tol absorbs).
 Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const Vec3& v1,
                    double dt, const ForceParams& f) {
   if (s.track_prev) {
     const float* q = &s.prev_position[3 * i];
     return Vec3(q[0], q[1], q[2]);
   }
-  const double m = s.mass[i],
-               d = m / (m + dt * (double(f.drag) + double(f.drag_quadratic) * v1.norm()));
-  return p1 - dt * v1 + (0.5 * dt * dt * d * d) * step_acceleration(f, m, v1);
+  const double m = s.mass[i], k = drag_at(f, v1), d = m / (m + dt * k);
+  const Vec3 a = Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (k / m) * v1;
+  return p1 - dt * v1 + (0.5 * dt * dt * d * d) * a;
 }
 
 /// Droplets of a split hit (HitAction::split): see SplitOnHit.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/vector_clones.hpp"
 #include "particles/forces.hpp"
 #include "particles/particle_store.hpp"
 
@@ -124,19 +125,24 @@ ParticleView ParticleStore::view() const {
 namespace {
 
 /// Semi-implicit (symplectic) Euler, Coutinho App. B / §3.3 — with the drag taken at the new
-/// velocity:  v' = (v + h g) / (1 + h k_d / m);  x' = x + h v' - h²/2 (g - k_d v' / m) d² with
-/// d = 1 / (1 + h k_d / m). Explicit drag multiplies v by (1 - h k_d / m) each step, which
+/// velocity:  v' = (v + h g) d, d = 1 / (1 + h k_d / m);  x' = x + h v' - h²/2 a(v') d², where
+/// a(v') = g - k_d v' / m. Explicit drag multiplies v by (1 - h k_d / m) each step, which
 /// diverges once h k_d / m > 2 (a light particle drawn near its mass floor in heavy drag); the
 /// implicit form is stable for any drag and keeps the exact terminal velocity m g / k_d as its
-/// fixed point. The position term -h²/2 a(v') d² makes a ballistic arc exact (x' = x + h v +
-/// h² g / 2 without drag), is zero at the terminal velocity, and fades (d²) where the drag is
-/// stiff, so a heavily damped transient still moves by about v0 m / k_d.
+/// fixed point. The position term makes a ballistic arc exact (x' = x + h v + h² g / 2 without
+/// drag), is zero at the terminal velocity, and fades (d²) where the drag is stiff, so a heavily
+/// damped transient still moves by about v0 m / k_d.
+/// Because the velocity update is implicit Euler, h a(v') = v' - v exactly, so the position
+/// update is x' = x + h (v' + c (v - v')) with c = d² / 2: per particle one division (d) and no
+/// more, which keeps the kernel as fast as plain semi-implicit Euler. Without drag (d = 1) it is
+/// x' = x + h v' - h² g / 2, written so because summing h v' and a constant keeps float
+/// rounding from drifting over thousands of steps (1000 steps of 1 ms land within 1e-5 m).
 /// Chunks of particles are processed as flat float arrays (x and v are (n x 3) interleaved), with
-/// the gravity and drag terms spread to a per-float pattern first, so the main loop is a plain
+/// the per-particle d and c spread to a per-float pattern first, so the main loop is a plain
 /// element-wise loop the compiler vectorises without shuffles. Float throughout: the method's
 /// O(h) error dwarfs float rounding.
 template <bool kDrag>
-unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t end, float h,
+SIMREEL_VECTOR_CLONES unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t end, float h,
                              const ForceParams& f) {
   constexpr std::size_t kChunk = 128;
   float* __restrict x = s.position.data();
@@ -157,28 +163,21 @@ unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t en
     const std::size_t n = std::min(kChunk, end - i0);
     float* __restrict xb = x + 3 * i0;
     float* __restrict vb = v + 3 * i0;
-    alignas(16) float damp3[3 * kChunk];  // m / (m + h k_d) = 1 / (1 + h k_d / m), per float
-    alignas(16) float hv3[3 * kChunk];    // h + h² (k_d / 2m) damp²: x' = x + hv3 v' - hhg3
-    alignas(16) float hhg3[3 * kChunk];   // h² g damp² / 2
+    alignas(16) float damp3[3 * kChunk];  // d = m / (m + h k_d), per float
     if constexpr (kDrag) {
       alignas(16) float damp[kChunk];
       for (std::size_t k = 0; k < n; ++k) damp[k] = m[i0 + k] / (m[i0 + k] + hk);
-      for (std::size_t k = 0; k < n; ++k) {
-        const float d2 = damp[k] * damp[k];
-        const float hv = h + 0.5f * h * hk / m[i0 + k] * d2;
-        for (std::size_t c = 3 * k; c < 3 * k + 3; ++c) {
-          damp3[c] = damp[k];
-          hv3[c] = hv;
-          hhg3[c] = hhg[c] * d2;
-        }
-      }
+      for (std::size_t k = 0; k < n; ++k)
+        damp3[3 * k] = damp3[3 * k + 1] = damp3[3 * k + 2] = damp[k];
     }
     for (std::size_t j = 0; j < 3 * n; ++j) {
-      float vv = vb[j] + hg[j];
+      const float v0 = vb[j];
+      float vv = v0 + hg[j];
       float xx;
       if constexpr (kDrag) {
-        vv = vv * damp3[j];
-        xx = xb[j] + hv3[j] * vv - hhg3[j];
+        const float d = damp3[j];
+        vv = vv * d;
+        xx = xb[j] + h * (vv + (0.5f * d * d) * (v0 - vv));
       } else {
         xx = xb[j] + h * vv - hhg[j];
       }
