@@ -517,8 +517,13 @@ void ParticleCollider::find_contacts_hashed(double contact_speed, double h) {
 }
 
 void ParticleCollider::make_bands(std::size_t pair_count) {
-  // Band width in columns: about 64 bands over the particles' extent (at least one column).
-  const std::uint64_t width = std::max<std::uint64_t>(1, (cells_x_ + 63) / 64);
+  // Band width in columns: about 64 bands over the particles' extent (at least one column) for
+  // a system large enough to be solved in parallel; one band (the plain sweep in cell order)
+  // below that, which keeps piles of a few thousand particles as quiet as the sequential order
+  // (bands two apart are not coupled within a sweep, so an impulse crosses a pile more slowly).
+  // The choice depends on the particle count only, never on the thread count.
+  const std::uint64_t width =
+      x.size() >= kParallelMin ? std::max<std::uint64_t>(1, (cells_x_ + 63) / 64) : cells_x_;
   const std::size_t nb = std::size_t((cells_x_ + width - 1) / width);
   // Sorted position -> band: the column of its cell (cell keys are x-major).
   const auto band_of = [&](std::uint32_t s) {
@@ -591,14 +596,18 @@ void ParticleCollider::solve() {
   const int nb = int(bands_.size());
   // Two sweeps of bands per iteration, each a fork and a barrier: only for large systems.
   const bool par = threads > 1 && x.size() >= kParallelMin;
-  for (int it = 0; it < iterations; ++it)
+  // Pairs of the even bands, of the odd bands, then every collider contact (one particle each:
+  // the bands' are independent of each other).
+  for (int it = 0; it < iterations; ++it) {
     for (int phase = 0; phase < 2; ++phase) {
 #pragma omp parallel for schedule(static) num_threads(threads) if (par)
-      for (int b = phase; b < nb; b += 2) {
+      for (int b = phase; b < nb; b += 2)
         sweep(bands_[std::size_t(b)].pair_begin, bands_[std::size_t(b)].pair_end);
-        sweep(bands_[std::size_t(b)].wall_begin, bands_[std::size_t(b)].wall_end);
-      }
     }
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+    for (int b = 0; b < nb; ++b)
+      sweep(bands_[std::size_t(b)].wall_begin, bands_[std::size_t(b)].wall_end);
+  }
 }
 
 void ParticleCollider::project_positions() {
