@@ -1,10 +1,15 @@
 #!/usr/bin/env bash
 # Installs simreel's build and run-time dependencies from Debian's packages.
 # Idempotent: installs only what is missing; prints the exact apt line when not root.
+# `--sanitize` adds what CI's sanitizer and fuzzing job (.ci/sanitize.sh) needs: clang and its
+# sanitizer/libFuzzer runtimes.
 set -euo pipefail
 PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev libpng-dev
       libassimp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg
-      assimp-testmodels)
+      assimp-testmodels python3-jsonschema libbullet-dev)
+if [ "${1:-}" = "--sanitize" ]; then
+  PKGS=(clang libclang-rt-14-dev)
+fi
 missing=()
 for p in "${PKGS[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

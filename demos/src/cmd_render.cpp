@@ -187,7 +187,7 @@ int render_command(const RenderOptions& o) {
   std::vector<std::unique_ptr<render::FrameSink>> hash_sinks;
   HashRecord record;
   if (!o.hash_file.empty()) {
-    record.scene = o.scene;
+    record.scene = scene_relative_to_golden(o.scene, o.hash_file);
     record.overrides = o.overrides;
     record.seed = static_cast<long long>(scene.seed);
     record.width = scene.render.width;

@@ -1,5 +1,6 @@
 #include "golden.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <utility>
 
@@ -28,7 +29,7 @@ std::string range_text(const HashRecord& r) {
 
 nlohmann::ordered_json to_json(const HashRecord& r) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
-  j["simreel_hashes"] = kHashFormat;
+  j["simreel_hashes"] = r.format;
   j["scene"] = r.scene;
   j["set"] = r.overrides;
   j["seed"] = r.seed;
@@ -61,7 +62,8 @@ HashRecord read_hash_record(const fs::path& path) {
   ObjectReader top(doc, "", file, errors);
   HashRecord r;
   const long long format = top.integer("simreel_hashes", -1, 1, kHashFormat);
-  if (format < 0) top.error_at("/simreel_hashes", "missing: expected 1 (a file written by `simreel render --hash`)");
+  if (format < 0) top.error_at("/simreel_hashes", "missing: expected 1 or 2 (a file written by `simreel render --hash`)");
+  r.format = int(std::max(1LL, format));
   r.scene = top.string("scene", "");
   if (r.scene.empty()) top.error_at("/scene", "expected the scene path, found nothing");
   if (const nlohmann::json* set = top.get("set")) {
@@ -172,6 +174,13 @@ class HashRecorder final : public render::FrameSink {
 
 std::unique_ptr<render::FrameSink> make_hash_recorder(const fs::path& path, HashRecord record) {
   return std::make_unique<HashRecorder>(path, std::move(record));
+}
+
+std::string scene_relative_to_golden(const fs::path& scene, const fs::path& golden) {
+  const fs::path abs_scene = fs::absolute(scene).lexically_normal();
+  const fs::path folder = fs::absolute(golden).lexically_normal().parent_path();
+  const fs::path rel = abs_scene.lexically_relative(folder);
+  return rel.empty() ? abs_scene.string() : rel.generic_string();
 }
 
 fs::path golden_frames_dir(const fs::path& golden) {

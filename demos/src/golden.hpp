@@ -37,10 +37,14 @@ struct Tolerance {
   int chash = 4;
 };
 
-inline constexpr int kHashFormat = 1;  ///< "simreel_hashes" in the file
+/// "simreel_hashes" in the file. 2: "scene" is relative to the golden file's folder (or
+/// absolute). 1 (older records, still read): "scene" is the path given to `render`, relative to
+/// the directory it ran in; `check` looks beside the golden first, then in the working directory.
+inline constexpr int kHashFormat = 2;
 
 struct HashRecord {
-  std::string scene;                   ///< path as given to `render` (relative to where it ran)
+  int format = kHashFormat;            ///< 1 or 2, kept by `check --update`
+  std::string scene;                   ///< see kHashFormat
   std::vector<std::string> overrides;  ///< --set POINTER=VALUE, in order
   long long seed = 0;
   int width = 0;
@@ -73,6 +77,11 @@ using render::write_file_atomic;
 /// with them to `path` atomically. abort() writes nothing.
 std::unique_ptr<render::FrameSink> make_hash_recorder(const std::filesystem::path& path,
                                                       HashRecord record);
+
+/// The "scene" to store in a format-2 record written to `golden`: `scene` (as given on the
+/// command line, relative to the working directory) made relative to the golden's folder, e.g.
+/// scene "scenes/a.json", golden "goldens/a.json" -> "../scenes/a.json".
+std::string scene_relative_to_golden(const std::filesystem::path& scene, const std::filesystem::path& golden);
 
 /// Directory of a golden's reference frames: `tests/golden/x.json` -> `tests/golden/x.frames`.
 std::filesystem::path golden_frames_dir(const std::filesystem::path& golden);

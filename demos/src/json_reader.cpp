@@ -243,6 +243,87 @@ void apply_override(json& doc, const std::string& assignment, const std::string&
                    " is not an object)");
 }
 
+namespace {
+thread_local KeyLog* g_key_log = nullptr;
+
+/// {"minimum": min, "maximum": max} with open and infinite ends left out or made exclusive.
+void add_range(json& schema, double min, double max, bool min_exclusive) {
+  if (std::isfinite(min)) schema[min_exclusive ? "exclusiveMinimum" : "minimum"] = min;
+  if (std::isfinite(max)) schema["maximum"] = max;
+}
+}  // namespace
+
+KeyLog::Scope::Scope(KeyLog& log) : previous_(g_key_log) { g_key_log = &log; }
+KeyLog::Scope::~Scope() { g_key_log = previous_; }
+KeyLog* KeyLog::current() { return g_key_log; }
+
+std::string KeyLog::normalise(const std::string& pointer) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < pointer.size()) {
+    const std::size_t next = pointer.find('/', i + 1);
+    const std::string token = pointer.substr(i + 1, (next == std::string::npos ? pointer.size() : next) - i - 1);
+    const bool index = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos;
+    out += "/" + (index ? std::string("*") : token);
+    if (next == std::string::npos) break;
+    i = next;
+  }
+  return out;
+}
+
+void KeyLog::add(const std::string& pointer, const std::string& key, const json& schema) {
+  const std::string object = normalise(pointer);
+  auto obj = std::find_if(objects_.begin(), objects_.end(), [&](const auto& o) { return o.first == object; });
+  if (obj == objects_.end()) {
+    objects_.push_back({object, {}});
+    obj = objects_.end() - 1;
+  }
+  auto k = std::find_if(obj->second.begin(), obj->second.end(), [&](const auto& e) { return e.first == key; });
+  if (k == obj->second.end()) {
+    obj->second.push_back({key, {schema}});
+    return;
+  }
+  auto& schemas = k->second;
+  const bool raw = schema.empty();
+  if (raw) return;  // a typed schema (or the same raw one) is already there
+  schemas.erase(std::remove_if(schemas.begin(), schemas.end(), [](const json& s) { return s.empty(); }),
+                schemas.end());
+  if (std::find(schemas.begin(), schemas.end(), schema) != schemas.end()) return;
+  // The same kind of value read with other bounds or another default (a range that depends on
+  // other keys, such as a pin's row in [0, rows - 1]): one schema with the widest bounds.
+  for (json& s : schemas) {
+    json a = s, b = schema;
+    for (json* x : {&a, &b})
+      for (const char* k : {"default", "minimum", "maximum", "exclusiveMinimum"}) x->erase(k);
+    if (a != b) continue;
+    if (s.value("default", json()) != schema.value("default", json())) s.erase("default");
+    for (const char* k : {"minimum", "exclusiveMinimum"}) {
+      if (!s.contains(k)) continue;
+      if (!schema.contains(k)) s.erase(k);
+      else s[k] = std::min(s[k].get<double>(), schema[k].get<double>());
+    }
+    if (s.contains("maximum")) {
+      if (!schema.contains("maximum")) s.erase("maximum");
+      else s["maximum"] = std::max(s["maximum"].get<double>(), schema["maximum"].get<double>());
+    }
+    return;
+  }
+  schemas.push_back(schema);
+}
+
+std::vector<std::string> KeyLog::keys(const std::string& pointer) const {
+  std::vector<std::string> out;
+  const std::string object = normalise(pointer);
+  for (const auto& [o, keys] : objects_)
+    if (o == object)
+      for (const auto& k : keys) out.push_back(k.first);
+  return out;
+}
+
+void ObjectReader::record(const std::string& key, const json& schema) const {
+  if (g_key_log != nullptr) g_key_log->add(pointer_, key, schema);
+}
+
 ObjectReader::ObjectReader(const json& object, std::string pointer, std::string file,
                            std::vector<std::string>& errors)
     : object_(object), pointer_(std::move(pointer)), file_(std::move(file)), errors_(errors) {}
@@ -251,6 +332,7 @@ bool ObjectReader::has(const std::string& key) const { return object_.contains(k
 
 const json* ObjectReader::get(const std::string& key) {
   known_.insert(key);
+  record(key, json::object());
   auto it = object_.find(key);
   return it == object_.end() ? nullptr : &*it;
 }
@@ -265,6 +347,12 @@ void ObjectReader::error_at(const std::string& ptr, const std::string& message) 
 
 double ObjectReader::number(const std::string& key, double fallback, double min, double max,
                             bool min_exclusive) {
+  if (g_key_log != nullptr) {
+    json schema = {{"type", "number"}};
+    add_range(schema, min, max, min_exclusive);
+    if (std::isfinite(fallback) && std::abs(fallback) < 1e299) schema["default"] = fallback;
+    record(key, schema);
+  }
   const json* v = get(key);
   if (!v) return fallback;
   std::string range = "a number";
@@ -287,6 +375,7 @@ double ObjectReader::number(const std::string& key, double fallback, double min,
 }
 
 long long ObjectReader::integer(const std::string& key, long long fallback, long long min, long long max) {
+  if (g_key_log != nullptr) record(key, {{"type", "integer"}, {"minimum", min}, {"maximum", max}, {"default", fallback}});
   const json* v = get(key);
   if (!v) return fallback;
   const std::string expected = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
@@ -318,6 +407,7 @@ long long ObjectReader::integer(const std::string& key, long long fallback, long
 }
 
 bool ObjectReader::boolean(const std::string& key, bool fallback) {
+  if (g_key_log != nullptr) record(key, {{"type", "boolean"}, {"default", fallback}});
   const json* v = get(key);
   if (!v) return fallback;
   if (!v->is_boolean()) {
@@ -328,6 +418,7 @@ bool ObjectReader::boolean(const std::string& key, bool fallback) {
 }
 
 std::string ObjectReader::string(const std::string& key, const std::string& fallback) {
+  if (g_key_log != nullptr) record(key, {{"type", "string"}, {"default", fallback}});
   const json* v = get(key);
   if (!v) return fallback;
   if (!v->is_string()) {
@@ -341,6 +432,11 @@ std::string ObjectReader::choice(const std::string& key, const std::string& fall
                                  const std::vector<std::string>& choices) {
   std::string expected = "one of";
   for (std::size_t i = 0; i < choices.size(); ++i) expected += (i ? ", \"" : " \"") + choices[i] + "\"";
+  if (g_key_log != nullptr) {
+    json schema = {{"enum", choices}};
+    if (!fallback.empty()) schema["default"] = fallback;
+    record(key, schema);
+  }
   const json* v = get(key);
   if (!v) return fallback;
   if (!v->is_string() || std::find(choices.begin(), choices.end(), v->get<std::string>()) == choices.end()) {
@@ -352,6 +448,13 @@ std::string ObjectReader::choice(const std::string& key, const std::string& fall
 
 std::vector<double> ObjectReader::numbers(const std::string& key, std::vector<double> fallback,
                                           std::size_t count, double min, double max, bool min_exclusive) {
+  if (g_key_log != nullptr) {
+    json item = {{"type", "number"}};
+    add_range(item, min, max, min_exclusive);
+    json schema = {{"type", "array"}, {"items", item}, {"minItems", count}, {"maxItems", count}};
+    if (fallback.size() == count) schema["default"] = fallback;
+    record(key, schema);
+  }
   const json* v = get(key);
   if (!v) return fallback;
   std::string expected = "an array of " + std::to_string(count) + " numbers";
@@ -390,6 +493,12 @@ std::array<double, 3> ObjectReader::vec3(const std::string& key, std::array<doub
 }
 
 std::array<double, 4> ObjectReader::color(const std::string& key, std::array<double, 4> fallback) {
+  if (g_key_log != nullptr)
+    record(key, {{"type", "array"},
+                 {"items", {{"type", "number"}, {"minimum", 0}, {"maximum", 1}}},
+                 {"minItems", 3},
+                 {"maxItems", 4},
+                 {"default", fallback}});
   const json* v = get(key);
   if (!v) return fallback;
   const std::string expected = "a color [r, g, b] or [r, g, b, a] with each in [0, 1]";

@@ -74,6 +74,45 @@ std::optional<std::pair<long long, long long>> parse_pair(std::string_view text,
 /// then rejects an unknown key). @throws SceneError naming the override and the file.
 void apply_override(json& doc, const std::string& assignment, const std::string& file);
 
+/// What the readers read, recorded for the JSON Schema (`simreel schema`) and for hints: while a
+/// KeyLog::Scope is alive on a thread, every ObjectReader on that thread records each key it
+/// reads with a JSON Schema of the value it accepts (type, range, default), under the object's
+/// pointer with array indices written as "*" ("/emitters/*/split"). The loader's own reads are
+/// the key table: nothing is listed twice.
+class KeyLog {
+ public:
+  /// Installs `log` for this thread until destroyed (the previous one is restored).
+  class Scope {
+   public:
+    explicit Scope(KeyLog& log);
+    ~Scope();
+    Scope(const Scope&) = delete;
+    Scope& operator=(const Scope&) = delete;
+
+   private:
+    KeyLog* previous_;
+  };
+  /// The log installed on this thread, or nullptr (the normal case: nothing is recorded).
+  static KeyLog* current();
+
+  /// Records `schema` for `key` of the object at `pointer`. A bare `{}` (a key read raw) never
+  /// replaces a typed schema; different typed schemas for one key are kept side by side (anyOf).
+  void add(const std::string& pointer, const std::string& key, const json& schema);
+  /// Objects (normalised pointers) -> keys in first-read order -> accepted schemas.
+  [[nodiscard]] const std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::vector<json>>>>>&
+  objects() const {
+    return objects_;
+  }
+  /// The keys read in the object at `pointer` (normalised), in first-read order.
+  [[nodiscard]] std::vector<std::string> keys(const std::string& pointer) const;
+
+  /// "/emitters/3/split" -> "/emitters/*/split".
+  static std::string normalise(const std::string& pointer);
+
+ private:
+  std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::vector<json>>>>> objects_;
+};
+
 /// One JSON object being read. Keys read through it are "known"; finish() reports the others.
 class ObjectReader {
  public:
@@ -87,7 +126,10 @@ class ObjectReader {
   std::vector<std::string>& errors() { return errors_; }
 
   /// Marks a key known without reading it (a key handled elsewhere).
-  void known(const std::string& key) { known_.insert(key); }
+  void known(const std::string& key) {
+    known_.insert(key);
+    record(key, json::object());
+  }
   /// The raw value of key, or nullptr if absent (marks the key known).
   const json* get(const std::string& key);
 
@@ -117,6 +159,9 @@ class ObjectReader {
   /// Fixed-length array of numbers each in [min, max].
   std::vector<double> numbers(const std::string& key, std::vector<double> fallback, std::size_t count,
                               double min, double max, bool min_exclusive = false);
+
+  /// Records `schema` for `key` in the thread's KeyLog, if one is installed.
+  void record(const std::string& key, const json& schema) const;
 
   /// Adds an error at this object's key.
   void error(const std::string& key, const std::string& expected, const json& found);

@@ -24,6 +24,8 @@ void add_run_options(CLI::App* cmd, simreel::app::RunOptions& o) {
                   "(VALUE is read as JSON; a bare word is a string)")
       ->take_all()
       ->allow_extra_args(false);
+  cmd->add_option("--threads", o.threads,
+                  "Simulation threads (overrides simulation.threads; 0 = all cores); results are identical at any count");
   cmd->add_option("--memory-limit", o.memory_limit,
                   "Refuse scenes whose estimated memory exceeds this many bytes (K, M, G suffixes; default "
                   "$SIMREEL_MEMORY_LIMIT or half the physical memory)");
@@ -63,6 +65,28 @@ int main(int argc, char** argv) {
                    "Write outputs on the render thread instead of writer threads (for measurements)");
   render->add_flag("-q,--quiet", render_opts.quiet, "No progress line");
 
+  simreel::app::SweepOptions sweep_opts;
+  auto* sweep = app.add_subcommand("sweep", "Render every combination of scene values (a wedge) into one labelled sheet");
+  add_run_options(sweep, sweep_opts);
+  sweep->add_option("--vary", sweep_opts.vary,
+                    "POINTER=V1,V2,...: values of one scene value to try (read as JSON); repeatable, every "
+                    "combination is rendered")
+      ->take_all();
+  sweep->add_option("--seeds", sweep_opts.seeds, "Seeds to try, e.g. 1,2,3 (one more axis)");
+  sweep->add_option("--contact-sheet", sweep_opts.contact_sheet,
+                    "The sheet: the last axis across, the others down, labelled with their values")
+      ->required();
+  sweep->add_option("--strip", sweep_opts.strip, "Frames per variant on the sheet, evenly from the range (default 3)");
+  sweep->add_option("--size", sweep_opts.size, "Frame size WIDTHxHEIGHT of every variant, e.g. 320x180");
+  sweep->add_option("--backend", sweep_opts.backend, "OpenGL context: osmesa (default) or egl");
+  sweep->add_option("-o,--output", sweep_opts.output_dir, "Also keep each variant's video as DIR/NN_<values>.mp4");
+  sweep->add_flag("--hash", sweep_opts.hash, "Also write a golden per variant, DIR/NN_<values>.json (needs -o DIR)");
+  sweep->add_option("--jobs", sweep_opts.jobs, "Variants rendered at once (default: the number of cores)");
+
+  std::string schema_output;
+  auto* schema = app.add_subcommand("schema", "Print the JSON Schema (draft 2020-12) of scene files, for editors");
+  schema->add_option("-o,--output", schema_output, "Write it to FILE instead of stdout");
+
   simreel::app::RunOptions sim_opts;
   std::string export_csv;
   auto* simulate = app.add_subcommand("simulate", "Simulate without rendering and export particle state as CSV");
@@ -89,9 +113,16 @@ int main(int argc, char** argv) {
   auto* presets = app.add_subcommand("presets", "List the effect presets (Coutinho §3.9.1) and their knobs with defaults");
   presets->add_option("effect", preset_name, "Only this effect");
   presets->add_flag("--json", preset_json, "Print an emitter object with every knob at its default, ready to paste");
+  bool preset_expand = false;
+  std::vector<std::string> preset_sets;
+  presets->add_flag("--expand", preset_expand,
+                    "Print the emitters and force fields the effect derives, as scene JSON (a base for \"overrides\")");
+  presets->add_option("--set", preset_sets, "With --expand: set a knob, KNOB=VALUE (VALUE read as JSON)")->take_all();
 
   auto* check = app.add_subcommand("check", "Re-render what a golden hash file describes and compare frame hashes");
-  check->add_option("golden", check_opts.golden, "Golden file written by `render --hash` or `check --update`")->required();
+  check->add_option("goldens", check_opts.goldens,
+                    "Golden files written by `render --hash` or `check --update`, or folders searched for them")
+      ->required();
   check->add_option("--tolerance", check_opts.tolerance, "Largest Hamming distance accepted for every hash kind")
       ->check(CLI::Range(0, 64));
   check->add_flag("--update", check_opts.update,
@@ -101,8 +132,15 @@ int main(int argc, char** argv) {
   check->add_flag("--allow-outside", check_opts.allow_outside,
                   "Let the golden's scene path leave the golden's folder (absolute or with ..); off by default so "
                   "an untrusted golden cannot make check read other files");
+  check->add_option("--root", check_opts.roots,
+                    "Also trust scenes under this folder (besides each golden's folder and the working directory); "
+                    "repeatable");
+  check->add_option("--junit", check_opts.junit, "Write a JUnit XML file: one test case per golden");
+  check->add_option("--report", check_opts.report_dir,
+                    "Write DIR/index.html with expected | actual | difference images of every failing frame");
 
   render_opts.renders = true;
+  sweep_opts.renders = true;
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -118,11 +156,13 @@ int main(int argc, char** argv) {
 
   try {
     if (render->parsed()) return simreel::app::render_command(render_opts);
+    if (schema->parsed()) return simreel::app::schema_command(schema_output);
+    if (sweep->parsed()) return simreel::app::sweep_command(sweep_opts);
     if (simulate->parsed()) return simreel::app::simulate_command(sim_opts, export_csv);
     if (validate->parsed()) return simreel::app::validate_command(validate_scene, validate_overrides);
     if (hash->parsed()) return simreel::app::hash_command(images, algorithm);
     if (check->parsed()) return simreel::app::check_command(check_opts);
-    if (presets->parsed()) return simreel::app::presets_command(preset_name, preset_json);
+    if (presets->parsed()) return simreel::app::presets_command(preset_name, preset_json, preset_expand, preset_sets);
   } catch (const simreel::app::SceneError& e) {
     for (const auto& m : e.messages()) std::cerr << "simreel: error: " << m << "\n";
     return 2;

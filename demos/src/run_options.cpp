@@ -135,6 +135,11 @@ Scene prepare_scene(const RunOptions& o, int* first) {
       throw SceneError("--backend " + *o.backend + ": expected osmesa or egl");
     }
   }
+  if (o.threads) {
+    if (*o.threads < 0 || *o.threads > 1024)
+      throw SceneError("--threads " + std::to_string(*o.threads) + ": expected an integer in [0, 1024] (0 = all cores)");
+    scene.world.threads = *o.threads;
+  }
   check_memory(scene, o);
   return scene;
 }

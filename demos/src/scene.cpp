@@ -41,6 +41,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   scene.file = file;
   if (!doc.is_object()) throw SceneError(file + ": /: expected a scene object, found " + describe(doc));
   ObjectReader r(doc, "", file, errors);
+  r.string("$schema", "");  // the JSON Schema an editor checks the file with (`simreel schema`)
   r.string("description", "");
   scene.seed = std::uint64_t(r.integer("seed", 0, 0, std::numeric_limits<long long>::max()));
   scene.fps = r.number("fps", 30.0, 0.0, 1000.0, true);

@@ -58,6 +58,8 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
         ObjectReader pr((*pins)[i], pp, file, errors);
         sim::ClothPin pin;
         if (!pr.has("row") || !pr.has("column")) pr.error_at(pp, "expected \"row\" and \"column\"");
+        // Their upper bound depends on the cloth: the schema (KeyLog) records them without one.
+        for (const char* key : {"row", "column"}) pr.record(key, {{"type", "integer"}, {"minimum", 0}});
         pin.row = std::size_t(pr.integer("row", 0, 0, std::max<long long>(0, (long long)d.rows - 1)));
         pin.column = std::size_t(pr.integer("column", 0, 0, std::max<long long>(0, (long long)d.columns - 1)));
         pin.path = keyframe_path(pr, "path");

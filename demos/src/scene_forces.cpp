@@ -44,6 +44,8 @@ void particle_forces(ObjectReader& r, sim::ParticleSystemDef& s) {
     sim::SpringDef sp;
     if (n_init < 2) o.error_at(p, "expected springs only between initial_particles (at least 2)");
     if (!o.has("a") || !o.has("b")) o.error_at(p, "expected \"a\" and \"b\" (indices into initial_particles)");
+    // Their upper bound depends on the scene: the schema (KeyLog) records them without one.
+    for (const char* key : {"a", "b"}) o.record(key, {{"type", "integer"}, {"minimum", 0}});
     sp.a = std::uint64_t(o.integer("a", 0, 0, std::max(0LL, n_init - 1)));
     sp.b = std::uint64_t(o.integer("b", 1, 0, std::max(0LL, n_init - 1)));
     if (sp.a == sp.b && o.has("a")) o.error_at(o.pointer("b"), "expected b different from a");

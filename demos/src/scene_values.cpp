@@ -34,6 +34,18 @@ const json* object_member(ObjectReader& r, const std::string& key) {
 
 sim::Distribution distribution(ObjectReader& r, const std::string& key, sim::Distribution fallback,
                                double min, double max, const std::string& unit) {
+  if (KeyLog::current() != nullptr) {
+    // A number, {"mean", "deviation", "min", "max"} or {"min", "max"} (Coutinho §3.8).
+    json number = {{"type", "number"}};
+    if (std::isfinite(min)) number["minimum"] = min;
+    if (std::isfinite(max)) number["maximum"] = max;
+    const json object = {{"type", "object"},
+                         {"properties",
+                          {{"mean", number}, {"deviation", {{"type", "number"}, {"minimum", 0}}}, {"min", number},
+                           {"max", number}}},
+                         {"additionalProperties", false}};
+    r.record(key, {{"anyOf", {number, object}}, {"default", fallback.mean}, {"x-unit", unit}});
+  }
   const json* v = r.get(key);
   if (!v) return fallback;
   const std::string range = std::string(" in [") + (std::isfinite(min) ? std::to_string(min) : "-inf") + ", " +

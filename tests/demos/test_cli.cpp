@@ -424,7 +424,8 @@ TEST(Check, HashRecordDescribesTheRunAndMatchesItself) {
   record(r);
   if (HasFatalFailure()) return;
   const auto j = nlohmann::json::parse(slurp(r.golden));
-  EXPECT_EQ(j.at("simreel_hashes"), 1);
+  EXPECT_EQ(j.at("simreel_hashes"), 2);
+  EXPECT_EQ(j.at("scene"), "s.json") << "relative to the golden's folder";
   EXPECT_EQ(j.at("size"), "96x72");
   EXPECT_EQ(j.at("frames"), "0:13");
   EXPECT_EQ(j.at("seed"), 4) << "the seed after --set";

@@ -28,32 +28,40 @@ bool dynamic(const RigidBodies& bodies, std::uint32_t i) {
   return i != kStaticBody && bodies.is_dynamic(i);
 }
 
-/// 1 / (J M⁻¹ Jᵀ) for the direction d at lever arms ra, rb (0 if both sides are static).
-double effective_mass(const Side& a, const Side& b, const Vec3& ra, const Vec3& rb,
-                      const Vec3& d) {
-  const Vec3 rad = ra.cross(d), rbd = rb.cross(d);
-  const double k =
-      a.inv_mass + b.inv_mass + rad.dot(a.inv_inertia * rad) + rbd.dot(b.inv_inertia * rbd);
-  return k > 0.0 ? 1.0 / k : 0.0;
+using Row = ContactSolver::Row;
+using Axis = ContactSolver::Axis;
+
+Axis make_axis(const Side& a, const Side& b, bool move_a, bool move_b, const Vec3& ra,
+               const Vec3& rb, const Vec3& d) {
+  Axis x;
+  x.d = d;
+  x.ra_d = ra.cross(d);
+  x.rb_d = rb.cross(d);
+  x.ia_d = move_a ? Vec3(a.inv_inertia * x.ra_d) : Vec3::Zero();
+  x.ib_d = move_b ? Vec3(b.inv_inertia * x.rb_d) : Vec3::Zero();
+  const double k = a.inv_mass + b.inv_mass + x.ra_d.dot(x.ia_d) + x.rb_d.dot(x.ib_d);
+  x.mass = k > 0.0 ? 1.0 / k : 0.0;
+  return x;
 }
 
-/// Velocity of the body-fixed point at lever arm r, from the arrays v and w (real or pseudo).
-Vec3 velocity_at(const std::vector<Vec3>& v, const std::vector<Vec3>& w, std::uint32_t i,
-                 const Vec3& r) {
-  if (i == kStaticBody) return Vec3::Zero();
-  return v[i] + w[i].cross(r);
+/// (v_b(p) - v_a(p)) · d from the arrays v and w (real or pseudo velocities).
+[[gnu::always_inline]] inline double relative_speed(const Row& r, const Axis& x, const std::vector<Vec3>& v,
+                      const std::vector<Vec3>& w) {
+  double s = 0.0;
+  if (r.b != kStaticBody) s += v[r.b].dot(x.d) + w[r.b].dot(x.rb_d);
+  if (r.a != kStaticBody) s -= v[r.a].dot(x.d) + w[r.a].dot(x.ra_d);
+  return s;
 }
 
-/// Applies +P at b and -P at a to the velocity arrays (v, w): real or pseudo.
-void apply(RigidBodies& bodies, std::vector<Vec3>& v, std::vector<Vec3>& w, std::uint32_t a,
-           std::uint32_t b, const Vec3& ra, const Vec3& rb, const Vec3& P) {
-  if (dynamic(bodies, a)) {
-    v[a] -= bodies.inv_mass[a] * P;
-    w[a] -= bodies.inv_inertia_world[a] * ra.cross(P);
+/// Applies the impulse λ d at b and -λ d at a to the arrays (v, w).
+[[gnu::always_inline]] inline void apply(const Row& r, const Axis& x, double lambda, std::vector<Vec3>& v, std::vector<Vec3>& w) {
+  if (r.move_a) {
+    v[r.a] -= (r.inv_mass_a * lambda) * x.d;
+    w[r.a] -= lambda * x.ia_d;
   }
-  if (dynamic(bodies, b)) {
-    v[b] += bodies.inv_mass[b] * P;
-    w[b] += bodies.inv_inertia_world[b] * rb.cross(P);
+  if (r.move_b) {
+    v[r.b] += (r.inv_mass_b * lambda) * x.d;
+    w[r.b] += lambda * x.ib_d;
   }
 }
 
@@ -85,15 +93,19 @@ void ContactSolver::prepare(const RigidBodies& bodies, std::span<const ContactPo
     const Side a = side_of(bodies, c.body_a), b = side_of(bodies, c.body_b);
     r.a = c.body_a;
     r.b = c.body_b;
-    r.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - a.position);
-    r.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - b.position);
-    r.n = c.normal;
-    tangent_basis(r.n, r.t1, r.t2);
-    r.normal_mass = effective_mass(a, b, r.ra, r.rb, r.n);
-    r.tangent_mass[0] = effective_mass(a, b, r.ra, r.rb, r.t1);
-    r.tangent_mass[1] = effective_mass(a, b, r.ra, r.rb, r.t2);
+    r.move_a = dynamic(bodies, c.body_a);
+    r.move_b = dynamic(bodies, c.body_b);
+    r.inv_mass_a = r.move_a ? a.inv_mass : 0.0;
+    r.inv_mass_b = r.move_b ? b.inv_mass : 0.0;
+    const Vec3 ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - a.position);
+    const Vec3 rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - b.position);
+    Vec3 t1, t2;
+    tangent_basis(c.normal, t1, t2);
+    r.n = make_axis(a, b, r.move_a, r.move_b, ra, rb, c.normal);
+    r.t1 = make_axis(a, b, r.move_a, r.move_b, ra, rb, t1);
+    r.t2 = make_axis(a, b, r.move_a, r.move_b, ra, rb, t2);
     r.friction = c.friction;
-    const double vn = relative_velocity(bodies, c.body_a, c.body_b, c.point).dot(r.n);
+    const double vn = relative_velocity(bodies, c.body_a, c.body_b, c.point).dot(c.normal);
     if (c.depth < 0.0) {
       // Speculative contact (a gap of -depth): the bodies may close the gap in this step but no
       // more, so a contact found a little early neither stops them short nor lets them tunnel.
@@ -116,9 +128,9 @@ void ContactSolver::warm_start(RigidBodies& bodies, std::span<ContactPoint> cont
       continue;
     }
     const Row& r = rows_[k];
-    const Vec3 P = c.normal_impulse * r.n + c.tangent_impulse[0] * r.t1 +
-                   c.tangent_impulse[1] * r.t2;
-    apply(bodies, bodies.linear_velocity, bodies.angular_velocity, r.a, r.b, r.ra, r.rb, P);
+    apply(r, r.n, c.normal_impulse, bodies.linear_velocity, bodies.angular_velocity);
+    apply(r, r.t1, c.tangent_impulse[0], bodies.linear_velocity, bodies.angular_velocity);
+    apply(r, r.t2, c.tangent_impulse[1], bodies.linear_velocity, bodies.angular_velocity);
   }
 }
 
@@ -133,30 +145,31 @@ double ContactSolver::iterate_velocities(RigidBodies& bodies, std::span<ContactP
     // Friction first, with the normal impulse of the previous sweep as its bound: the normal
     // row, solved last, then has the final say on penetration (Catto 2005).
     const double limit = r.friction * c.normal_impulse;
-    const double old_t[2] = {c.tangent_impulse[0], c.tangent_impulse[1]};
-    const Vec3* const tangents[2] = {&r.t1, &r.t2};
+    const Axis* const tangents[2] = {&r.t1, &r.t2};
     for (int j = 0; j < 2; ++j) {
-      const Vec3 dv = velocity_at(v, w, r.b, r.rb) - velocity_at(v, w, r.a, r.ra);
-      c.tangent_impulse[j] -= r.tangent_mass[j] * dv.dot(*tangents[j]);
-      const double delta = c.tangent_impulse[j] - (j == 0 ? old_t[0] : old_t[1]);
-      apply(bodies, v, w, r.a, r.b, r.ra, r.rb, delta * *tangents[j]);
+      const Axis& t = *tangents[j];
+      const double old_t = c.tangent_impulse[j];
+      c.tangent_impulse[j] = old_t - t.mass * relative_speed(r, t, v, w);
+      apply(r, t, c.tangent_impulse[j] - old_t, v, w);
     }
     // Project the accumulated tangent impulse onto the Coulomb disc |λ_t| <= μ λ_n.
-    const double mag = std::hypot(c.tangent_impulse[0], c.tangent_impulse[1]);
+    const double mag = std::sqrt(c.tangent_impulse[0] * c.tangent_impulse[0] +
+                                 c.tangent_impulse[1] * c.tangent_impulse[1]);
     if (mag > limit) {
       const double s = mag > 0.0 ? limit / mag : 0.0;
       const double fix0 = c.tangent_impulse[0] * s - c.tangent_impulse[0];
       const double fix1 = c.tangent_impulse[1] * s - c.tangent_impulse[1];
       c.tangent_impulse[0] += fix0;
       c.tangent_impulse[1] += fix1;
-      apply(bodies, v, w, r.a, r.b, r.ra, r.rb, fix0 * r.t1 + fix1 * r.t2);
+      apply(r, r.t1, fix0, v, w);
+      apply(r, r.t2, fix1, v, w);
     }
     // Normal: reach target_vn, accumulated impulse clamped to >= 0 (Catto 2005).
-    const double vn = (velocity_at(v, w, r.b, r.rb) - velocity_at(v, w, r.a, r.ra)).dot(r.n);
+    const double vn = relative_speed(r, r.n, v, w);
     const double old_n = c.normal_impulse;
-    c.normal_impulse = std::max(old_n - r.normal_mass * (vn - r.target_vn), 0.0);
+    c.normal_impulse = std::max(old_n - r.n.mass * (vn - r.target_vn), 0.0);
     const double dn = c.normal_impulse - old_n;
-    apply(bodies, v, w, r.a, r.b, r.ra, r.rb, dn * r.n);
+    apply(r, r.n, dn, v, w);
     largest = std::max(largest, std::abs(dn));
   }
   return largest;
@@ -168,10 +181,10 @@ void ContactSolver::solve_positions(RigidBodies& bodies) {
   for (int it = 0; it < settings_.position_iterations; ++it)
     for (Row& r : rows_) {
       if (r.target_bias <= 0.0 && r.bias_impulse <= 0.0) continue;
-      const double vn = (velocity_at(v, w, r.b, r.rb) - velocity_at(v, w, r.a, r.ra)).dot(r.n);
+      const double vn = relative_speed(r, r.n, v, w);
       const double old = r.bias_impulse;
-      r.bias_impulse = std::max(old - r.normal_mass * (vn - r.target_bias), 0.0);
-      apply(bodies, v, w, r.a, r.b, r.ra, r.rb, (r.bias_impulse - old) * r.n);
+      r.bias_impulse = std::max(old - r.n.mass * (vn - r.target_bias), 0.0);
+      apply(r, r.n, r.bias_impulse - old, v, w);
     }
 }
 

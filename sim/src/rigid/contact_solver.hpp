@@ -107,18 +107,29 @@ class ContactSolver {
   /// warm_start, settings().velocity_iterations sweeps, solve_positions, finish.
   void solve(RigidBodies& bodies, std::span<ContactPoint> contacts);
 
- private:
+ // The solver's rows (public only so the solver's helper functions can take them).
+  /// One direction d (normal or tangent) of a contact, with everything an iteration needs
+  /// precomputed so a sweep does no matrix products: the lever-arm crosses r × d and the
+  /// angular velocity change per unit impulse I_w⁻¹ (r × d) of each side (zero for a side that
+  /// does not move).
+  struct Axis {
+    Vec3 d;
+    Vec3 ra_d, rb_d;  ///< ra × d, rb × d
+    Vec3 ia_d, ib_d;  ///< I_a⁻¹ (ra × d), I_b⁻¹ (rb × d); zero unless dynamic
+    double mass;      ///< 1 / (J M⁻¹ Jᵀ) along d (kg)
+  };
   struct Row {
     std::uint32_t a, b;
-    Vec3 ra, rb;        ///< (m) contact point minus centre of mass, world
-    Vec3 n, t1, t2;
-    double normal_mass;      ///< 1 / (J M⁻¹ Jᵀ) along n (kg)
-    double tangent_mass[2];  ///< along t1, t2
+    bool move_a, move_b;     ///< dynamic sides (impulses change their velocities)
+    double inv_mass_a, inv_mass_b;
+    Axis n, t1, t2;
     double target_vn;        ///< (m/s) the normal velocity to reach: -e v_n⁻ or 0
     double target_bias;      ///< (m/s) pseudo-velocity to reach: β (depth - slop)/h or 0
     double friction;
     double bias_impulse;     ///< accumulated split impulse (N s), >= 0
   };
+
+ private:
   ContactSolverSettings settings_;
   std::vector<Row> rows_;
 };

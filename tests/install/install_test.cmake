@@ -1,0 +1,26 @@
+# ctest install.consumer: installs the build into a fresh prefix, then configures, builds and runs
+# tests/install/consumer (find_package(simreel)) against it: load a scene, step, render a PNG.
+# Variables: BUILD_DIR, SOURCE_DIR, WORK_DIR, GENERATOR.
+file(REMOVE_RECURSE ${WORK_DIR})
+function(run)
+  execute_process(COMMAND ${ARGV} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGV}\n${out}\n${err}")
+  endif()
+endfunction()
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix)
+foreach(f include/simreel/sim/world.hpp include/simreel/scene/scene.hpp bin/simreel)
+  if(NOT EXISTS ${WORK_DIR}/prefix/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/install/consumer -B ${WORK_DIR}/build -G "${GENERATOR}"
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix)
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(${WORK_DIR}/build/first_frame ${SOURCE_DIR}/demos/scenes/fountain.json 10 ${WORK_DIR}/frame.png)
+file(SIZE ${WORK_DIR}/frame.png size)
+if(size LESS 1000)
+  message(FATAL_ERROR "frame.png is ${size} bytes")
+endif()
+message(STATUS "install.consumer: rendered ${WORK_DIR}/frame.png (${size} bytes)")
+file(REMOVE_RECURSE ${WORK_DIR})
