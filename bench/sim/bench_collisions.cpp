@@ -1,9 +1,11 @@
 // Collision benchmarks (Coutinho Ch. 2–3). Figures go in issue notes, never thresholds in tests.
-//   rain_on_mesh/N        N particles raining onto a 100k-triangle height-field mesh, whole step
+//   rain_on_mesh/N/T      N particles raining onto a 100k-triangle height-field mesh, whole step,
+//                         T threads (WorldDef::threads)
 //   mesh_broad/N, mesh_broad_narrow/N
 //                         the same swept segments against the mesh: AABB-tree query alone
 //                         (broad) and query + swept-sphere triangle tests (broad + narrow)
-//   internal/N            N particles in a box with particle–particle collisions, whole step
+//   internal_world/N/T    N particles in a box with particle–particle collisions, whole step,
+//                         T threads
 //   internal_grid/N, internal_solve/N
 //                         the grid pair search (broad) and the sequential-impulse solve (narrow
 //                         and response) of the same particles
@@ -46,7 +48,7 @@ MeshDef terrain() {
 
 void rain_on_mesh(benchmark::State& state) {
   const auto n = std::size_t(state.range(0));
-  World world(WorldDef{1.0 / 240, 1, 0.05});
+  World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
   world.add_mesh(terrain());
   ParticleSystemDef def;
   def.emitter.rate = 0.0;
@@ -119,7 +121,7 @@ detail::ParticleCollider cloud(std::size_t n) {
 
 void internal_world(benchmark::State& state) {
   const auto n = std::size_t(state.range(0));
-  World world(WorldDef{1.0 / 240, 1, 0.05});
+  World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
   ParticleSystemDef def;
   def.emitter.rate = 0.0;
   def.emitter.max_particles = n;
@@ -215,10 +217,10 @@ void pile_in_bowl(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(rain_on_mesh)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK(rain_on_mesh)->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(mesh_phases, mesh_broad, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(mesh_phases, mesh_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
-BENCHMARK(internal_world)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_solve, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(pile_in_bowl)->Iterations(1)->Unit(benchmark::kSecond);

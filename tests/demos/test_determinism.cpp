@@ -107,7 +107,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"fountain", 0x67acdc7e984d7ac4ull},
       {"jet", 0x32e133308e45664full},
       {"jet_crates", 0xf76dd9ea0ed97285ull},
-      {"pour", 0x2e0974bddbb765a4ull},
+      {"pour", 0x7c754b765345a771ull},
       {"rain", 0xb2c0900519690b5full},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
       {"shells", 0x7d0ae63ec5578a8bull},

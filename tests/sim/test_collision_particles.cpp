@@ -1,4 +1,4 @@
-// Particle–particle collisions: hashed grid (Coutinho §2.3.1), pair impulses (§3.6.1) and the
+// Particle–particle collisions: uniform and hashed grids (Coutinho §2.3.1–2.3.2), pair impulses (§3.6.1) and the
 // simultaneous-impulse linear system (§3.6.2) reached by the sequential-impulse solver.
 #include <gtest/gtest.h>
 
@@ -186,6 +186,83 @@ TEST(SimParticleCollision, MultiLevelGridFindsExactlyTheBruteForcePairs) {
     EXPECT_GT(brute.size(), 300u);
     EXPECT_EQ(found, brute);  // same pairs, none twice
   }
+}
+
+/// The pairs (smaller index first, sorted) brute force finds within the reach find_contacts()
+/// uses (overlaps for h = 0, plus the speculative margin for h > 0).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_pairs(const detail::ParticleCollider& pc,
+                                                                  double h) {
+  const double m = h > 0.0 ? pc.pair_margin_fraction : 0.0;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+  for (std::uint32_t i = 0; i < pc.x.size(); ++i)
+    for (std::uint32_t j = i + 1; j < pc.x.size(); ++j)
+      if ((pc.x[i] - pc.x[j]).norm() <
+          pc.radius[i] + pc.radius[j] + m * std::min(pc.radius[i], pc.radius[j]))
+        out.emplace_back(i, j);
+  return out;
+}
+
+TEST(SimParticleCollision, SortedGridFindsExactlyTheBruteForcePairs) {
+  // The uniform grid sorts particles by cell and tests each pair once (half stencil). Dense
+  // boxes use a counting sort, a box with far more cells than particles (a few particles far
+  // away) a comparison sort of the same keys, and one too wide for 21-bit cell coordinates the
+  // hashed grid: every pair must be found exactly once in each case, at rest (speculative
+  // contacts within the margin count) and overlapping.
+  for (int spread : {0, 1, 2}) {
+    detail::ParticleCollider pc;
+    Rng rng(7, std::uint64_t(spread));
+    for (int i = 0; i < 2500; ++i) {
+      pc.x.emplace_back(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(0.0, 0.2));
+      pc.v.emplace_back(Vec3::Zero());
+      pc.inv_mass.push_back(1.0);
+      pc.radius.push_back(rng.uniform(0.008, 0.012));
+      pc.restitution.push_back(0.5);
+      pc.friction.push_back(0.1);
+    }
+    if (spread == 1) pc.x[17] = Vec3(40.0, -25.0, 90.0);  // sparse: comparison sort
+    if (spread == 2) pc.x[17] = Vec3(1e5, 0.0, 0.0);      // > 2^21 cells: hashed grid
+    for (double h : {0.0, 1.0 / 240}) {
+      pc.find_contacts(0.05, h);
+      EXPECT_EQ(pc.levels, 1);
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> found;
+      for (const auto& c : pc.contacts) {
+        found.emplace_back(std::min(c.i, c.j), std::max(c.i, c.j));
+        // The normal points from i to j.
+        EXPECT_GT(c.n.dot(pc.x[c.j] - pc.x[c.i]), 0.0);
+      }
+      std::sort(found.begin(), found.end());
+      const auto brute = brute_pairs(pc, h);
+      EXPECT_GT(brute.size(), 1000u);
+      EXPECT_EQ(found, brute) << "spread " << spread << ", h " << h;
+    }
+  }
+}
+
+TEST(SimParticleCollision, LargeCollidingSystemIsBitIdenticalAtAnyThreadCount) {
+  // Above the parallel threshold the solve sweeps slabs of grid cells two at a time (even, then
+  // odd), on as many threads as given: the state must not depend on the count.
+  auto run = [](int threads) {
+    World world(WorldDef{1.0 / 240, 3, 0.05, threads});
+    PlaneDef ground;
+    world.add_plane(ground);
+    ParticleSystemDef def = test::spawn_only_system();
+    def.collide_particles = true;
+    def.emitter.max_particles = 20000;
+    const auto ps = world.add_particle_system(def);
+    Rng rng(5, 0);
+    for (int i = 0; i < 20000; ++i)
+      world.spawn_particle(ps, Vec3(rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), rng.uniform(0.01, 0.3)),
+                           Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)), 1e-3,
+                           0.01, 100);
+    for (int s = 0; s < 6; ++s) world.advance(1.0 / 240);
+    const ParticleView v = world.particles(ps);
+    std::vector<float> out(v.position, v.position + 3 * v.count);
+    out.insert(out.end(), v.velocity, v.velocity + 3 * v.count);
+    return out;
+  };
+  const auto one = run(1);
+  EXPECT_EQ(one, run(2));
+  EXPECT_EQ(one, run(3));
 }
 
 TEST(SimParticleCollision, StackOfTenOnAPlaneStaysStackedWithoutDrift) {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <type_traits>
 
+#include "particles/forces.hpp"  // kParallelMin
+
 namespace simreel::sim::detail {
 
 namespace {
@@ -17,6 +19,26 @@ std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uin
   const auto h = std::uint64_t(x) * 73856093ull ^ std::uint64_t(y) * 19349663ull ^
                  std::uint64_t(z) * 83492791ull ^ std::uint64_t(level) * 2654435761ull;
   return std::uint32_t(h ^ (h >> 29)) & mask;
+}
+
+}  // namespace
+
+namespace {
+
+/// a[k] = a[order[k]] for every k, through `tmp`.
+template <class T>
+void permute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
+  tmp.resize(a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) tmp[k] = a[order[k]];
+  a.swap(tmp);
+}
+
+/// a[order[k]] = a[k] for every k (the inverse of permute), through `tmp`.
+template <class T>
+void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
+  tmp.resize(a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) tmp[order[k]] = a[k];
+  a.swap(tmp);
 }
 
 }  // namespace
@@ -33,6 +55,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   friction.resize(n);
   key.resize(n);
   collides.resize(n);
+  half_dt_.resize(n);
   std::size_t k = 0;
   for (const auto& m : members) {
     const ParticleStore& s = *m.store;
@@ -45,13 +68,43 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       friction[k] = m.friction;
       key[k] = (std::uint64_t(m.system) << 40) | s.id[i];
       collides[k] = m.collide ? 1 : 0;
+      half_dt_[k] = 0.5 * std::min(double(s.age[i]), h);
     }
   }
   x_before.clear();
   if (n < 2) return;
-  find_contacts(contact_speed, h);
+  key_flat_ = key;
+  // The working arrays go into cell order, so that every later pass reads neighbours from
+  // nearby memory; perm_ maps them back.
+  contacts.clear();
+  choose_cells(h);
+  const bool reordered = levels == 1 && build_grid();
+  if (reordered) {
+    permute(x, order_, tmp3_);
+    permute(v, order_, tmp3_);
+    permute(inv_mass, order_, tmp1_);
+    permute(radius, order_, tmp1_);
+    permute(restitution, order_, tmp1_);
+    permute(friction, order_, tmp1_);
+    permute(half_dt_, order_, tmp1_);
+    std::vector<std::uint64_t> tk;
+    permute(key, order_, tk);
+    std::vector<std::uint8_t> tc;
+    permute(collides, order_, tc);
+    perm_.swap(order_);
+    order_.resize(n);
+    for (std::size_t q = 0; q < n; ++q) order_[q] = std::uint32_t(q);
+    find_pairs(contact_speed, h);
+  } else {
+    perm_.resize(n);
+    for (std::size_t q = 0; q < n; ++q) perm_[q] = std::uint32_t(q);
+    find_contacts_hashed(contact_speed, h);
+  }
+  const std::size_t pair_count = contacts.size();
   if (colliders != nullptr && !colliders->empty())
     find_collider_contacts(*colliders, h, contact_speed);
+  bands_.clear();
+  if (reordered) make_bands(pair_count);
   WarmCache* cache = nullptr;
   if (warm_start && !members.empty()) {
     for (WarmCache& c : caches_)
@@ -72,13 +125,12 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   // acceleration): dt Δv / 2. A stack whose weight the solve cancels stays where it was instead
   // of sinking g h² / 2 per step into overlaps the projection must undo.
   x_before = x;
-  k = 0;
-  for (const auto& m : members) {
-    const ParticleStore& s = *m.store;
-    for (std::size_t i = 0; i < s.count; ++i, ++k)
-      x[k] += 0.5 * std::min(double(s.age[i]), h) * (v[k] - v_before_[k]);
-  }
+  for (std::size_t q = 0; q < n; ++q) x[q] += half_dt_[q] * (v[q] - v_before_[q]);
   project_positions();
+  // Back to flat order: x, v and x_before are indexed like the members' particles again.
+  unpermute(x, perm_, tmp3_);
+  unpermute(v, perm_, tmp3_);
+  unpermute(x_before, perm_, tmp3_);
   k = 0;
   for (const auto& m : members) {
     ParticleStore& s = *m.store;
@@ -158,7 +210,19 @@ void ParticleCollider::forget_system(std::uint32_t serial) {
 
 void ParticleCollider::load_warm_start(const WarmCache& c) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
+  // The first cache entry of each particle's key, by a walk over the particles in flat order
+  // (keys ascending within a system, systems in registration order), searching only where a key
+  // goes back.
+  const std::size_t n = key_flat_.size();
+  warm_first_.resize(n);
   std::size_t cursor = 0;
+  for (std::size_t f = 0; f < n; ++f) {
+    const std::uint64_t kf = key_flat_[f];
+    if (f > 0 && kf < key_flat_[f - 1])
+      cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), kf) - c.ki.begin());
+    while (cursor < c.ki.size() && c.ki[cursor] < kf) ++cursor;
+    warm_first_[f] = std::uint32_t(cursor);
+  }
   for (Contact& ct : contacts) {
     ct.pn = 0.0;
     ct.pt = Vec3::Zero();
@@ -166,17 +230,13 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
     // previous step's says nothing about it.
     if (ct.target > 0.0) continue;
     const bool wall = ct.i == kCollider;
-    const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
+    const std::uint32_t owner = wall ? ct.j : ct.i;
+    const std::uint64_t ki = key[owner];
     const std::uint64_t kj = wall ? (kWall | ct.collider) : key[ct.j];
-    // Contacts come in ascending particle order, mostly with ascending keys: walk a cursor,
-    // and search only when a key goes back.
-    if (cursor > 0 && (cursor > c.ki.size() || c.ki[cursor - 1] >= ki))
-      cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), ki) - c.ki.begin());
-    while (cursor < c.ki.size() && c.ki[cursor] < ki) ++cursor;
     // A collider may give a particle several contacts: the one with the nearest normal.
     std::size_t best = c.ki.size();
     double best_dot = 0.99;
-    for (std::size_t q = cursor; q < c.ki.size() && c.ki[q] == ki; ++q) {
+    for (std::size_t q = warm_first_[perm_[owner]]; q < c.ki.size() && c.ki[q] == ki; ++q) {
       if (c.kj[q] != kj) continue;
       const double dot = wall ? c.n[q].dot(ct.n) : 1.0;
       if (dot < best_dot) continue;
@@ -192,28 +252,38 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
   }
 }
 
-void ParticleCollider::store_warm_start(WarmCache& c) const {
+void ParticleCollider::store_warm_start(WarmCache& c) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
-  c.ki.clear();
-  c.kj.clear();
-  c.n.clear();
-  c.pt.clear();
-  c.pn.clear();
-  bool sorted = true;
+  // Entries in the flat order of their first particle (a stable counting sort; ties in contact
+  // order), which is ascending key order unless systems' keys interleave.
+  const std::size_t n = key_flat_.size();
+  count_.assign(n + 1, 0);
+  std::size_t m = 0;
+  for (const Contact& ct : contacts) {
+    if (!(ct.pn > 0.0)) continue;
+    ++count_[perm_[ct.i == kCollider ? ct.j : ct.i] + 1];
+    ++m;
+  }
+  for (std::size_t f = 0; f < n; ++f) count_[f + 1] += count_[f];
+  c.ki.resize(m);
+  c.kj.resize(m);
+  c.n.resize(m);
+  c.pt.resize(m);
+  c.pn.resize(m);
   for (const Contact& ct : contacts) {
     if (!(ct.pn > 0.0)) continue;
     const bool wall = ct.i == kCollider;
-    const std::uint64_t ki = wall ? key[ct.j] : key[ct.i];
-    sorted = sorted && (c.ki.empty() || c.ki.back() <= ki);
-    c.ki.push_back(ki);
-    c.kj.push_back(wall ? (kWall | ct.collider) : key[ct.j]);
-    c.n.push_back(ct.n);
-    c.pt.push_back(ct.pt);
-    c.pn.push_back(ct.pn);
+    const std::uint32_t owner = wall ? ct.j : ct.i;
+    const std::size_t q = count_[perm_[owner]]++;
+    c.ki[q] = key[owner];
+    c.kj[q] = wall ? (kWall | ct.collider) : key[ct.j];
+    c.n[q] = ct.n;
+    c.pt[q] = ct.pt;
+    c.pn[q] = ct.pn;
   }
-  if (sorted) return;
-  // Keys out of order (particles of several systems interleaved): sort by ki, ties in contact
-  // order, so lookups stay deterministic.
+  if (std::is_sorted(c.ki.begin(), c.ki.end())) return;
+  // Keys out of order (particles of several systems interleaved): sort by ki, ties in the order
+  // above, so lookups stay deterministic.
   std::vector<std::size_t> order(c.ki.size());
   for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
   std::stable_sort(order.begin(), order.end(),
@@ -230,10 +300,8 @@ void ParticleCollider::store_warm_start(WarmCache& c) const {
   c = std::move(s);
 }
 
-void ParticleCollider::find_contacts(double contact_speed, double h) {
-  contacts.clear();
+void ParticleCollider::choose_cells(double h) {
   const std::size_t n = x.size();
-  if (n < 2) return;
   double sum_r = 0.0, max_r = 0.0, min_r = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n; ++i) {
     sum_r += radius[i];
@@ -252,6 +320,145 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
   } else {
     cell_size = std::max(4.0 * sum_r / double(n), reach_d * max_r);
   }
+}
+
+void ParticleCollider::find_contacts(double contact_speed, double h) {
+  contacts.clear();
+  bands_.clear();
+  if (x.size() < 2) return;
+  choose_cells(h);
+  if (levels == 1 && build_grid()) {
+    find_pairs(contact_speed, h);
+  } else {
+    find_contacts_hashed(contact_speed, h);
+  }
+}
+
+bool ParticleCollider::build_grid() {
+  const std::size_t n = x.size();
+  const double inv = 1.0 / cell_size;
+  Vec3 lo = x[0];
+  for (std::size_t i = 1; i < n; ++i) lo = lo.cwiseMin(x[i]);
+  // Cell coordinates from 1 (a neighbour at -1 stays >= 0), and one spare cell past the largest.
+  constexpr double kMaxCells = double(1 << 21);
+  std::int64_t dim[3] = {0, 0, 0};
+  cell_key_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::floor((x[i][a] - lo[a]) * inv) + 1.0;
+      if (!(c < kMaxCells - 2.0)) return false;  // too wide for 21 bits (or not finite)
+      dim[a] = std::max(dim[a], std::int64_t(c) + 2);
+    }
+  stride_y_ = std::uint64_t(dim[2]);
+  stride_x_ = std::uint64_t(dim[1]) * stride_y_;
+  cells_x_ = std::uint64_t(dim[0]);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = [&](int a) { return std::uint64_t(std::floor((x[i][a] - lo[a]) * inv) + 1.0); };
+    cell_key_[i] = c(0) * stride_x_ + c(1) * stride_y_ + c(2);
+  }
+  // Particles by (cell key, index): a counting sort when the box has few cells per particle,
+  // else a comparison sort of the same keys (the same order either way).
+  order_.resize(n);
+  const std::uint64_t cells = std::uint64_t(dim[0]) * stride_x_;
+  if (cells <= 4 * std::uint64_t(n) + 4096) {
+    count_.assign(std::size_t(cells) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++count_[std::size_t(cell_key_[i]) + 1];
+    for (std::size_t c = 0; c < cells; ++c) count_[c + 1] += count_[c];
+    for (std::size_t i = 0; i < n; ++i) order_[count_[std::size_t(cell_key_[i])]++] = std::uint32_t(i);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) order_[i] = std::uint32_t(i);
+    std::sort(order_.begin(), order_.end(), [&](std::uint32_t p, std::uint32_t q) {
+      return cell_key_[p] != cell_key_[q] ? cell_key_[p] < cell_key_[q] : p < q;
+    });
+  }
+  sx_.resize(n);
+  sy_.resize(n);
+  sz_.resize(n);
+  sr_.resize(n);
+  occupied_.clear();
+  cell_first_.clear();
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::uint32_t i = order_[s];
+    sx_[s] = x[i][0];
+    sy_[s] = x[i][1];
+    sz_[s] = x[i][2];
+    sr_[s] = radius[i];
+    if (s == 0 || cell_key_[i] != occupied_.back()) {
+      occupied_.push_back(cell_key_[i]);
+      cell_first_.push_back(std::uint32_t(s));
+    }
+  }
+  cell_first_.push_back(std::uint32_t(n));
+  return true;
+}
+
+void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
+                                double contact_speed, double h) {
+  const Vec3 d = x[j] - x[i];
+  const double rr = radius[i] + radius[j];
+  const double dist = std::sqrt(d2);
+  const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
+  // Apart but within the margin: a speculative resting contact (it may close the gap this step,
+  // no more), so a pile's contacts hold without first overlapping. An impact is left until it
+  // overlaps, where it gets its restitution.
+  if (dist >= rr && -vn > contact_speed) return;
+  Contact c;
+  c.i = i;
+  c.j = j;
+  c.n = d / dist;
+  c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
+  c.depth = rr - dist;
+  const double e = 0.5 * (restitution[i] + restitution[j]);
+  c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
+  c.mu = 0.5 * (friction[i] + friction[j]);
+  contacts.push_back(c);
+}
+
+void ParticleCollider::find_pairs(double contact_speed, double h) {
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const std::size_t cells = occupied_.size();
+  const std::uint64_t* key_of = occupied_.data();
+  const std::uint32_t* first = cell_first_.data();
+  const double *px = sx_.data(), *py = sy_.data(), *pz = sz_.data(), *pr = sr_.data();
+  // Half stencil: the cell itself (later particles) and the cell above it (z + 1), then the
+  // columns (dx, dy) = (0, 1), (1, -1), (1, 0), (1, 1), three cells each (z - 1 .. z + 1), all
+  // later in key order. Cells are visited in key order, so each column's first occupied cell
+  // only moves forward: a cursor per column instead of a search.
+  const std::uint64_t off[4] = {stride_y_, stride_x_ - stride_y_, stride_x_, stride_x_ + stride_y_};
+  std::size_t cursor[4] = {0, 0, 0, 0};
+  std::uint32_t run_b[5], run_e[5];
+  for (std::size_t c = 0; c < cells; ++c) {
+    const std::uint64_t kc = key_of[c];
+    run_b[0] = first[c];
+    run_e[0] = c + 1 < cells && key_of[c + 1] == kc + 1 ? first[c + 2] : first[c + 1];
+    for (int col = 0; col < 4; ++col) {
+      const std::uint64_t lo = kc + off[col] - 1, hi = kc + off[col] + 1;
+      std::size_t& cur = cursor[col];
+      while (cur < cells && key_of[cur] < lo) ++cur;
+      std::size_t end = cur;
+      while (end < cells && key_of[end] <= hi) ++end;
+      run_b[col + 1] = first[cur];
+      run_e[col + 1] = first[end];
+    }
+    for (std::uint32_t si = first[c]; si < first[c + 1]; ++si) {
+      const double xi = px[si], yi = py[si], zi = pz[si], ri = pr[si];
+      run_b[0] = si + 1;
+      for (int col = 0; col < 5; ++col)
+        for (std::uint32_t sj = run_b[col]; sj < run_e[col]; ++sj) {
+          const double dx = px[sj] - xi, dy = py[sj] - yi, dz = pz[sj] - zi;
+          const double d2 = dx * dx + dy * dy + dz * dz;
+          const double reach = ri + pr[sj] + margin * std::min(ri, pr[sj]);
+          if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
+          try_pair(order_[si], order_[sj], d2, contact_speed, h);
+        }
+    }
+  }
+}
+
+void ParticleCollider::find_contacts_hashed(double contact_speed, double h) {
+  const std::size_t n = x.size();
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const double reach_d = 2.0 + 2.0 * margin;  // a sphere's reach, times its radius
   std::uint32_t table = 1;
   while (table < 2 * n) table <<= 1;
   const std::uint32_t mask = table - 1;
@@ -299,28 +506,45 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
                   cell_xyz_[3 * j + 2] != nz)
                 continue;
               const Vec3 d = x[j] - x[i];
-              const double rr = radius[i] + radius[j];
-              const double reach = rr + margin * std::min(radius[i], radius[j]);
+              const double reach = radius[i] + radius[j] + margin * std::min(radius[i], radius[j]);
               const double d2 = d.squaredNorm();
               if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
-              const double dist = std::sqrt(d2);
-              const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
-              // Apart but within the margin: a speculative resting contact (it may close the gap
-              // this step, no more), so a pile's contacts hold without first overlapping. An
-              // impact is left until it overlaps, where it gets its restitution.
-              if (dist >= rr && -vn > contact_speed) continue;
-              Contact c;
-              c.i = std::uint32_t(i);
-              c.j = j;
-              c.n = d / dist;
-              c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
-              c.depth = rr - dist;
-              const double e = 0.5 * (restitution[i] + restitution[j]);
-              c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
-              c.mu = 0.5 * (friction[i] + friction[j]);
-              contacts.push_back(c);
+              try_pair(std::uint32_t(i), j, d2, contact_speed, h);
             }
           }
+    }
+  }
+}
+
+void ParticleCollider::make_bands(std::size_t pair_count) {
+  // Band width in columns: about 64 bands over the particles' extent (at least one column) for
+  // a system large enough to be solved in parallel; one band (the plain sweep in cell order)
+  // below that, which keeps piles of a few thousand particles as quiet as the sequential order
+  // (bands two apart are not coupled within a sweep, so an impulse crosses a pile more slowly).
+  // The choice depends on the particle count only, never on the thread count.
+  const std::uint64_t width =
+      x.size() >= kParallelMin ? std::max<std::uint64_t>(1, (cells_x_ + 63) / 64) : cells_x_;
+  const std::size_t nb = std::size_t((cells_x_ + width - 1) / width);
+  // Sorted position -> band: the column of its cell (cell keys are x-major).
+  const auto band_of = [&](std::uint32_t s) {
+    return std::size_t(cell_key_[perm_[s]] / stride_x_ / width);
+  };
+  bands_.assign(nb, Band{0, 0, 0, 0});
+  std::size_t b = 0;
+  for (std::size_t q = 0; q <= pair_count; ++q) {
+    const std::size_t bq = q < pair_count ? band_of(contacts[q].i) : nb;
+    for (; b < bq; ++b) {
+      bands_[b].pair_end = std::uint32_t(q);
+      if (b + 1 < nb) bands_[b + 1].pair_begin = std::uint32_t(q);
+    }
+  }
+  b = 0;
+  for (std::size_t q = pair_count; q <= contacts.size(); ++q) {
+    const std::size_t bq = q < contacts.size() ? band_of(contacts[q].j) : nb;
+    if (q == pair_count) bands_[0].wall_begin = std::uint32_t(q);
+    for (; b < bq; ++b) {
+      bands_[b].wall_end = std::uint32_t(q);
+      if (b + 1 < nb) bands_[b + 1].wall_begin = std::uint32_t(q);
     }
   }
 }
@@ -332,7 +556,7 @@ void ParticleCollider::solve() {
     v[c.j] += inv_mass[c.j] * p;
   }
   // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
-  const auto update = [&](Contact& c, auto wall_tag) {
+  const auto update = [&](Contact& c, auto wall_tag) __attribute__((always_inline)) {
     constexpr bool wall = decltype(wall_tag)::value;
     const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
     Vec3 dv = v[c.j] - (wall ? c.vc : v[c.i]);
@@ -355,14 +579,35 @@ void ParticleCollider::solve() {
     if (!wall) v[c.i] -= wi * dpt;
     v[c.j] += wj * dpt;
   };
-  for (int it = 0; it < iterations; ++it)
-    for (Contact& c : contacts) {
+  const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
+    for (std::size_t q = begin; q < end; ++q) {
+      Contact& c = contacts[q];
       if (c.i == kCollider) {
         update(c, std::true_type{});
       } else {
         update(c, std::false_type{});
       }
     }
+  };
+  if (bands_.empty()) {
+    for (int it = 0; it < iterations; ++it) sweep(0, contacts.size());
+    return;
+  }
+  const int nb = int(bands_.size());
+  // Two sweeps of bands per iteration, each a fork and a barrier: only for large systems.
+  const bool par = threads > 1 && x.size() >= kParallelMin;
+  // Pairs of the even bands, of the odd bands, then every collider contact (one particle each:
+  // the bands' are independent of each other).
+  for (int it = 0; it < iterations; ++it) {
+    for (int phase = 0; phase < 2; ++phase) {
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+      for (int b = phase; b < nb; b += 2)
+        sweep(bands_[std::size_t(b)].pair_begin, bands_[std::size_t(b)].pair_end);
+    }
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+    for (int b = 0; b < nb; ++b)
+      sweep(bands_[std::size_t(b)].wall_begin, bands_[std::size_t(b)].wall_end);
+  }
 }
 
 void ParticleCollider::project_positions() {

@@ -7,8 +7,9 @@
 // pair's impulse follows §3.6.1: equal and opposite (momentum is conserved exactly up to
 // rounding), normal part reaching v_n' = -e v_n, Coulomb friction clamped to mu P_n so sliding
 // stops when mu reaches the critical coefficient (eqs. 3.56–3.57). Contacts slower than the
-// contact speed are resting (e = 0, §3.6.3). Order is fixed (ascending particle, then fixed
-// neighbour-cell order), so results are deterministic.
+// contact speed are resting (e = 0, §3.6.3). Order is fixed (run() sorts the particles by grid
+// cell; contacts follow the cells, and the sweeps go over slabs of cells, the even slabs then the
+// odd ones, which may run in parallel), so results are deterministic at any thread count.
 //
 // Resting contact with colliders (§3.6.3–3.6.4): impacts on colliders are resolved by the swept
 // pass (collider.cpp) before this solve, but a particle under a pile is pushed back into the
@@ -57,11 +58,13 @@ class ParticleCollider {
   double margin_fraction = 0.25;  ///< collider contacts within this gap, times the radius
   double pair_margin_fraction = 0.05;  ///< pair contacts within this gap, times the smaller radius
   bool warm_start = true;
+  int threads = 1;  ///< OpenMP threads for the solve of a large step (results do not depend on it)
 
   /// Finds and resolves the contacts among all members' particles and, for members that
   /// collide, with `colliders` (may be null) at their end-of-step pose; h (s) is the step.
   /// Updates velocities and positions in place. Scratch buffers are kept between calls (no
-  /// per-step allocation once they have grown).
+  /// per-step allocation once they have grown). Afterwards x, v and x_before are indexed like
+  /// the members' particles (in member order); the other working arrays are in cell order.
   void run(const std::vector<ParticleGroupMember>& members, double contact_speed, double h,
            const std::vector<Collider>* colliders);
 
@@ -87,11 +90,13 @@ class ParticleCollider {
     std::uint32_t collider = 0;
   };
   std::vector<Contact> contacts;
-  /// Fills `contacts` from x/radius with the hashed grid. Cell size: 2 x the mean diameter, or
-  /// the largest diameter if that is bigger, so the 27 neighbouring cells hold every contact;
-  /// when the largest would need cells over 4 x those, a multi-level grid (Coutinho §2.3.2):
-  /// cells doubling per level, each particle in the finest level that holds its reach, pairs
-  /// across levels searched from the smaller particle in the larger one's level.
+  /// Fills `contacts` from x/radius with a uniform grid (§2.3.1). Cell size: 2 x the mean
+  /// diameter, or the largest diameter if that is bigger, so the 27 neighbouring cells hold
+  /// every contact; particles are sorted by cell and each pair is tested once, from the earlier
+  /// cell (half stencil). When the largest would need cells over 4 x those, a hashed multi-level
+  /// grid (Coutinho §2.3.2): cells doubling per level, each particle in the finest level that
+  /// holds its reach, pairs across levels searched from the smaller particle in the larger
+  /// one's level. Contacts come in a fixed order (deterministic), not by particle index.
   /// With h > 0 (s, the step), pairs up to pair_margin_fraction x the smaller radius apart and
   /// not approaching faster than contact_speed are speculative resting contacts (target
   /// -gap / h); with h = 0 only overlaps count.
@@ -129,7 +134,54 @@ class ParticleCollider {
   std::vector<WarmCache> caches_;
   std::vector<Vec3> v_before_;
   void load_warm_start(const WarmCache& c);
-  void store_warm_start(WarmCache& c) const;
+  void store_warm_start(WarmCache& c);
+
+  // Uniform grid (one level): particles sorted by cell (x-major linear cell index, then particle
+  // index) with a counting sort over the cells of the particles' bounding box (a comparison sort
+  // of the same keys when that box has far more cells than particles), read as contiguous cell
+  // ranges (Green 2010). run() reorders its working arrays into this order, so the pair search,
+  // the solve and the projection read memory in order.
+  /// Picks cell_size and levels for the current radii (h > 0: with the speculative margin).
+  void choose_cells(double h);
+  /// Sorts the particles into cells of cell_size (order_, cell_key_/cell_first_, sx_..sr_);
+  /// false when the particles span more than 2^21 cells on an axis (the hashed grid then).
+  bool build_grid();
+  /// Pairs over the sorted grid, half stencil, in (cell, particle, neighbour cell, particle)
+  /// order of the sorted positions; contacts name particles by index (order_).
+  void find_pairs(double contact_speed, double h);
+  /// The hashed grid of Coutinho §2.3.1–2.3.2 (multi-level, or a uniform grid too wide to sort).
+  void find_contacts_hashed(double contact_speed, double h);
+  /// Appends the contact of i and j, d2 (m²) apart within reach, unless they are apart and
+  /// approaching faster than contact_speed (see find_contacts()).
+  void try_pair(std::uint32_t i, std::uint32_t j, double d2, double contact_speed, double h);
+  std::vector<std::uint32_t> order_;       ///< sorted position -> particle index
+  std::vector<std::uint32_t> perm_;        ///< run(): working index -> flat (member) index
+  std::vector<std::uint64_t> cell_key_;    ///< (particles) linear cell key, then occupied cells'
+  std::vector<std::uint32_t> cell_first_;  ///< occupied cell -> first sorted position, + n
+  std::vector<std::uint64_t> occupied_;    ///< occupied cells' keys, increasing
+  std::vector<std::uint32_t> count_;       ///< counting-sort scratch
+  std::vector<double> sx_, sy_, sz_, sr_;  ///< x, y, z, radius in sorted order
+  std::uint64_t stride_y_ = 0, stride_x_ = 0;  ///< linear key = cx stride_x + cy stride_y + cz
+  std::uint64_t cells_x_ = 0;              ///< cells along x (the key's major axis)
+  /// Contacts of run() in slabs of grid columns along x: band b holds the pairs whose first
+  /// particle lies in its columns (the second lies there or one column on) and the collider
+  /// contacts of its particles, so bands two apart share no particle and the solve sweeps the
+  /// even bands, then the odd ones, each band in contact order, any number at a time. The bands
+  /// depend on the geometry only, so the result is the same at any thread count. Empty: one
+  /// sweep in contact order (find_contacts() used directly).
+  struct Band {
+    std::uint32_t pair_begin, pair_end, wall_begin, wall_end;
+  };
+  std::vector<Band> bands_;
+  /// Fills bands_ from the contacts of find_pairs() and find_collider_contacts() on sorted
+  /// positions (pairs, then walls, each in ascending band order).
+  void make_bands(std::size_t pair_count);
+  // run(): values in flat (member) order kept across the reordering.
+  std::vector<std::uint64_t> key_flat_;
+  std::vector<std::uint32_t> warm_first_;  ///< (flat particle) first cache entry with its key
+  std::vector<double> half_dt_;            ///< (sorted) min(age, h) / 2
+  std::vector<Vec3> tmp3_;
+  std::vector<double> tmp1_;
 
   std::vector<std::uint32_t> bucket_start_, cursor_, sorted_, cell_hash_;
   std::vector<std::int64_t> cell_xyz_;

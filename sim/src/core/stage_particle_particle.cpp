@@ -29,6 +29,7 @@ void stage_particle_particle(WorldState& w, double t0, double t1) {
     }
     // A lone system without collide_particles has nobody to collide with.
     if (members.size() == 1 && !d.collide_particles) continue;
+    pc.threads = w.threads;
     pc.run(members, w.def.contact_speed, h, &colliders);
     // §3.7: the collider contacts' impulses (pn n + pt on the particle) push dynamic bodies back,
     // at the surface point under the particle's centre before the overlap correction.

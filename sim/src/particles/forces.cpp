@@ -90,10 +90,84 @@ Vec3 FieldState::acceleration(const Vec3& x, const Vec3& v, double m, double t) 
 // ---------------------------------------------------------------------------------------------
 // Whole-system evaluation
 
+namespace {
+
+constexpr std::size_t kNoiseBlock = 64;  ///< particles per batch of curl-noise samples
+
+/// Adds curl-noise field f's acceleration to a (n x 3) for particles [b, e) (e - b <=
+/// kNoiseBlock): FieldState::acceleration() with the three noise gradients of each particle taken
+/// in one vectorised batch (GradientNoise::gradients, bit for bit sample()).
+void add_curl_block(const FieldState& f, std::size_t b, std::size_t e, const double* x,
+                    const double* v, const double* mass, double t, double* a) {
+  const std::size_t len = e - b;
+  alignas(64) double px[3 * kNoiseBlock] = {}, py[3 * kNoiseBlock] = {}, pz[3 * kNoiseBlock] = {};
+  alignas(64) double gx[3 * kNoiseBlock], gy[3 * kNoiseBlock], gz[3 * kNoiseBlock];
+  double w[kNoiseBlock];
+  const ForceFieldDef& d = f.def;
+  for (std::size_t k = 0; k < len; ++k) {
+    const std::size_t i = b + k;
+    const Vec3 xi(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+    w[k] = f.weight(xi);
+    const Vec3 p = d.frequency * (f.rotation.transpose() * (xi - f.centre) - d.scroll * t);
+    const Vec3 p1 = p + kCurlOffset1, p2 = p + kCurlOffset2;
+    px[k] = p.x(), py[k] = p.y(), pz[k] = p.z();
+    px[len + k] = p1.x(), py[len + k] = p1.y(), pz[len + k] = p1.z();
+    px[2 * len + k] = p2.x(), py[2 * len + k] = p2.y(), pz[2 * len + k] = p2.z();
+  }
+  f.noise.gradients(3 * len, px, py, pz, gx, gy, gz);
+  for (std::size_t k = 0; k < len; ++k) {
+    const std::size_t i = b + k;
+    Vec3 af = Vec3::Zero();  // acceleration() outside the field's region (still added: -0 + 0)
+    if (w[k] != 0.0) {
+      const std::size_t k2 = len + k, k3 = 2 * len + k;
+      const Vec3 g1(gx[k], gy[k], gz[k]), g2(gx[k2], gy[k2], gz[k2]), g3(gx[k3], gy[k3], gz[k3]);
+      const Vec3 curl(g3.y() - g2.z(), g1.z() - g3.x(), g2.x() - g1.y());  // as curl_noise()
+      const Vec3 u = d.amplitude * (f.rotation * curl);
+      const Vec3 vi(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+      af = (w[k] * d.drag / mass[i]) * (u - vi);
+    }
+    a[3 * i] += af.x();
+    a[3 * i + 1] += af.y();
+    a[3 * i + 2] += af.z();
+  }
+}
+
+}  // namespace
+
 void Dynamics::eval(double t, const double* x, const double* v, double* a, bool with_drag) {
   for (FieldState* f : fields) f->pose_at(t);
   const double g0 = gravity.x(), g1 = gravity.y(), g2 = gravity.z();
   const bool has_fields = !fields.empty();
+  bool noise = false;
+  for (const FieldState* f : fields) noise = noise || f->def.kind == FieldKind::curl_noise;
+  if (noise) {
+    // Blocks of particles: gravity and drag, then each field in order, the curl-noise ones
+    // batched; per particle the same sums in the same order as the loop below.
+    const std::size_t blocks = (n + kNoiseBlock - 1) / kNoiseBlock;
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
+    for (std::size_t blk = 0; blk < blocks; ++blk) {
+      const std::size_t b = blk * kNoiseBlock, e = std::min(n, b + kNoiseBlock);
+      for (std::size_t i = b; i < e; ++i) {
+        const double c = with_drag ? drag_at(v + 3 * i) / mass[i] : 0.0;
+        a[3 * i] = g0 - c * v[3 * i];
+        a[3 * i + 1] = g1 - c * v[3 * i + 1];
+        a[3 * i + 2] = g2 - c * v[3 * i + 2];
+      }
+      for (const FieldState* f : fields) {
+        if (f->def.kind == FieldKind::curl_noise) {
+          add_curl_block(*f, b, e, x, v, mass, t, a);
+          continue;
+        }
+        for (std::size_t i = b; i < e; ++i) {
+          const Vec3 af = f->acceleration(Vec3(x[3 * i], x[3 * i + 1], x[3 * i + 2]),
+                                          Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]), mass[i], t);
+          a[3 * i] += af.x();
+          a[3 * i + 1] += af.y();
+          a[3 * i + 2] += af.z();
+        }
+      }
+    }
+  } else {
 #pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
   for (std::size_t i = 0; i < n; ++i) {
     const double c = with_drag ? drag_at(v + 3 * i) / mass[i] : 0.0;
@@ -111,6 +185,7 @@ void Dynamics::eval(double t, const double* x, const double* v, double* a, bool 
     a[3 * i] = ax;
     a[3 * i + 1] = ay;
     a[3 * i + 2] = az;
+  }
   }
   if (pair.enabled() && n > 1) add_pair_forces(x, a);
   // Springs scatter into both ends: serial, in definition order (few, and deterministic).
