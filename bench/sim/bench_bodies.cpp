@@ -4,15 +4,17 @@
 //   pyramid  20 rows of 0.5 m boxes (210) on a ground plane, 600 steps of 1/60 s
 //   terrain  500 mixed convex bodies (spheres, boxes, capsules) dropped onto a 2048-triangle
 //            height-field mesh, 600 steps of 1/60 s (after Jolt's ConvexVsMesh)
-// Both engines take one step of 1/60 s per frame (simreel: WorldDef::max_step = 1/60; Bullet:
-// stepSimulation(1/60, 1, 1/60)), 10 velocity iterations, friction 0.5, no restitution, density
-// 1000 kg/m³, gravity 9.81. Bullet keeps its defaults otherwise (its deactivation — sleeping —
-// is on, as users get it; simreel has no sleeping yet).
-// Reported per engine: CPU time per step (median over the rounds), the pyramid's top-box drift
+// Frames of 1/60 s. Each engine runs as its users get it: simreel at its default internal step
+// (WorldDef::max_step = 1/240 s, 4 steps per frame; --simreel-steps N for N per frame), Bullet
+// with stepSimulation(1/60, 1, 1/60) (one step per frame); both 10 velocity iterations, friction
+// 0.5, no restitution, density 1000 kg/m³, gravity 9.81, sleeping on (Bullet's deactivation,
+// simreel's WorldDef::allow_sleeping; --bullet-no-sleep turns Bullet's off).
+// Reported per engine: CPU time per frame (median over the rounds), the pyramid's top-box drift
 // from its start (m), and the number of bodies that ended below the ground / terrain (tunnelled).
 // Hulls are not in the terrain scene: simreel's dynamic bodies do not take hull shapes yet.
 //
-// Usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep]. Figures go in issue notes, never
+// Usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep] [--simreel-steps N].
+// Figures go in issue notes, never
 // thresholds in tests.
 #include <time.h>
 
@@ -43,7 +45,8 @@ constexpr double kGap = 0.02;      // (m) horizontal gap between pyramid boxes
 constexpr int kTerrainCells = 32;  // 32 x 32 cells, 2 triangles each: 2048 triangles
 constexpr double kTerrainSize = 40.0;
 constexpr int kDropped = 500;
-bool g_bullet_no_sleep = false;  // --bullet-no-sleep: Bullet without deactivation, like simreel
+bool g_bullet_no_sleep = false;  // --bullet-no-sleep: Bullet without deactivation
+int g_simreel_steps = 4;         // --simreel-steps N: simreel's internal steps per frame
 
 double cpu_seconds() {
   timespec t{};
@@ -118,7 +121,7 @@ std::vector<Drop> drops() {
 // simreel
 
 Result run_simreel_pyramid() {
-  World world(WorldDef{kStep, 1, 0.05, 1});
+  World world(WorldDef{kStep / g_simreel_steps, 1, 0.05, 1});
   BodyDef ground;
   ground.shapes = {ShapeDef::plane()};
   ground.shapes[0].material = Material(0.0, 0.5);
@@ -144,7 +147,7 @@ Result run_simreel_pyramid() {
 }
 
 Result run_simreel_terrain() {
-  World world(WorldDef{kStep, 1, 0.05, 1});
+  World world(WorldDef{kStep / g_simreel_steps, 1, 0.05, 1});
   BodyDef ground;
   ShapeDef mesh;
   mesh.type = ShapeType::mesh;
@@ -286,16 +289,16 @@ void report(const char* scene, const std::vector<Result>& ours, const std::vecto
   std::vector<double> a, b;
   for (const Result& r : ours) a.push_back(r.seconds_per_step);
   for (const Result& r : peer) b.push_back(r.seconds_per_step);
-  std::printf("%-8s simreel %8.3f ms/step  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
+  std::printf("%-8s simreel %8.3f ms/frame  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
               1e3 * median(a), ours.back().top_drift, ours.back().tunnelled, ours.back().off_edge);
   if (peer.empty()) {
     std::printf("%-8s Bullet   not built (libbullet-dev not found)\n", scene);
     return;
   }
-  std::printf("%-8s Bullet  %8.3f ms/step  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
+  std::printf("%-8s Bullet  %8.3f ms/frame  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
               1e3 * median(b), peer.back().top_drift, peer.back().tunnelled, peer.back().off_edge);
-  std::printf("%-8s ratio simreel / Bullet = %.2f (median of %zu rounds, CPU time)\n", scene,
-              median(a) / median(b), a.size());
+  std::printf("%-8s ratio simreel / Bullet = %.2f (median of %zu rounds, CPU time; simreel %d "
+              "steps per frame)\n", scene, median(a) / median(b), a.size(), g_simreel_steps);
 }
 
 }  // namespace
@@ -307,8 +310,10 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
     else if (std::strcmp(argv[i], "--scene") == 0 && i + 1 < argc) scene = argv[++i];
     else if (std::strcmp(argv[i], "--bullet-no-sleep") == 0) g_bullet_no_sleep = true;
+    else if (std::strcmp(argv[i], "--simreel-steps") == 0 && i + 1 < argc)
+      g_simreel_steps = std::max(1, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep]\n");
+      std::fprintf(stderr, "usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep] [--simreel-steps N]\n");
       return 2;
     }
   }

@@ -152,6 +152,8 @@ sim::BodyDef dynamic_body_def(const ColliderScene& c) {
   b.linear_velocity = c.dynamic.velocity;
   b.angular_velocity = c.dynamic.angular_velocity;
   b.linear_damping = c.dynamic.linear_damping;
+  b.drag_coefficient = c.dynamic.drag_coefficient;
+  b.drag_area = c.dynamic.drag_area;
   b.angular_damping = c.dynamic.angular_damping;
   b.gravity = c.dynamic.gravity;
   return b;

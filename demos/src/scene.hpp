@@ -28,6 +28,8 @@ struct DynamicScene {
   sim::Vec3 angular_velocity = sim::Vec3::Zero();  ///< (rad/s) world (JSON in deg/s)
   double linear_damping = 0.0;                     ///< (1/s)
   double angular_damping = 0.0;                    ///< (1/s)
+  double drag_coefficient = 1.0;                   ///< C_d of the air drag (BodyDef)
+  double drag_area = 0.0;                          ///< (m²) 0: a quarter of the surface area
   sim::Vec3 gravity{0.0, 0.0, -9.81};              ///< (m/s²) the scene's "simulation"/"gravity"
 };
 

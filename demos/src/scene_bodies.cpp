@@ -1,7 +1,8 @@
 // colliders[i] "motion": how a box, sphere or cylinder collider moves — "static" (no path),
 // "kinematic" (follows its "path") or "dynamic" (Coutinho Ch. 4: falls, tumbles and collides,
 // like Unity's Rigidbody or Blender's "Active" rigid body), with the dynamic keys "density" or
-// "mass", "velocity", "angular_velocity_deg", "linear_damping", "angular_damping". README
+// "mass", "velocity", "angular_velocity_deg", "linear_damping", "angular_damping",
+// "drag_coefficient", "drag_area_m2" (air drag and blast share, body_coupling.cpp). README
 // "Rigid bodies".
 #include <array>
 
@@ -12,8 +13,9 @@ namespace simreel::app::scene_read {
 namespace {
 
 /// The keys that only a dynamic collider reads.
-constexpr std::array<const char*, 6> kDynamicKeys{"density",          "mass",          "velocity",
-                                                  "angular_velocity_deg", "linear_damping", "angular_damping"};
+constexpr std::array<const char*, 8> kDynamicKeys{
+    "density",         "mass",           "velocity",         "angular_velocity_deg",
+    "linear_damping",  "angular_damping", "drag_coefficient", "drag_area_m2"};
 
 }  // namespace
 
@@ -55,6 +57,8 @@ void collider_motion(ObjectReader& r, const std::string& type, bool has_path, Co
   d.angular_velocity = to_vec(r.vec3("angular_velocity_deg", {0, 0, 0})) * kDeg;
   d.linear_damping = r.number("linear_damping", 0.0, ranges::kBodyDamping);
   d.angular_damping = r.number("angular_damping", 0.0, ranges::kBodyDamping);
+  d.drag_coefficient = r.number("drag_coefficient", d.drag_coefficient, ranges::kBodyDragCoefficient);
+  d.drag_area = r.number("drag_area_m2", 0.0, ranges::kBodyDragArea);
 }
 
 }  // namespace simreel::app::scene_read

@@ -86,10 +86,12 @@ ForceFieldScene force_field(const json& j, const std::string& ptr, const std::st
   ForceFieldScene f;
   sim::ForceFieldDef& d = f.def;
   ObjectReader r(j, ptr, file, errors);
-  const std::string type = r.choice("type", "uniform", {"uniform", "attractor", "vortex", "curl_noise"});
+  const std::string type =
+      r.choice("type", "uniform", {"uniform", "attractor", "vortex", "curl_noise", "blast"});
   d.kind = type == "attractor" ? sim::FieldKind::attractor
            : type == "vortex"  ? sim::FieldKind::vortex
            : type == "curl_noise" ? sim::FieldKind::curl_noise
+           : type == "blast"      ? sim::FieldKind::blast
                                   : sim::FieldKind::uniform;
   if (const json* rj = object_member(r, "region")) {
     ObjectReader o(*rj, r.pointer("region"), file, errors);
@@ -115,6 +117,12 @@ ForceFieldScene force_field(const json& j, const std::string& ptr, const std::st
     case sim::FieldKind::uniform:
       d.acceleration = to_vec(r.vec3("acceleration", {0, 0, 0}));
       d.force = to_vec(r.vec3("force", {0, 0, 0}));
+      d.wind = to_vec(r.vec3("wind", {0, 0, 0}));
+      d.drag = r.number("drag", d.drag, ranges::kFieldDrag);
+      break;
+    case sim::FieldKind::blast:
+      d.impulse = r.number("impulse", 0.0, ranges::kFieldImpulse);
+      d.time = r.number("time", 0.0, ranges::kFieldTime);
       break;
     case sim::FieldKind::attractor:
       d.strength = r.number("strength", d.strength);
@@ -132,6 +140,7 @@ ForceFieldScene force_field(const json& j, const std::string& ptr, const std::st
       d.drag = r.number("drag", d.drag, ranges::kFieldDrag);
       break;
   }
+  d.bodies = r.boolean("bodies", true);
   f.systems = system_names(r, "systems");
   r.finish();
   return f;

@@ -177,3 +177,33 @@ TEST(SceneBodies, BoxFallsOntoThePlaneAndRests) {
   // Still upright: the body z axis stays along the world z axis.
   EXPECT_NEAR(p.rotation(2, 2), 1.0, 1e-3);
 }
+
+TEST(SceneBodies, CouplingKeysReachTheDefinitions) {
+  // Air drag of bodies (drag_coefficient, drag_area_m2), a uniform field's wind, a blast field,
+  // and a field kept off bodies ("bodies": false). README "Rigid bodies", body_coupling.cpp.
+  const Scene s = scene_from_json(json::parse(R"({
+    "colliders": [
+      {"type": "box", "motion": "dynamic", "half_extents": [0.1, 0.1, 0.1],
+       "drag_coefficient": 1.05, "drag_area_m2": 0.02}
+    ],
+    "force_fields": [
+      {"type": "uniform", "wind": [3, 0, 0], "drag": 0.002},
+      {"type": "blast", "impulse": 50, "time": 0.4, "region": {"center": [1, 2, 0]}},
+      {"type": "vortex", "bodies": false}
+    ]})"),
+                                  "s.json");
+  const sim::BodyDef b = dynamic_body_def(s.colliders[0]);
+  EXPECT_EQ(b.drag_coefficient, 1.05);
+  EXPECT_EQ(b.drag_area, 0.02);
+  ASSERT_EQ(s.force_fields.size(), 3u);
+  EXPECT_EQ(s.force_fields[0].def.wind, sim::Vec3(3, 0, 0));
+  EXPECT_EQ(s.force_fields[0].def.drag, 0.002);
+  EXPECT_TRUE(s.force_fields[0].def.bodies);
+  EXPECT_EQ(s.force_fields[1].def.kind, sim::FieldKind::blast);
+  EXPECT_EQ(s.force_fields[1].def.impulse, 50.0);
+  EXPECT_EQ(s.force_fields[1].def.time, 0.4);
+  EXPECT_FALSE(s.force_fields[2].def.bodies);
+  EXPECT_NE(collider_errors(R"({"type": "box", "motion": "dynamic", "drag_coefficient": -1})"), "");
+  EXPECT_NE(collider_errors(R"({"type": "box", "drag_area_m2": 0.1})"), "");  // not dynamic
+  EXPECT_NE(errors_of(R"({"force_fields": [{"type": "blast", "impulse": -1}]})"), "");
+}

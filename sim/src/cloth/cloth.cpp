@@ -162,7 +162,8 @@ Cloth::~Cloth() = default;
 Cloth::Cloth(Cloth&&) noexcept = default;
 Cloth& Cloth::operator=(Cloth&&) noexcept = default;
 
-bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* colliders) {
+bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* colliders,
+                 detail::BodyImpulses* impulses) {
   State& S = *s_;
   const double h = t1 - t0;
   S.x_start = S.x;
@@ -176,7 +177,7 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
   if (collide) {
     std::fill(S.hit.begin(), S.hit.end(), std::uint8_t(0));
     detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
-                          S.def.friction, S.hit);
+                          S.def.friction, S.hit, S.vertex_mass, impulses);
   }
   S.max_deformation_pass();
   bool finite = true;

@@ -165,7 +165,8 @@ bool solid(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Ve
 
 void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
                    const std::vector<std::uint8_t>& free, const std::vector<Collider>& colliders,
-                   double thickness, double friction, std::vector<std::uint8_t>& hit) {
+                   double thickness, double friction, std::vector<std::uint8_t>& hit,
+                   double vertex_mass, BodyImpulses* impulses) {
   const std::size_t n = x.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (!free[i]) continue;
@@ -191,7 +192,11 @@ void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector
             break;
         }
         if (touched) {
+          const Vec3 v_in = v[i];
           respond(v[i], normal, c.point_velocity(x[i]), friction);
+          // Two-way (§3.7): the body takes the momentum the vertex lost, at the surface point.
+          if (impulses != nullptr && v[i] != v_in)
+            impulses->add(c, vertex_mass * (v_in - v[i]), x[i] - thickness * normal);
           hit[i] = 1;
           moved = true;
         }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "collision/body_impulses.hpp"
 #include "collision/collider_impl.hpp"
 #include "simreel/sim/types.hpp"
 
@@ -17,10 +18,13 @@ namespace simreel::sim::detail {
 /// to the collider loses the normal component pointing in (perfectly inelastic: cloth does not
 /// bounce) and the tangential part is reduced by friction × the normal speed removed (Coulomb,
 /// §3.6.1), to zero at most. `hit[i]` is set to 1 for every vertex touched.
+/// With `impulses`, each response against a dynamic body's shape logs the vertex's momentum
+/// change vertex_mass (v_before - v_after) (N s) on the body at the contact (§3.7, two-way).
 /// A switch on the collider kind: plane, box, and (swept, see cloth_collide.cpp) sphere,
 /// cylinder, capsule and triangle mesh, static or kinematic.
 void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
                    const std::vector<std::uint8_t>& free, const std::vector<Collider>& colliders,
-                   double thickness, double friction, std::vector<std::uint8_t>& hit);
+                   double thickness, double friction, std::vector<std::uint8_t>& hit,
+                   double vertex_mass = 0.0, BodyImpulses* impulses = nullptr);
 
 }  // namespace simreel::sim::detail

@@ -88,6 +88,8 @@ struct Collider {
 /// (e.g. "BodyDef.shapes[1].radius") on bad parameters.
 Collider make_collider(const ShapeDef& def, const std::string& what);
 
+struct BodyImpulses;  // collision/body_impulses.hpp
+
 /// A droplet requested by HitAction::split, appended to the system after the pass.
 struct SpawnRequest {
   Vec3 position, velocity;
@@ -103,6 +105,9 @@ struct CollisionContext {
   /// The system's own hit action (ParticleSystemDef::on_hit), replacing the collider's.
   const HitAction* on_hit = nullptr;
   const SplitOnHit* on_hit_split = nullptr;
+  /// When set (a dynamic body exists): every velocity change of a particle against a dynamic
+  /// body's shape logs the equal and opposite impulse m (v_before - v_after) here (Coutinho §3.7).
+  BodyImpulses* impulses = nullptr;
 };
 
 /// Collides particles [begin, end) of one system with every collider, after integration. Each

@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "collision/body_impulses.hpp"
 #include "collision/sweep.hpp"
 #include "core/vector_clones.hpp"
 
@@ -164,8 +165,15 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
     const double rest = (1.0 - hit.s) * dt;
     const Vec3 v_hit = v - rest * A;  // the velocity at the time of impact
     if (mat.on_hit == HitAction::kill || mat.on_hit == HitAction::split) {
+      const std::size_t spawned = ctx.spawns != nullptr ? ctx.spawns->size() : 0;
       if (mat.on_hit == HitAction::split)
         splash(mat, hit.point, hit.normal, v_hit - vc, vc, r, s.mass[i], ctx);
+      if (ctx.impulses != nullptr) {  // §3.7: the body takes what the droplets do not carry off
+        Vec3 J = double(s.mass[i]) * v_hit;
+        for (std::size_t q = spawned; ctx.spawns != nullptr && q < ctx.spawns->size(); ++q)
+          J -= (*ctx.spawns)[q].mass * (*ctx.spawns)[q].velocity;
+        ctx.impulses->add(*hit.collider, J, hit.point - r * hit.normal);
+      }
       dead = true;
       b = hit.point;
       break;
@@ -187,6 +195,9 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
       const double vn1 = (v1 - vc).dot(n);
       if (vn1 < 0.0) v1 -= vn1 * n;
     }
+    // §3.7: the body takes the momentum the contact removed, m (v without it - v with it).
+    if (ctx.impulses != nullptr)
+      ctx.impulses->add(*hit.collider, double(s.mass[i]) * (v - v1), hit.point - r * n);
     v = v1;
     // The rest of the step against the collider held at its end pose (§3.4), never back into
     // the surface just left. (Not relative to a moving collider: a particle at rest on a box
@@ -204,8 +215,13 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   }
 
   if (!dead) {
-    for (const Collider& c : colliders)
-      if (c.shape == Collider::Shape::box) push_out(c, b, v, r);
+    for (const Collider& c : colliders) {
+      if (c.shape != Collider::Shape::box) continue;
+      const Vec3 v_in = v;
+      push_out(c, b, v, r);
+      if (ctx.impulses != nullptr && v != v_in)
+        ctx.impulses->add(c, double(s.mass[i]) * (v_in - v), b);
+    }
     for (const Collider& c : colliders) {
       if (c.shape != Collider::Shape::plane) continue;
       const double d = c.normal.dot(b - c.point) - r;

@@ -82,6 +82,27 @@ void validate_body(const BodyDef& def, const Names& names) {
   }
   require_in(def.linear_damping, ranges::kBodyDamping, "BodyDef.linear_damping");
   require_in(def.angular_damping, ranges::kBodyDamping, "BodyDef.angular_damping");
+  require_in(def.drag_coefficient, ranges::kBodyDragCoefficient, "BodyDef.drag_coefficient");
+  require_in(def.drag_area, ranges::kBodyDragArea, "BodyDef.drag_area");
+}
+
+/// (m²) Mean projected area of a dynamic body's shapes: a quarter of the surface area (Cauchy's
+/// formula, exact for a convex shape averaged over all directions), summed over the shapes.
+double mean_projected_area(const BodyDef& def) {
+  constexpr double pi = 3.14159265358979323846;
+  double surface = 0.0;
+  for (const ShapeDef& s : def.shapes) {
+    const double r = s.radius, hh = s.half_height;
+    const Vec3& e = s.half_extents;
+    switch (s.type) {
+      case ShapeType::sphere: surface += 4.0 * pi * r * r; break;
+      case ShapeType::box: surface += 8.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x()); break;
+      case ShapeType::cylinder: surface += 2.0 * pi * r * r + 4.0 * pi * r * hh; break;
+      case ShapeType::capsule: surface += 4.0 * pi * r * r + 4.0 * pi * r * hh; break;
+      default: break;
+    }
+  }
+  return 0.25 * surface;
 }
 
 /// Mass properties of a dynamic body in its body frame from its shapes (Coutinho §4.1, App. D):
@@ -149,6 +170,8 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
   } else if (b.dynamic()) {
     b.local_com = mass.center_of_mass;
     b.gravity = def.gravity;
+    b.drag_coefficient = def.drag_coefficient;
+    b.drag_area = def.drag_area > 0.0 ? def.drag_area : mean_projected_area(def);
     const Quat q = def.pose.rotation.normalized();
     RigidBodyDef r;
     r.position = def.pose.translation + q * mass.center_of_mass;
@@ -197,12 +220,22 @@ Names names_of(const std::string& def) {
 void remove_rigid(WorldState& w, std::uint32_t i) {
   const std::uint32_t last = std::uint32_t(w.dyn.rigid.size() - 1);
   swap_remove(w.dyn.rigid, i);
+  BodyDynamics& d = w.dyn;
+  if (d.rest_time.size() == last + 1) {
+    d.rest_time[i] = d.rest_time[last];
+    d.rest_time.pop_back();
+    d.island[i] = d.island[last];
+    d.island.pop_back();
+  }
   if (i == last) return;
   for (Body& b : w.bodies.dense())
     if (b.rigid == last) b.rigid = i;
 }
 
 void remove_body(WorldState& w, const Handle& h) {
+  // Whatever rested on the body must be free to fall (and island ids name rigid indices, which
+  // the swap-remove below changes).
+  wake_all(w);
   const Body& gone = w.bodies[h];
   if (gone.dynamic()) --w.dyn.dynamic_count;
   if (gone.rigid != kNoRigid) remove_rigid(w, gone.rigid);
@@ -265,6 +298,35 @@ ColliderHandle World::add_mesh(const MeshDef& def) {
 MovedObject World::pose(BodyHandle h) const {
   MovedObject m = impl_->bodies[h.id].report_pose(impl_->shapes);
   m.handle = h.id;
+  return m;
+}
+
+bool World::is_awake(BodyHandle h) const {
+  const detail::Body& b = impl_->bodies[h.id];
+  return !b.dynamic() || !impl_->dyn.rigid.asleep[b.rigid];
+}
+
+void World::wake(BodyHandle h) {
+  const detail::Body& b = impl_->bodies[h.id];
+  if (b.dynamic()) detail::wake_island(*impl_, b.rigid);
+}
+
+std::pair<Vec3, Vec3> World::velocity(BodyHandle h) const {
+  const detail::Body& b = impl_->bodies[h.id];
+  return {b.velocity, b.angular_velocity};
+}
+
+BodyMotion World::motion(BodyHandle h) const {
+  const detail::Body& b = impl_->bodies[h.id];
+  if (!b.dynamic()) throw std::invalid_argument("World::motion: body '" + b.name + "' is not dynamic");
+  const detail::RigidBodies& r = impl_->dyn.rigid;
+  BodyMotion m;
+  m.mass = r.mass[b.rigid];
+  m.center_of_mass = r.position[b.rigid];
+  m.linear_velocity = r.linear_velocity[b.rigid];
+  m.angular_velocity = r.angular_velocity[b.rigid];
+  m.linear_momentum = m.mass * m.linear_velocity;
+  m.angular_momentum = r.angular_momentum[b.rigid];
   return m;
 }
 

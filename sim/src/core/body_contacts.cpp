@@ -60,6 +60,7 @@ class Builder {
     planes();
     broad_phase();
     for (const auto& [i, j] : d_.pairs) pair(i, j);
+    carry_sleeping();
     std::sort(d_.manifolds.begin(), d_.manifolds.end(),
               [](const BodyManifold& a, const BodyManifold& b) { return a.key < b.key; });
   }
@@ -67,6 +68,32 @@ class Builder {
  private:
   [[nodiscard]] const Body& body_of(std::uint32_t shape) const { return bodies_[owner_[shape].body]; }
   [[nodiscard]] bool dynamic(std::uint32_t shape) const { return body_of(shape).dynamic(); }
+  /// Can start a contact: an awake dynamic body, or a kinematic body with a velocity.
+  [[nodiscard]] bool active(std::uint32_t shape) const {
+    const Body& b = body_of(shape);
+    if (b.dynamic()) return !d_.rigid.asleep[b.rigid];
+    return b.kinematic() && (!b.velocity.isZero(0.0) || !b.angular_velocity.isZero(0.0));
+  }
+  [[nodiscard]] bool frozen(std::uint32_t rigid) const {
+    return rigid == kStaticBody || d_.rigid.asleep[rigid] ||
+           (!d_.rigid.is_dynamic(rigid) && d_.rigid.linear_velocity[rigid].isZero(0.0) &&
+            d_.rigid.angular_velocity[rigid].isZero(0.0));
+  }
+
+  /// Last step's manifolds between two bodies that cannot move now (a sleeping island's
+  /// contacts): not recomputed, kept for the warm start when the island wakes.
+  void carry_sleeping() {
+    for (const BodyManifold& m : d_.previous) {
+      if (m.rigid_a != kStaticBody && m.rigid_a >= d_.rigid.size()) continue;
+      if (m.rigid_b != kStaticBody && m.rigid_b >= d_.rigid.size()) continue;
+      const bool sleeping = (m.rigid_a != kStaticBody && d_.rigid.asleep[m.rigid_a]) ||
+                            (m.rigid_b != kStaticBody && d_.rigid.asleep[m.rigid_b]);
+      if (!sleeping || !frozen(m.rigid_a) || !frozen(m.rigid_b)) continue;
+      BodyManifold c = m;
+      c.first_point = kCarriedManifold;
+      d_.manifolds.push_back(c);
+    }
+  }
   [[nodiscard]] std::uint32_t rigid(std::uint32_t shape) const {
     const Body& b = body_of(shape);
     return b.rigid == kNoRigid ? kStaticBody : b.rigid;
@@ -81,7 +108,7 @@ class Builder {
       const Collider& plane = w_.shapes[p];
       if (plane.shape != Collider::Shape::plane) continue;
       for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
-        if (!dynamic(s)) continue;
+        if (!dynamic(s) || !active(s)) continue;
         add(key(p, s, 0), collide_plane(plane.point, plane.normal, posed(w_.shapes[s]),
                                         kBodyContactMargin),
             p, s);
@@ -96,7 +123,8 @@ class Builder {
       const Collider& c = w_.shapes[s];
       if (c.shape == Collider::Shape::plane) continue;
       const Vec3 half = c.aabb_half + Vec3::Constant(kPad);
-      d_.proxies.push_back({c.aabb_center - half, c.aabb_center + half, s, owner_[s].body, dynamic(s)});
+      d_.proxies.push_back(
+          {c.aabb_center - half, c.aabb_center + half, s, owner_[s].body, dynamic(s), active(s)});
     }
     std::sort(d_.proxies.begin(), d_.proxies.end(), [](const Proxy& a, const Proxy& b) {
       return a.lo.x() < b.lo.x() || (a.lo.x() == b.lo.x() && a.shape < b.shape);
@@ -106,7 +134,8 @@ class Builder {
       const Proxy& a = d_.proxies[i];
       for (std::size_t j = i + 1; j < n && d_.proxies[j].lo.x() <= a.hi.x(); ++j) {
         const Proxy& b = d_.proxies[j];
-        if (!(a.dynamic || b.dynamic) || a.body == b.body) continue;
+        // A dynamic side, and a side that can move (two sleeping or resting sides: carried).
+        if (!(a.dynamic || b.dynamic) || !(a.active || b.active) || a.body == b.body) continue;
         if (a.lo.y() > b.hi.y() || b.lo.y() > a.hi.y() || a.lo.z() > b.hi.z() || b.lo.z() > a.hi.z())
           continue;
         d_.pairs.emplace_back(std::min(a.shape, b.shape), std::max(a.shape, b.shape));

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "collision/body_impulses.hpp"
 #include "collision/manifold.hpp"
 #include "rigid/body_state.hpp"
 #include "rigid/contact_solver.hpp"
@@ -38,8 +39,13 @@ struct PairKey {
   bool operator==(const PairKey&) const = default;
 };
 
+/// BodyManifold::first_point of a manifold carried over unchanged from the last step because
+/// neither side can move (both asleep, or asleep and static): kept for the warm start when the
+/// island wakes, with no points in BodyDynamics::points and no solver rows.
+inline constexpr std::uint32_t kCarriedManifold = std::numeric_limits<std::uint32_t>::max();
+
 /// One manifold of the step: its key, its points, the rigid indices of its two bodies and where
-/// its points start in BodyDynamics::points.
+/// its points start in BodyDynamics::points (or kCarriedManifold).
 struct BodyManifold {
   PairKey key;
   Manifold manifold;
@@ -53,7 +59,19 @@ struct Proxy {
   std::uint32_t shape;  ///< index into WorldState::shapes
   std::uint32_t body;   ///< index into bodies.dense()
   bool dynamic;
+  bool active;  ///< an awake dynamic body, or a kinematic one that moves: it can start a contact
 };
+
+/// Sleeping (Box2D's b2_linearSleepTolerance / b2_angularSleepTolerance / b2_timeToSleep, the
+/// same idea as Bullet's deactivation): a dynamic body that touches something and is slower
+/// than both tolerances accumulates rest time (a free body never sleeps: it keeps its drift); an island of bodies in contact sleeps once every one of them has rested
+/// kTimeToSleep. Sleeping bodies are frozen (rigid/body_state.hpp sleep()) and cost nothing: no
+/// integration, no narrow phase among themselves, no solver rows. An island wakes whole when an
+/// awake dynamic body or a moving kinematic body touches one of its bodies, when a body of it is
+/// removed or pushed (World::wake), or when anything it rests on is removed.
+inline constexpr double kSleepLinearSpeed = 0.05;                     ///< (m/s)
+inline constexpr double kSleepAngularSpeed = 2.0 * 3.14159265358979 / 180.0;  ///< (rad/s)
+inline constexpr double kTimeToSleep = 0.5;                           ///< (s)
 
 struct BodyDynamics {
   RigidBodies rigid;
@@ -63,7 +81,33 @@ struct BodyDynamics {
   std::vector<ContactPoint> points;
   std::vector<Proxy> proxies;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;  ///< proxy index pairs
+  bool allow_sleeping = true;  ///< WorldDef::allow_sleeping
+  /// Per rigid entry: rest time (s) of a dynamic body, and the island it fell asleep with (the
+  /// bodies that wake together).
+  std::vector<double> rest_time;
+  std::vector<std::uint32_t> island;
+  std::vector<std::uint32_t> parent;  ///< union–find scratch over rigid entries, reused
+  /// Impulses from particles and cloth on the dynamic bodies over the current step (§3.7),
+  /// applied and cleared by the bodies stage.
+  BodyImpulses coupling;
 };
+
+/// Readies w.dyn.coupling for this step (body_coupling.cpp): which shapes belong to dynamic
+/// bodies, an empty log. Called at the start of the particle collisions.
+void prepare_coupling(WorldState& w);
+
+/// The log the passes of this step append to, or nullptr when there is no dynamic body.
+BodyImpulses* coupling_log(WorldState& w);
+
+/// Adds to the dynamic bodies' force and torque accumulators, for the step [t0, t1]: the
+/// impulses logged this step (as the constant force J/h over it: the same change of momentum
+/// as an impulse at its start, Coutinho §3.7), and the force fields (body_coupling.cpp). Clears
+/// the log.
+void apply_coupling(WorldState& w, double t0, double t1);
+
+/// Wakes the island of every sleeping body with an entry in this step's impulse log or a
+/// non-zero force from a field over [t0, t1] (Box2D wakes a body a force is applied to).
+void wake_coupled(WorldState& w, double t0, double t1);
 
 /// (m) Contact margin: pairs closer than this give (speculative) points. Kept at zero-ish so
 /// restitution sees the true impact speed (a speculative point would slow the body first).
@@ -72,6 +116,21 @@ inline constexpr double kBodyContactMargin = 0.0;
 /// Broad and narrow phase (body_contacts.cpp): fills d.manifolds (in a fixed order: planes
 /// first, then pairs by shape index) and d.points, each point warm-started from d.previous.
 void find_body_contacts(WorldState& w);
+
+/// Wakes sleeping islands touched this step by an awake dynamic body or a moving kinematic one
+/// (d.manifolds of the last find_body_contacts). Returns whether any body woke: the caller then
+/// finds the contacts again, since a sleeping island's own contacts were not computed.
+bool wake_touched(WorldState& w);
+
+/// Wakes every body of rigid entry i's island (i may be kStaticBody or awake: nothing happens).
+void wake_island(WorldState& w, std::uint32_t i);
+
+/// Wakes every sleeping body (a removal: whatever rested on the removed body must fall).
+void wake_all(WorldState& w);
+
+/// After the step's solve: rest times from the new velocities, islands from this step's
+/// manifolds, and islands that have all rested kTimeToSleep put to sleep.
+void update_sleep(WorldState& w, double h);
 
 /// Removes rigid entry i by swap-remove, keeping every Body::rigid index right.
 void remove_rigid(WorldState& w, std::uint32_t i);

@@ -29,6 +29,8 @@ struct Body {
   std::uint32_t rigid = 0xffffffffu;
   Vec3 local_com = Vec3::Zero();  ///< (m) dynamic: centre of mass in the body frame
   Vec3 gravity = Vec3::Zero();    ///< (m/s²) dynamic: world
+  double drag_coefficient = 0.0;  ///< C_d, dynamic: air drag (BodyDef::drag_coefficient)
+  double drag_area = 0.0;         ///< (m²) dynamic: A of the air drag and of a blast's share
   std::uint32_t first_shape = 0;  ///< its shapes: WorldState::shapes[first_shape, + shape_count)
   std::uint32_t shape_count = 0;
   // What the moved list last reported.

@@ -1,10 +1,12 @@
 // Stage "bodies" (stages.hpp; Coutinho Ch. 4): dynamic bodies over one step h —
 //   kinematic bodies' rigid entries take their path velocity (§3.7: it enters the contacts),
 //   broad and narrow phase with warm-started manifolds (body_contacts.cpp, §4.4–4.7),
-//   gravity, then prepare -> integrate velocities (forces, drag §4.3) -> sequential impulses
+//   gravity, the impulses of particles and cloth logged this step and the force fields
+//   (body_coupling.cpp, §3.7), then prepare -> integrate velocities (forces, drag §4.3) -> sequential impulses
 //   (§4.8) -> integrate positions (§4.2, App. C) as rigid/contact_solver.hpp's step_with_contacts,
 //   the impulses kept in the manifolds for the next step's warm start,
 //   each dynamic body's frame and shapes placed from its centre of mass.
+//   then rest times and islands: islands at rest fall asleep (sleep.cpp, body_dynamics.hpp).
 // Nothing runs without a dynamic body, so scenes before Ch. 4 are bit-identical. Serial, in the
 // bodies' dense order: deterministic at any thread count.
 #include "core/stages.hpp"
@@ -26,9 +28,17 @@ void stage_bodies(WorldState& w, double t0, double t1) {
       r.linear_velocity[b.rigid] = b.velocity;
       r.angular_velocity[b.rigid] = b.angular_velocity;
     }
+  // Bodies that particles or cloth pushed, or that a force field acts on, wake before their
+  // contacts are found.
+  wake_coupled(w, t0, t1);
   find_body_contacts(w);
+  // A sleeping island touched by something moving wakes; its own contacts were skipped, so
+  // they are found again with it awake.
+  if (wake_touched(w)) find_body_contacts(w);
   for (const Body& b : bodies)
-    if (b.dynamic()) apply_force(r, b.rigid, r.mass[b.rigid] * b.gravity);
+    if (b.dynamic() && r.is_dynamic(b.rigid)) apply_force(r, b.rigid, r.mass[b.rigid] * b.gravity);
+  // Particles' and cloth's impulses of this step, force fields (§3.7; body_coupling.cpp).
+  apply_coupling(w, t0, t1);
   d.solver.prepare(r, d.points, h);
   integrate_velocities(r, h);
   d.solver.solve(r, d.points);
@@ -36,7 +46,8 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   clear_forces(r);
   // The solver's impulses go back into the manifolds: next step's warm start (tangent impulses
   // as world vectors, persistent_manifold.hpp).
-  for (BodyManifold& m : d.manifolds)
+  for (BodyManifold& m : d.manifolds) {
+    if (m.first_point == kCarriedManifold) continue;
     for (int k = 0; k < m.manifold.count; ++k) {
       const ContactPoint& c = d.points[m.first_point + std::uint32_t(k)];
       Vec3 t1v, t2v;
@@ -44,6 +55,8 @@ void stage_bodies(WorldState& w, double t0, double t1) {
       m.manifold.points[k].normal_impulse = c.normal_impulse;
       m.manifold.points[k].tangent_impulse = c.tangent_impulse[0] * t1v + c.tangent_impulse[1] * t2v;
     }
+  }
+  update_sleep(w, h);
   std::swap(d.previous, d.manifolds);
   for (Body& b : bodies) {
     if (!b.dynamic()) continue;

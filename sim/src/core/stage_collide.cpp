@@ -6,6 +6,7 @@
 namespace simreel::sim::detail {
 
 void stage_particle_collisions(WorldState& w, double t0, double t1) {
+  prepare_coupling(w);  // the step's impulse log on dynamic bodies (§3.7, body_coupling.cpp)
   if (w.shapes.empty()) return;
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
@@ -20,6 +21,7 @@ void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_
   ctx.contact_speed = def.contact_speed;
   ctx.rng = &ps.splash_rng;
   ctx.spawns = &ps.spawns;
+  ctx.impulses = coupling_log(*this);
   if (ps.def.on_hit) {
     ctx.on_hit = &*ps.def.on_hit;
     ctx.on_hit_split = &ps.def.on_hit_split;

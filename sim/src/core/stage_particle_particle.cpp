@@ -31,6 +31,14 @@ void stage_particle_particle(WorldState& w, double t0, double t1) {
     if (members.size() == 1 && !d.collide_particles) continue;
     pc.threads = w.threads;
     pc.run(members, w.def.contact_speed, h, &colliders);
+    // §3.7: the collider contacts' impulses (pn n + pt on the particle) push dynamic bodies back,
+    // at the surface point under the particle's centre before the overlap correction.
+    if (BodyImpulses* log = coupling_log(w); log != nullptr && !pc.x_before.empty())
+      for (const ParticleCollider::Contact& c : pc.contacts) {
+        if (c.i != ParticleCollider::kCollider) continue;
+        const Vec3 p = pc.x_before[c.j] - (pc.radius[c.j] - c.depth) * c.n;
+        log->add(colliders[c.collider], -(c.pn * c.n + c.pt), p);
+      }
     if (colliders.empty() || pc.x_before.empty()) continue;
     // The overlap correction moved particles: sweep those moves against the colliders (§3.4).
     std::size_t k = 0;

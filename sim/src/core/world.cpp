@@ -33,6 +33,7 @@ World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
   detail::validate(def);
   if (def.threads < 0) throw std::invalid_argument("WorldDef.threads must be >= 0 (0 = hardware)");
   impl_->def = def;
+  impl_->dyn.allow_sleeping = def.allow_sleeping;
   impl_->threads = def.threads > 0 ? def.threads
                                    : std::max(1, int(std::thread::hardware_concurrency()));
 }
@@ -103,7 +104,7 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   // Fields for every system, in registration order (the order their forces are summed in).
   std::vector<std::pair<std::uint64_t, detail::FieldState*>> all;
   for (std::size_t f = 0; f < impl_->fields.size(); ++f)
-    if (impl_->fields.at(f).all_systems)
+    if (impl_->fields.at(f).all_systems && impl_->fields.at(f).state->def.kind != FieldKind::blast)
       all.emplace_back(impl_->fields.serial(f), impl_->fields.at(f).state.get());
   std::sort(all.begin(), all.end());
   for (const auto& [serial, f] : all) ps.dynamics.fields.push_back(f);
@@ -152,9 +153,9 @@ ForceFieldHandle World::add_force_field(const ForceFieldDef& def) {
                                    (0x9E3779B97F4A7C15ULL * (impl_->fields.next_serial() + 1)));
   f->pose_at(impl_->time);
   for (std::size_t s = 0; s < impl_->systems.size(); ++s) {
-    bool applies = def.systems.empty();
+    bool applies = def.systems.empty() && def.kind != FieldKind::blast;  // blast: bodies only
     for (const ParticleSystemHandle& h : def.systems)
-      applies = applies || h.id == impl_->systems.handle(s);
+      applies = applies || (h.id == impl_->systems.handle(s) && def.kind != FieldKind::blast);
     if (applies) impl_->systems.at(s).dynamics.fields.push_back(f.get());
   }
   detail::FieldEntry e;

@@ -57,8 +57,13 @@ Vec3 FieldState::acceleration(const Vec3& x, const Vec3& v, double m, double t) 
   const double w = weight(x);
   if (w == 0.0) return Vec3::Zero();
   switch (def.kind) {
-    case FieldKind::uniform:
-      return w * (rotation * (def.acceleration + def.force / m));
+    case FieldKind::uniform: {
+      const Vec3 a = w * (rotation * (def.acceleration + def.force / m));
+      if (def.wind == Vec3::Zero()) return a;
+      return a + (w * def.drag / m) * (rotation * def.wind - v);
+    }
+    case FieldKind::blast:
+      return Vec3::Zero();  // bodies only (body_coupling.cpp)
     case FieldKind::attractor: {
       const Vec3 d = centre - x;
       const double r = d.norm();
@@ -285,6 +290,19 @@ void validate_forces(const ParticleSystemDef& def) {
   check_nonneg(p + "charge.deviation", def.charge.deviation);
 }
 
+Vec3 FieldState::air_velocity(const Vec3& x, double t) const {
+  switch (def.kind) {
+    case FieldKind::uniform:
+      return rotation * def.wind;
+    case FieldKind::curl_noise: {
+      const Vec3 p = def.frequency * (rotation.transpose() * (x - centre) - def.scroll * t);
+      return def.amplitude * (rotation * curl_noise(noise, p));
+    }
+    default:
+      return Vec3::Zero();
+  }
+}
+
 void validate(const ForceFieldDef& def) {
   const std::string p = "ForceFieldDef.";
   if (def.shape == RegionShape::sphere) require_in(def.radius, ranges::kFieldRadius, p + "radius");
@@ -303,6 +321,12 @@ void validate(const ForceFieldDef& def) {
     require_in(def.frequency, ranges::kFieldFrequency, p + "frequency");
     require_in(def.amplitude, ranges::kFieldAmplitude, p + "amplitude");
     require_in(def.drag, ranges::kFieldDrag, p + "drag");
+  }
+  check_vec(p + "wind", def.wind);
+  if (def.kind == FieldKind::uniform) require_in(def.drag, ranges::kFieldDrag, p + "drag");
+  if (def.kind == FieldKind::blast) {
+    require_in(def.impulse, ranges::kFieldImpulse, p + "impulse");
+    require_in(def.time, ranges::kFieldTime, p + "time");
   }
 }
 

@@ -25,6 +25,9 @@ struct FieldState {
   [[nodiscard]] double weight(const Vec3& x) const;
   /// Acceleration (m/s²) on a particle of mass m at x with velocity v, current pose, time t.
   [[nodiscard]] Vec3 acceleration(const Vec3& x, const Vec3& v, double m, double t) const;
+  /// (m/s) Air velocity at world point x, time t: a uniform field's wind, the curl noise's flow;
+  /// zero for the other kinds (what the air drag of bodies is taken relative to).
+  [[nodiscard]] Vec3 air_velocity(const Vec3& x, double t) const;
 };
 
 /// Everything that pushes the particles of one system, resolved to indices in the integrated

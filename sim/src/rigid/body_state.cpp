@@ -34,6 +34,7 @@ void RigidBodies::reserve(std::size_t n) {
   angular_drag.reserve(n);
   bias_velocity.reserve(n);
   bias_angular_velocity.reserve(n);
+  asleep.reserve(n);
 }
 
 namespace {
@@ -62,6 +63,7 @@ void swap_remove(RigidBodies& b, std::size_t i) {
   swap_pop(b.angular_drag, i);
   swap_pop(b.bias_velocity, i);
   swap_pop(b.bias_angular_velocity, i);
+  swap_pop(b.asleep, i);
 }
 
 std::size_t add_body(RigidBodies& bodies, const RigidBodyDef& def) {
@@ -111,7 +113,29 @@ std::size_t add_body(RigidBodies& bodies, const RigidBodyDef& def) {
   bodies.angular_drag.push_back(def.angular_drag);
   bodies.bias_velocity.push_back(Vec3::Zero());
   bodies.bias_angular_velocity.push_back(Vec3::Zero());
+  bodies.asleep.push_back(0);
   return i;
+}
+
+void sleep(RigidBodies& bodies, std::size_t i) {
+  assert(bodies.is_dynamic(i));
+  bodies.asleep[i] = 1;
+  bodies.linear_velocity[i].setZero();
+  bodies.angular_momentum[i].setZero();
+  bodies.angular_velocity[i].setZero();
+  bodies.force[i].setZero();
+  bodies.torque[i].setZero();
+  bodies.bias_velocity[i].setZero();
+  bodies.bias_angular_velocity[i].setZero();
+  bodies.inv_mass[i] = 0.0;
+  bodies.inv_inertia_world[i].setZero();
+}
+
+void wake(RigidBodies& bodies, std::size_t i) {
+  if (!bodies.asleep[i]) return;
+  bodies.asleep[i] = 0;
+  bodies.inv_mass[i] = 1.0 / bodies.mass[i];
+  update_derived(bodies, i);
 }
 
 void update_derived(RigidBodies& bodies, std::size_t i) {

@@ -62,8 +62,12 @@ struct RigidBodies {
   /// using Sequential Impulses").
   std::vector<Vec3> bias_velocity;
   std::vector<Vec3> bias_angular_velocity;
+  /// 1: a dynamic body put to sleep (sleep()): at rest, frozen with zero velocities and zero
+  /// inverse mass, so the integrators skip it and contacts treat it as immovable until wake().
+  std::vector<std::uint8_t> asleep;
 
   [[nodiscard]] std::size_t size() const { return position.size(); }
+  /// Moves under forces and contacts: dynamic and awake (inverse mass > 0).
   [[nodiscard]] bool is_dynamic(std::size_t i) const { return inv_mass[i] > 0.0; }
   void reserve(std::size_t n);
 };
@@ -76,6 +80,14 @@ std::size_t add_body(RigidBodies& bodies, const RigidBodyDef& def);
 /// Removes body i: the last body moves into slot i in every array (swap-remove); the caller
 /// re-points whatever named the last index. Asserts i < size().
 void swap_remove(RigidBodies& bodies, std::size_t i);
+
+/// Puts dynamic body i to sleep (Box2D's and Bullet's deactivation): v = L = ω = 0, accumulators
+/// cleared, inverse mass and world inverse inertia 0, so every pass that moves bodies skips it
+/// and a contact meets it as an immovable body. Its pose is kept exactly. Asserts it is dynamic.
+void sleep(RigidBodies& bodies, std::size_t i);
+
+/// Wakes body i if asleep: inverse mass 1/m and I_w⁻¹ from its orientation again, at rest.
+void wake(RigidBodies& bodies, std::size_t i);
 
 /// Recomputes I_w⁻¹ = R I_b⁻¹ Rᵀ and ω = I_w⁻¹ L of body i from its current q and L.
 void update_derived(RigidBodies& bodies, std::size_t i);

@@ -34,8 +34,10 @@ enum class BodyType : std::uint8_t {
   /// (or BodyDef::mass), state x, q, v, L integrated by semi-implicit Euler, contacts with every
   /// other body's solid and plane shapes solved by sequential impulses with friction and
   /// restitution (§4.8). Shapes: sphere, box, capsule, cylinder (a dynamic mesh or plane is
-  /// rejected). It appears in the moved list after every advance() in which it moved. Not yet:
-  /// sleeping, particle/cloth impulses on the body, continuous collision, joints.
+  /// rejected). It appears in the moved list after every advance() in which it moved. Particles and cloth
+  /// vertices that hit it push it back (their momentum change, summed over a step, enters the
+  /// bodies' step: Coutinho §3.7), and force fields push it (ForceFieldDef::bodies). Not yet:
+  /// sleeping, continuous collision, joints.
   dynamic,
 };
 
@@ -118,8 +120,26 @@ struct BodyDef {
   /// (m/s²) world: the gravitational acceleration on a dynamic body (per body, as particle
   /// systems have their own; zero for a body that floats).
   Vec3 gravity{0.0, 0.0, -9.81};
+  /// Dynamic bodies, air drag of force fields with an air velocity (a uniform field's wind, curl
+  /// noise): F = ½ ρ_air C_d A |u - v| (u - v) at the centre of mass, ρ_air = 1.225 kg/m³.
+  /// C_d (dimensionless) >= 0; ~1.05 for a cube face-on, 0.47 for a sphere.
+  double drag_coefficient = 1.0;
+  /// (m²) >= 0, the area A of that drag and of a blast's share; 0 (default): the mean projected
+  /// area of the shapes, a quarter of their surface area (Cauchy's formula for a convex body;
+  /// summed over the shapes of a compound one).
+  double drag_area = 0.0;
   std::vector<ShapeDef> shapes;  ///< at least one; planes only on static bodies
   std::string name;              ///< for messages
+};
+
+/// A dynamic body's motion (World::motion): what its momentum is now.
+struct BodyMotion {
+  double mass = 0.0;                     ///< (kg)
+  Vec3 center_of_mass = Vec3::Zero();    ///< (m) world
+  Vec3 linear_velocity = Vec3::Zero();   ///< (m/s) of the centre of mass, world
+  Vec3 angular_velocity = Vec3::Zero();  ///< (rad/s) world
+  Vec3 linear_momentum = Vec3::Zero();   ///< (kg m/s) m v, world
+  Vec3 angular_momentum = Vec3::Zero();  ///< (kg m²/s) about the centre of mass, world
 };
 
 }  // namespace simreel::sim

@@ -27,6 +27,7 @@ namespace simreel::sim {
 
 namespace detail {
 struct Collider;
+struct BodyImpulses;
 }
 
 /// How a cloth's state is advanced over one internal step (Coutinho Appendix B).
@@ -173,8 +174,12 @@ class Cloth {
 
   /// Advances from t0 to t1 (s): forces, the integrator, collisions with `colliders` (the World's;
   /// nullptr: none), the maximum-deformation pass (§3.9.2) and velocities from the corrected
-  /// positions. @returns false if the state became non-finite (the World then reports it).
-  bool step(double t0, double t1, const std::vector<detail::Collider>* colliders = nullptr);
+  /// positions. `impulses` (the World's, when it has dynamic bodies): each vertex's momentum
+  /// change against a dynamic body's shape is logged there, equal and opposite, for the body
+  /// (two-way coupling, Coutinho §3.7). @returns false if the state became non-finite (the World
+  /// then reports it).
+  bool step(double t0, double t1, const std::vector<detail::Collider>* colliders = nullptr,
+            detail::BodyImpulses* impulses = nullptr);
 
   [[nodiscard]] ClothView view() const;
   [[nodiscard]] ClothStats stats() const;

@@ -65,6 +65,12 @@ enum class FieldKind {
   vortex,      ///< a = strength (axis × ρ̂) - inward_strength ρ̂, ρ = the part of x - c normal
                ///< to the axis: orbit around the axis, optionally pulled in
   curl_noise,  ///< F = drag (u(x, t) - v): dragged toward a divergence-free velocity field
+  /// A pressure pulse at `time` from the region centre, on dynamic bodies only (particles are
+  /// not pushed: the explosion effect's fragments are): the momentum `impulse` Π (N s) leaves
+  /// the centre evenly in every direction, and a body whose centre of mass is at distance d
+  /// takes the share its mean projected area A intercepts, J = Π A / (4π max(d, √(A/π))²) along
+  /// the outward direction, times the drop-off weight (see world.hpp, bodies and fields).
+  blast,
 };
 
 /// A force field (Coutinho §3.3, "force fields"), confined to a region that can follow a path.
@@ -81,6 +87,9 @@ struct ForceFieldDef {
   // uniform
   Vec3 acceleration = Vec3::Zero();    ///< (m/s²) field frame
   Vec3 force = Vec3::Zero();           ///< (N) field frame, divided by each particle's mass
+  /// (m/s) field frame: air velocity of a uniform field (wind). Particles are dragged toward it
+  /// with F = drag (u - v); dynamic bodies with F = ½ ρ_air C_d A |u - v| (u - v) (world.hpp).
+  Vec3 wind = Vec3::Zero();
   // attractor and vortex
   double strength = 1.0;               ///< (m/s²) attractor pull / vortex tangential
   Vec3 axis = Vec3::UnitZ();           ///< vortex axis, field frame (normalised on add)
@@ -90,7 +99,13 @@ struct ForceFieldDef {
   double amplitude = 1.0;              ///< (m/s)
   double frequency = 1.0;              ///< (1/m) spatial frequency of the noise, > 0
   Vec3 scroll = Vec3::Zero();          ///< (m/s) the field drifts with this velocity
-  double drag = 1e-3;                  ///< k (kg/s) coupling F = k (u - v), >= 0
+  double drag = 1e-3;                  ///< k (kg/s) particle coupling F = k (u - v) to the
+                                       ///< curl noise or the uniform field's wind, >= 0
+  // blast
+  double impulse = 0.0;                ///< Π (N s) >= 0: momentum of the pulse
+  double time = 0.0;                   ///< (s) >= 0: when the pulse passes (one step takes it)
+  /// Whether the field also pushes dynamic bodies (at their centre of mass; world.hpp).
+  bool bodies = true;
   /// Systems the field acts on; empty = every system.
   std::vector<ParticleSystemHandle> systems;
 };

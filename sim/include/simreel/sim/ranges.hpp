@@ -98,7 +98,9 @@ inline constexpr Range kFieldRadius = kPositive;         ///< (m) sphere region
 inline constexpr Range kFieldHalfExtent = kPositive;     ///< (m) box region, each axis
 inline constexpr Range kFieldAmplitude = kNonNegative;   ///< (m/s) curl-noise velocity scale
 inline constexpr Range kFieldFrequency = kPositive;      ///< (1/m) curl-noise spatial frequency
-inline constexpr Range kFieldDrag = kNonNegative;        ///< (1/s) pull towards the noise velocity
+inline constexpr Range kFieldDrag = kNonNegative;        ///< (kg/s) pull towards the air velocity
+inline constexpr Range kFieldImpulse = kNonNegative;     ///< (N s) momentum of a blast
+inline constexpr Range kFieldTime = kNonNegative;        ///< (s) when a blast passes
 
 // Attractor springs (AttractorSpringDef; §3.3 damped springs to an anchor).
 inline constexpr Range kAttractorStiffness = kSpringStiffness;  ///< (N/m)
@@ -123,6 +125,8 @@ inline constexpr Range kBodyDensity = kPositive;         ///< (kg/m³) ShapeDef:
 /// (kg) a body's total mass when given (BodyDef::mass; the field's 0 means "from the densities").
 inline constexpr Range kBodyMass = kPositive;
 inline constexpr Range kBodyDamping = kNonNegative;      ///< (1/s) linear and angular damping
+inline constexpr Range kBodyDragCoefficient = kNonNegative;  ///< C_d of the air drag (BodyDef)
+inline constexpr Range kBodyDragArea = kNonNegative;     ///< (m²) 0: a quarter of the surface area
 
 // Cloths (ClothDef; §3.9.2).
 inline constexpr IntRange kClothGrid{1, 1024};           ///< rows, columns (vertices)

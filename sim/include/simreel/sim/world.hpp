@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "simreel/sim/body.hpp"
@@ -164,6 +165,24 @@ class World {
   /// rotation taking local +z to its normal.
   /// @throws std::out_of_range if stale.
   [[nodiscard]] MovedObject pose(BodyHandle h) const;
+
+  /// Whether a dynamic body is awake (false: asleep, frozen at rest with its island until
+  /// something moving touches it; see WorldDef::allow_sleeping). Static and kinematic bodies
+  /// are always awake. @throws std::out_of_range if stale.
+  [[nodiscard]] bool is_awake(BodyHandle h) const;
+
+  /// Wakes a sleeping dynamic body and every body asleep in its island (nothing for an awake,
+  /// static or kinematic body). Call it after changing what acts on a body from outside the
+  /// engine. @throws std::out_of_range if stale.
+  void wake(BodyHandle h);
+
+  /// (m/s, rad/s) Linear velocity of a body's frame origin and angular velocity, world frame
+  /// (zero for a static body, the path's for a kinematic one). @throws std::out_of_range if stale.
+  [[nodiscard]] std::pair<Vec3, Vec3> velocity(BodyHandle h) const;
+
+  /// Mass, centre of mass, velocities and momenta of a dynamic body (world frame).
+  /// @throws std::out_of_range if stale; std::invalid_argument if the body is not dynamic.
+  [[nodiscard]] BodyMotion motion(BodyHandle h) const;
   /// Live particles of a system. @throws std::out_of_range if the handle is stale.
   [[nodiscard]] ParticleView particles(ParticleSystemHandle h) const;
   [[nodiscard]] const ParticleSystemDef& definition(ParticleSystemHandle h) const;

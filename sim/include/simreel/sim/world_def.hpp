@@ -20,6 +20,10 @@ struct WorldDef {
                                   ///< blow-up (divergence), reported as NonFiniteState
   double max_distance = 1e6;      ///< (m) > 0: a particle coordinate beyond it (from the world
                                   ///< origin) is a blow-up, reported as NonFiniteState
+  /// Dynamic bodies at rest fall asleep (an island of bodies in contact, all slower than
+  /// 0.05 m/s and 2°/s for 0.5 s: Box2D's tolerances) and cost nothing until something moving
+  /// touches them or World::wake is called; false keeps every body simulated every step.
+  bool allow_sleeping = true;
 };
 
 }  // namespace simreel::sim

@@ -1,0 +1,47 @@
+#pragma once
+// Momentum handed from particles and cloth vertices to the dynamic bodies they touch (private).
+// Coutinho §3.7: a particle colliding with (or resting on) a rigid body is responded to with the
+// body held fixed; "for each simulation time step, we need to sum all collision impulses acting
+// on the rigid body owing to one or more particle-rigid body collisions, and apply the resultant
+// impulse at the beginning of the next simulation time step". The passes that change a particle's
+// or a vertex's velocity against a shape (collision/particle_response.cpp, the particle-particle
+// stage's collider contacts, cloth/cloth_collide.cpp) append the equal and opposite impulse here;
+// the bodies stage sums the log per body, in log order, and applies it (core/body_coupling.cpp).
+//
+// Determinism: the log is a sequence, not a sum, so the result does not depend on how a pass is
+// split over threads as long as the chunks' logs are concatenated in particle order (a pass split
+// over threads gives each chunk its own BodyImpulses and appends their entries in chunk order).
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "collision/collider_impl.hpp"
+#include "simreel/sim/types.hpp"
+
+namespace simreel::sim::detail {
+
+struct BodyImpulses {
+  /// One exchange: the impulse on the body and its moment about the shape frame's origin.
+  struct Entry {
+    std::uint32_t shape;  ///< index into WorldState::shapes
+    Vec3 impulse;         ///< (N s) on the body, world frame
+    Vec3 moment;          ///< (N m s) (p - c) × impulse, p the contact point, c Collider::center
+  };
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+  /// WorldState::shapes.data() and, per shape, the rigid index of its body when that body is
+  /// dynamic, else kNone (set by prepare_coupling each step; only those shapes log anything).
+  const Collider* shapes = nullptr;
+  std::vector<std::uint32_t> rigid;
+  std::vector<Entry> entries;
+
+  /// Logs the impulse J (N s, world) on collider c (an element of the `shapes` array) at world
+  /// point p, if c belongs to a dynamic body.
+  void add(const Collider& c, const Vec3& J, const Vec3& p) {
+    const std::size_t k = std::size_t(&c - shapes);
+    if (k >= rigid.size() || rigid[k] == kNone) return;
+    entries.push_back(Entry{std::uint32_t(k), J, (p - c.center).cross(J)});
+  }
+};
+
+}  // namespace simreel::sim::detail
