@@ -36,12 +36,17 @@ Vec3 respond(const Vec3& v, const Vec3& vc, const Vec3& n, const Material& m, do
   const Vec3 vr = v - vc;
   const double vn = vr.dot(n);
   if (vn >= 0.0) return v;  // already separating
-  const double kick_t = (kick - kick.dot(n) * n).norm();
   const bool resting = force_resting || is_resting(vn, kick.dot(n), contact_speed);
   double e = resting ? 0.0 : m.restitution;
   const Vec3 vt = vr - vn * n;
   const double vt_len = vt.norm();
-  double mu = resting && vt_len <= kick_t * (1.0 + 1e-6) + 1e-12 ? m.static_mu() : m.friction;
+  // The static coefficient only matters when it differs from the dynamic one (the tangential
+  // push of the step is then needed to tell holding from sliding).
+  double mu = m.friction;
+  if (resting && m.static_mu() != m.friction) {
+    const double kick_t = (kick - kick.dot(n) * n).norm();
+    if (vt_len <= kick_t * (1.0 + 1e-6) + 1e-12) mu = m.static_mu();
+  }
   if (m.on_hit == HitAction::stick) {
     e = 0.0;
     mu = std::numeric_limits<double>::infinity();
@@ -97,14 +102,15 @@ Vec3 step_acceleration(const ForceParams& f, double mass, const Vec3& v1) {
 /// Where particle i was at the start of its step: stored (the other integrators) or, for
 /// semi-implicit Euler, recovered from its position update x1 = x0 + dt v1 - dt²/2 a(v1) d²,
 /// d = 1 / (1 + dt k / m) (within float rounding of x1, which surface_tol absorbs).
+/// `accel`: step_acceleration(f, m, v1) when the caller has it already (the same value).
 Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const Vec3& v1,
-                   double dt, const ForceParams& f) {
+                   double dt, const ForceParams& f, const Vec3* accel = nullptr) {
   if (s.track_prev) {
     const float* q = &s.prev_position[3 * i];
     return Vec3(q[0], q[1], q[2]);
   }
   const double m = s.mass[i], k = drag_at(f, v1), d = m / (m + dt * k);
-  const Vec3 a = Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (k / m) * v1;
+  const Vec3 a = accel != nullptr ? *accel : Vec3(Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (k / m) * v1);
   return p1 - dt * v1 + (0.5 * dt * dt * d * d) * a;
 }
 
@@ -146,9 +152,9 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   float* vf = &s.velocity[3 * i];
   Vec3 b(pf[0], pf[1], pf[2]);
   Vec3 v(vf[0], vf[1], vf[2]);
-  Vec3 a = start_of_step(s, i, b, v, dt, f);
-  const double r = s.radius[i];
   const Vec3 A = step_acceleration(f, s.mass[i], v);
+  Vec3 a = start_of_step(s, i, b, v, dt, f, &A);
+  const double r = s.radius[i];
   const Vec3 kick = A * dt;  // the velocity one whole step of the forces adds
   bool dead = false;
 
