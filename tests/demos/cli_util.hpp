@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,20 @@
 #include <string>
 
 namespace simreel::test {
+
+/// A jet of big orange particles seen from close by (the effect fills a good part of the frame):
+/// the scene the golden and workflow tests record and check.
+inline const char* kGoldenScene = R"({
+  "seed": 3, "fps": 30, "frames": 20,
+  "camera": {"position": [1.5, -2.5, 0.9], "target": [0, 0, 0.6]},
+  "colliders": [{"type": "plane", "restitution": 0.5}],
+  "emitters": [{"name": "jet", "rate": 1500, "start_speed": {"mean": 4, "deviation": 0.3},
+                "spread_deg": {"mean": 0, "deviation": 6}, "lifetime": 2, "position": [0, 0, 0.1],
+                "particle_radius": 0.03,
+                "color_over_lifetime": [{"t": 0, "color": [1, 0.5, 0.1, 1]}, {"t": 1, "color": [1, 0.3, 0.1, 1]}]}]
+})";
+
+inline int count_lines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
 
 struct RunResult {
   int code = -1;

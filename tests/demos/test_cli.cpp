@@ -17,6 +17,8 @@
 #include "cli_util.hpp"
 #include "simreel/render/image.hpp"
 
+using simreel::test::count_lines;
+using simreel::test::kGoldenScene;
 using simreel::test::run_simreel;
 using simreel::test::slurp;
 using simreel::test::TempDir;
@@ -33,7 +35,6 @@ const char* kSmallScene = R"({
                 "spread_deg": {"mean": 0, "deviation": 10}, "lifetime": 2, "position": [0, 0, 0.1]}]
 })";
 
-int count_lines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
 
 }  // namespace
 
@@ -397,16 +398,6 @@ struct Recorded {
   fs::path golden;
 };
 
-// A jet of big orange particles seen from close by: the effect fills a good part of the frame.
-const char* kGoldenScene = R"({
-  "seed": 3, "fps": 30, "frames": 20,
-  "camera": {"position": [1.5, -2.5, 0.9], "target": [0, 0, 0.6]},
-  "colliders": [{"type": "plane", "restitution": 0.5}],
-  "emitters": [{"name": "jet", "rate": 1500, "start_speed": {"mean": 4, "deviation": 0.3},
-                "spread_deg": {"mean": 0, "deviation": 6}, "lifetime": 2, "position": [0, 0, 0.1],
-                "particle_radius": 0.03,
-                "color_over_lifetime": [{"t": 0, "color": [1, 0.5, 0.1, 1]}, {"t": 1, "color": [1, 0.3, 0.1, 1]}]}]
-})";
 
 /// Records hashes of frames 0, 4, 8, 12 at 96x72 and their reference frames.
 void record(Recorded& r) {

@@ -8,6 +8,8 @@
 #include "cli_util.hpp"
 #include "simreel/render/image.hpp"
 
+using simreel::test::count_lines;
+using simreel::test::kGoldenScene;
 using simreel::test::run_simreel;
 using simreel::test::slurp;
 using simreel::test::TempDir;
@@ -18,18 +20,7 @@ namespace {
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-int count_lines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
 
-// A jet of big orange particles seen from close by: the effect fills a good part of the frame.
-const char* kScene = R"({
-  "seed": 3, "fps": 30, "frames": 20,
-  "camera": {"position": [1.5, -2.5, 0.9], "target": [0, 0, 0.6]},
-  "colliders": [{"type": "plane", "restitution": 0.5}],
-  "emitters": [{"name": "jet", "rate": 1500, "start_speed": {"mean": 4, "deviation": 0.3},
-                "spread_deg": {"mean": 0, "deviation": 6}, "lifetime": 2, "position": [0, 0, 0.1],
-                "particle_radius": 0.03,
-                "color_over_lifetime": [{"t": 0, "color": [1, 0.5, 0.1, 1]}, {"t": 1, "color": [1, 0.3, 0.1, 1]}]}]
-})";
 
 /// Renders `scene` into a golden with frames 0, 4, 8 at 64x48 and records its reference frames.
 void record(const fs::path& scene, const fs::path& golden, const std::string& extra = "") {
@@ -47,7 +38,7 @@ void record(const fs::path& scene, const fs::path& golden, const std::string& ex
 TEST(Workflow, NewGoldensNameTheirSceneRelativeToTheGoldenAndCheckFromAnywhere) {
   TempDir d;
   fs::create_directories(d / "goldens" / "scenes");
-  write_file(d / "goldens" / "scenes" / "jet.json", kScene);
+  write_file(d / "goldens" / "scenes" / "jet.json", kGoldenScene);
   record(d / "goldens" / "scenes" / "jet.json", d / "goldens" / "jet.json");
   if (HasFatalFailure()) return;
   const auto j = nlohmann::json::parse(slurp(d / "goldens" / "jet.json"));
@@ -62,7 +53,7 @@ TEST(Workflow, NewGoldensNameTheirSceneRelativeToTheGoldenAndCheckFromAnywhere) 
 TEST(Workflow, SceneBesideTheGoldensFolderNeedsRootOrTheWorkingDirectory) {
   TempDir d;
   fs::create_directories(d / "scenes");
-  write_file(d / "scenes" / "jet.json", kScene);
+  write_file(d / "scenes" / "jet.json", kGoldenScene);
   record(d / "scenes" / "jet.json", d / "goldens" / "jet.json", "--root " + d.path.string());
   if (HasFatalFailure()) return;
   EXPECT_EQ(nlohmann::json::parse(slurp(d / "goldens" / "jet.json")).at("scene"), "../scenes/jet.json");
@@ -79,7 +70,7 @@ TEST(Workflow, SceneBesideTheGoldensFolderNeedsRootOrTheWorkingDirectory) {
 
 TEST(Workflow, CheckSeveralGoldensWritesSummaryJunitAndReport) {
   TempDir d;
-  write_file(d / "jet.json", kScene);
+  write_file(d / "jet.json", kGoldenScene);
   record(d / "jet.json", d / "a.json");
   if (HasFatalFailure()) return;
   // b: the same golden with the jet removed, so it fails; c: not a golden at all (skipped in a
@@ -200,7 +191,7 @@ TEST(Workflow, PresetErrorsPointToTheFix) {
 
 TEST(Workflow, SweepRendersEveryCombinationIntoOneLabelledSheet) {
   TempDir d;
-  write_file(d / "jet.json", kScene);
+  write_file(d / "jet.json", kGoldenScene);
   const std::string base = "sweep " + (d / "jet.json").string() +
                            " --vary /emitters/0/rate=50,1500 --seeds 1,2 --frames 0:6 --size 64x48 --strip 2 ";
   const auto r = run_simreel(base + "--contact-sheet " + (d / "sheet.png").string() + " -o " + (d / "variants").string() +
@@ -226,7 +217,7 @@ TEST(Workflow, SweepRendersEveryCombinationIntoOneLabelledSheet) {
 
 TEST(Workflow, SweepErrorsExit2BeforeRendering) {
   TempDir d;
-  write_file(d / "jet.json", kScene);
+  write_file(d / "jet.json", kGoldenScene);
   const std::string scene = (d / "jet.json").string();
   const std::string sheet = " --contact-sheet " + (d / "s.png").string();
   for (const std::string& args :
