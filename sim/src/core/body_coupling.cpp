@@ -123,8 +123,12 @@ void apply_coupling(WorldState& w, double t0, double t1) {
   BodyImpulses& log = d.coupling;
   if (!log.entries.empty()) {
     // Per body: ΣJ and Σ (p - x) × J = Σ (p - c) × J + (c - x) × J, c the shape's origin.
-    std::vector<Vec3> impulse(r.size(), Vec3::Zero()), moment(r.size(), Vec3::Zero());
-    std::vector<std::uint8_t> touched(r.size(), 0);
+    std::vector<Vec3>& impulse = d.coupling_impulse;
+    std::vector<Vec3>& moment = d.coupling_moment;
+    std::vector<std::uint8_t>& touched = d.coupling_touched;
+    impulse.assign(r.size(), Vec3::Zero());
+    moment.assign(r.size(), Vec3::Zero());
+    touched.assign(r.size(), 0);
     for (const BodyImpulses::Entry& e : log.entries) {
       const std::uint32_t i = log.rigid[e.shape];
       impulse[i] += e.impulse;

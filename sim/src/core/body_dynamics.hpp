@@ -90,6 +90,9 @@ struct BodyDynamics {
   /// Impulses from particles and cloth on the dynamic bodies over the current step (§3.7),
   /// applied and cleared by the bodies stage.
   BodyImpulses coupling;
+  /// apply_coupling's per-body sums, reused from step to step (no allocation once grown).
+  std::vector<Vec3> coupling_impulse, coupling_moment;
+  std::vector<std::uint8_t> coupling_touched;
 };
 
 /// Readies w.dyn.coupling for this step (body_coupling.cpp): which shapes belong to dynamic
