@@ -115,6 +115,7 @@ struct BodyDynamics {
   std::vector<JointBodies> joint_bodies;
   std::vector<std::uint32_t> joint_entry;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> no_collide;
+  std::vector<std::uint8_t> in_contact;  ///< per rigid entry: touched something this step
 };
 
 /// Resolves this step's joints (joints.cpp): fills joint_models/joint_bodies/joint_entry from

@@ -13,6 +13,35 @@
 #include "rigid/integrate.hpp"
 
 namespace simreel::sim::detail {
+namespace {
+
+std::uint32_t root(std::vector<std::uint32_t>& parent, std::uint32_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+/// d.in_contact[i] = 1 for every body of an articulation (bodies joined by joints) of which
+/// some body touches something this step: those take the joint projection as a position
+/// correction only (joint_solver.hpp project_positions).
+void mark_articulations_in_contact(BodyDynamics& d) {
+  const std::uint32_t n = std::uint32_t(d.rigid.size());
+  d.in_contact.assign(n, 0);
+  d.parent.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) d.parent[i] = i;
+  for (const JointBodies& j : d.joint_bodies)
+    if (j.a != kStaticBody && j.b != kStaticBody) {
+      const std::uint32_t a = root(d.parent, j.a), b = root(d.parent, j.b);
+      if (a != b) d.parent[std::max(a, b)] = std::min(a, b);
+    }
+  for (const BodyManifold& m : d.manifolds) {
+    if (m.manifold.count == 0 || m.first_point == kCarriedManifold) continue;
+    if (m.rigid_a != kStaticBody) d.in_contact[root(d.parent, m.rigid_a)] = 1;
+    if (m.rigid_b != kStaticBody) d.in_contact[root(d.parent, m.rigid_b)] = 1;
+  }
+  for (std::uint32_t i = 0; i < n; ++i) d.in_contact[i] = d.in_contact[root(d.parent, i)];
+}
+
+}  // namespace
 
 void stage_bodies(WorldState& w, double t0, double t1) {
   BodyDynamics& d = w.dyn;
@@ -63,9 +92,20 @@ void stage_bodies(WorldState& w, double t0, double t1) {
     js.finish(r);
     finish_joints(w, h);
   }
-  integrate_positions(r, h);
-  // Drift (§5.4): the anchors projected back together, limits back inside.
-  if (!js.empty()) js.project_positions(r, d.joint_models, d.joint_bodies);
+  if (js.empty()) {
+    integrate_positions(r, h);
+  } else {
+    // Drift (§5.4): the anchors projected back together and limits back inside after the real
+    // motion, the projection's displacement becoming velocity (joint_solver.hpp); then the
+    // contacts' split-impulse displacement, projected again without touching the velocities — a
+    // joint must not turn a contact's position correction into motion (links pushed apart by a
+    // contact and pulled back by their joint would otherwise gain speed every step).
+    integrate_positions(r, h, Motion::velocity);
+    mark_articulations_in_contact(d);
+    js.project_positions(r, d.joint_models, d.joint_bodies, h, d.in_contact);
+    integrate_positions(r, h, Motion::bias);
+    js.project_positions(r, d.joint_models, d.joint_bodies, h, {});
+  }
   clear_forces(r);
   // The solver's impulses go back into the manifolds: next step's warm start (tangent impulses
   // as world vectors, persistent_manifold.hpp).

@@ -23,18 +23,27 @@ void integrate_velocities(RigidBodies& bodies, double h) {
   }
 }
 
-void integrate_positions(RigidBodies& bodies, double h) {
+void integrate_positions(RigidBodies& bodies, double h, Motion motion) {
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     if (!bodies.is_dynamic(i)) continue;
-    bodies.position[i] += h * (bodies.linear_velocity[i] + bodies.bias_velocity[i]);
-    const Vec3 w = bodies.angular_velocity[i] + bodies.bias_angular_velocity[i];
+    Vec3 v = bodies.bias_velocity[i], w = bodies.bias_angular_velocity[i];
+    if (motion == Motion::velocity) {
+      v = bodies.linear_velocity[i];
+      w = bodies.angular_velocity[i];
+    } else if (motion == Motion::both) {
+      v += bodies.linear_velocity[i];
+      w += bodies.angular_velocity[i];
+    }
+    bodies.position[i] += h * v;
     Quat& q = bodies.orientation[i];
     // dq/dt = ½ (0, ω) ⊗ q with ω in the world frame (Coutinho App. C).
     const Quat dq = Quat(0.0, w.x(), w.y(), w.z()) * q;
     q.coeffs() += (0.5 * h) * dq.coeffs();
     q.normalize();
-    bodies.bias_velocity[i].setZero();
-    bodies.bias_angular_velocity[i].setZero();
+    if (motion != Motion::velocity) {
+      bodies.bias_velocity[i].setZero();
+      bodies.bias_angular_velocity[i].setZero();
+    }
     update_derived(bodies, i);
   }
 }

@@ -36,7 +36,12 @@ void integrate_velocities(RigidBodies& bodies, double h);
 /// Position half of the step for every dynamic body: moves x and q with the current velocities
 /// plus the split-impulse pseudo-velocities (then zeroed), renormalises q, refreshes I_w⁻¹ and
 /// ω = I_w⁻¹ L.
-void integrate_positions(RigidBodies& bodies, double h);
+/// `motion` picks what moves them: both (the default), only the real velocities (the split
+/// pseudo-velocities kept for a later call), or only the pseudo-velocities — so that the joint
+/// projection can tell the motion it must turn into velocity from the contacts' position
+/// correction it must not (core/stage_bodies.cpp).
+enum class Motion { both, velocity, bias };
+void integrate_positions(RigidBodies& bodies, double h, Motion motion = Motion::both);
 
 /// A step with no contacts: integrate_velocities, integrate_positions, clear_forces.
 void step_free(RigidBodies& bodies, double h);

@@ -24,6 +24,16 @@ Vec3 linear_velocity(const RigidBodies& r, std::uint32_t i) {
   return i == kStaticBody ? Vec3::Zero() : r.linear_velocity[i];
 }
 
+/// After a position correction turned body i: I_w⁻¹ at the new orientation with ω kept and L
+/// following it. Keeping L (update_derived) would hand the angular momentum of a tumbling thin
+/// link to its axis of least inertia whenever the correction turns that axis towards L: a spin
+/// the momentum form then feeds step after step.
+void turned(RigidBodies& r, std::uint32_t i) {
+  const Mat3 R = r.orientation[i].toRotationMatrix();
+  r.inv_inertia_world[i] = R * r.inv_inertia_body[i] * R.transpose();
+  sync_angular_momentum(r, i);
+}
+
 /// Rotates q by the small world-frame rotation vector dtheta (first order, renormalised: the
 /// same update as integrate_positions with ω h = dtheta).
 void rotate(Quat& q, const Vec3& dtheta) {
@@ -108,13 +118,15 @@ JointAngles joint_angles(const JointModel& m, const JointFrame& f) {
 }
 
 void JointSolver::rows_for(const RigidBodies& r, const JointModel& m, JointBodies j,
-                           std::uint32_t joint, double h) {
+                           std::uint32_t joint, double h, bool equality_only) {
   const bool da = moves(r, j.a), db = moves(r, j.b);
   if (!da && !db) return;
   const JointFrame f = joint_frame(r, m, j);
   const double ima = da ? r.inv_mass[j.a] : 0.0, imb = db ? r.inv_mass[j.b] : 0.0;
   const Mat3 Ia = da ? r.inv_inertia_world[j.a] : Mat3::Zero();
   const Mat3 Ib = db ? r.inv_inertia_world[j.b] : Mat3::Zero();
+  // Velocity-product terms (eq. 5.8's ω × (ω × r); for the hinge's axis rows, the turning of
+  // the axis with body a), from the velocities at the start of the step.
   auto eq_row = [&](std::uint8_t kind, const Vec3& lin, const Vec3& ang_a, const Vec3& ang_b) {
     EqRow row;
     row.a = j.a;
@@ -144,6 +156,7 @@ void JointSolver::rows_for(const RigidBodies& r, const JointModel& m, JointBodie
   } else if (m.type == JointType::fixed) {
     for (std::uint8_t k = 0; k < 3; ++k) eq_row(std::uint8_t(5 + k), Vec3::Zero(), Vec3::Unit(k), Vec3::Unit(k));
   }
+  if (equality_only) return;
   auto ang_row = [&](const Vec3& d, double target, double lo, double hi, double gamma) {
     AngRow row;
     row.a = j.a;
@@ -156,7 +169,6 @@ void JointSolver::rows_for(const RigidBodies& r, const JointModel& m, JointBodie
     if (k <= 0.0) return;
     row.mass = 1.0 / (k + gamma);
     row.gamma = gamma;
-    row.target = target;
     row.lo = lo;
     row.hi = hi;
     row.acc = 0.0;
@@ -187,7 +199,7 @@ void JointSolver::prepare(const RigidBodies& r, std::span<const JointModel> mode
   ang_.clear();
   impulse_.assign(models.size(), JointImpulse{});
   for (std::size_t i = 0; i < models.size(); ++i)
-    rows_for(r, models[i], bodies[i], std::uint32_t(i), h);
+    rows_for(r, models[i], bodies[i], std::uint32_t(i), h, false);
   assemble(r);
 }
 
@@ -301,12 +313,29 @@ void JointSolver::finish(RigidBodies& r) const {
 }
 
 void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> models,
-                                    std::span<const JointBodies> bodies, int iterations,
+                                    std::span<const JointBodies> bodies, double h,
+                                    std::span<const std::uint8_t> in_contact, int iterations,
                                     double tolerance) {
   if (eq_.empty() || !factor_ok_) return;
   dx_.resize(r.size());
   dtheta_.resize(r.size());
-  auto equality_round = [&]() -> double {
+  moved_x_.resize(r.size());
+  moved_theta_.resize(r.size());
+  for (const auto& t : touch_) {
+    moved_x_[t.first].setZero();
+    moved_theta_[t.first].setZero();
+  }
+  auto equality_round = [&](bool relinearise) -> double {
+    if (relinearise) {
+      // Newton on C(x): the Jacobians and K at the current positions (same rows, same pattern:
+      // a numeric refactorisation). A whipping chain turns its links by tenths of a radian per
+      // step, where the step's K alone makes the iteration overshoot and pump energy.
+      eq_.clear();
+      for (std::size_t i = 0; i < models.size(); ++i)
+        rows_for(r, models[i], bodies[i], std::uint32_t(i), h, true);
+      assemble(r);
+      if (!factor_ok_) return 0.0;
+    }
     double worst = 0.0;
     std::uint32_t joint = kStaticBody;
     JointFrame f;
@@ -343,10 +372,12 @@ void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> 
       if (moves(r, row.a)) {
         dx_[row.a] += l * row.ma_lin;
         dtheta_[row.a] += l * row.ma_ang;
+
       }
       if (moves(r, row.b)) {
         dx_[row.b] += l * row.mb_lin;
         dtheta_[row.b] += l * row.mb_ang;
+
       }
     }
     std::uint32_t last = kStaticBody;
@@ -355,12 +386,14 @@ void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> 
       last = t.first;
       r.position[last] += dx_[last];
       rotate(r.orientation[last], dtheta_[last]);
-      update_derived(r, last);
+      turned(r, last);
+      moved_x_[last] += dx_[last];
+      moved_theta_[last] += dtheta_[last];
     }
     return worst;
   };
   for (int it = 0; it < iterations; ++it)
-    if (equality_round() <= tolerance) break;
+    if (equality_round(it > 0) <= tolerance) break;
   // Limits: each violated one turned back by the rotation that removes its violation, shared by
   // the bodies in proportion to their inverse inertia (a nonlinear Gauss–Seidel step), then the
   // anchors re-projected.
@@ -381,18 +414,39 @@ void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> 
       const double p = -c[k] / kk;
       if (moves(r, j.a)) {
         rotate(r.orientation[j.a], -p * ia);
-        update_derived(r, j.a);
+        turned(r, j.a);
+        moved_theta_[j.a] -= p * ia;
       }
       if (moves(r, j.b)) {
         rotate(r.orientation[j.b], p * ib);
-        update_derived(r, j.b);
+        turned(r, j.b);
+        moved_theta_[j.b] += p * ib;
       }
       any = true;
     }
   }
   if (any)
     for (int it = 0; it < iterations; ++it)
-      if (equality_round() <= tolerance) break;
+      if (equality_round(true) <= tolerance) break;
+  // The projection's displacement becomes velocity (RATTLE / SHAKE: the position constraint's
+  // multipliers act as impulses over the step), so the velocities are the chord of the
+  // constrained motion. Without this the next step's velocity solve strips the normal part of
+  // the motion the projection took away and the articulation bleeds energy at O(h ω²).
+  if (!in_contact.empty()) {
+    std::uint32_t last = kStaticBody;
+    for (const auto& t : touch_) {
+      if (t.first == last) continue;
+      last = t.first;
+      if (in_contact[last]) continue;
+      r.linear_velocity[last] += moved_x_[last] / h;
+      // As an angular impulse on L (then ω = I_w⁻¹ L at the final orientation): the impulses
+      // (r × d) λ are normal to a link's long axis, so a thin link gets no spin from them; adding
+      // Δθ/h to ω instead would turn orientation round-off into spin about the axis of least
+      // inertia, which the momentum form then amplifies step after step.
+      r.angular_velocity[last] += moved_theta_[last] / h;
+      sync_angular_momentum(r, last);
+    }
+  }
 }
 
 }  // namespace simreel::sim::detail
