@@ -169,6 +169,7 @@ void JointSolver::rows_for(const RigidBodies& r, const JointModel& m, JointBodie
     if (k <= 0.0) return;
     row.mass = 1.0 / (k + gamma);
     row.gamma = gamma;
+    row.target = target;
     row.lo = lo;
     row.hi = hi;
     row.acc = 0.0;
@@ -301,7 +302,7 @@ void JointSolver::iterate_rows(RigidBodies& r) {
     if (moves(r, row.a)) r.angular_velocity[row.a] -= applied * row.ia_d;
     if (moves(r, row.b)) r.angular_velocity[row.b] += applied * row.ib_d;
     impulse_[row.joint].angular += applied * row.d;
-  }
+    }
 }
 
 void JointSolver::finish(RigidBodies& r) const {
