@@ -115,7 +115,9 @@ JointScene joint(const json& j, const std::string& ptr, const std::string& file,
     if (o.has("speed_deg_s") && o.has("rpm"))
       o.error_at(o.pointer("rpm"), "expected \"speed_deg_s\" or \"rpm\", found both");
     d.motor_enabled = d.type == sim::JointType::hinge;
-    d.motor_speed = o.has("rpm") ? o.number("rpm", 0.0) * kRpm : o.number("speed_deg_s", 0.0) * kDeg;
+    const double deg_s = o.number("speed_deg_s", 0.0);
+    const double rpm = o.number("rpm", 0.0);
+    d.motor_speed = o.has("rpm") ? rpm * kRpm : deg_s * kDeg;
     if (!o.has("max_torque_n_m"))
       o.error_at(o.pointer(), "expected a \"max_torque_n_m\": the largest torque the motor applies (N m, > 0)");
     d.max_motor_torque = o.number("max_torque_n_m", 0.0, 0.0, kInf, true);
