@@ -43,7 +43,8 @@ const char* kProbe = R"({
                 "on_hit": "split", "on_hit_split": {}, "pair_forces": {}, "initial_particles": [{}],
                 "springs": [{}]}],
   "force_fields": [{"type": "uniform", "region": {"shape": "box"}, "path": {"keys": [{"time": 0}]}},
-                   {"type": "attractor", "region": {"shape": "sphere"}}, {"type": "vortex"}, {"type": "curl_noise"}],
+                   {"type": "attractor", "region": {"shape": "sphere"}}, {"type": "vortex"}, {"type": "curl_noise"},
+                   {"type": "blast"}],
   "attractor_springs": [{"path": {"keys": [{"time": 0}]}}],
   "cloths": [{"pins": [{"path": {"keys": [{"time": 0}]}}], "wind": {}, "aero": {}},
              {"pins": "top_edge", "areal_density": 1}]
