@@ -205,7 +205,7 @@ void chain(const json& j, const std::string& ptr, const std::string& file, std::
 
 // --- ragdolls ------------------------------------------------------------------------------
 //
-// A standard humanoid of 14 segments (12 without hands and feet), with proportions from Winter,
+// A standard humanoid of 15 segments (11 without hands and feet), with proportions from Winter,
 // *Biomechanics and Motor Control of Human Movement* (4th ed., 2009), Fig. 4.1 (segment lengths
 // as fractions of the height H: shoulder 0.818 H, elbow 0.632 H, wrist 0.485 H, hip 0.530 H, knee
 // 0.285 H, ankle 0.039 H, foot 0.152 H long, hand 0.108 H) and Table 4.1 (segment masses as
