@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -333,4 +334,33 @@ TEST(SceneJoints, ExportBodiesAndJointsCsvColumns) {
   EXPECT_EQ(cells[10], "0");
   // No export asked for: a usage error.
   EXPECT_EQ(run_simreel("simulate " + (d / "s.json").string()).code, 2);
+}
+
+// The ragdoll's hinge axes point the anatomical way: a standing ragdoll that collapses bends its
+// knees and elbows forward (positive flexion, as far as tens of degrees) and never hyperextends
+// them (a reversed axis would leave them locked straight at their 0° limit), its anchors held.
+TEST(SceneJoints, RagdollKneesAndElbowsBendOneWay) {
+  const Scene s = scene_from_json(json::parse(R"({"colliders": [{"type": "plane", "name": "ground"}],
+    "ragdolls": [{"name": "r", "position": [0, 0, 0], "velocity": [0.3, 0, 0]}]})"),
+                                  "s.json");
+  auto sw = build_world(s);
+  std::map<std::string, std::pair<double, double>> range;  // name -> min, max angle (rad)
+  double drift = 0;
+  for (int f = 0; f < 45; ++f) {
+    sw.world.advance(1.0 / 30);
+    for (std::size_t k = 0; k < sw.joints.size(); ++k) {
+      const auto st = sw.world.joint_state(sw.joints[k]);
+      drift = std::max(drift, st.anchor_error);
+      auto [it, fresh] = range.try_emplace(s.joints[k].def.name, st.angle, st.angle);
+      it->second.first = std::min(it->second.first, st.angle);
+      it->second.second = std::max(it->second.second, st.angle);
+    }
+  }
+  for (const char* j : {"r_knee_l", "r_knee_r"}) {
+    EXPECT_GT(range[j].second, 30 * kDeg) << j << " flexes";
+    EXPECT_GT(range[j].first, -1 * kDeg) << j << " does not hyperextend";
+  }
+  for (const char* j : {"r_elbow_l", "r_elbow_r"}) EXPECT_GT(range[j].first, -1 * kDeg) << j;
+  EXPECT_GT(std::max(range["r_elbow_l"].second, range["r_elbow_r"].second), 10 * kDeg) << "an elbow flexes";
+  EXPECT_LT(drift, 1e-4);
 }
