@@ -337,30 +337,45 @@ TEST(SceneJoints, ExportBodiesAndJointsCsvColumns) {
 }
 
 // The ragdoll's hinge axes point the anatomical way: a standing ragdoll that collapses bends its
-// knees and elbows forward (positive flexion, as far as tens of degrees) and never hyperextends
-// them (a reversed axis would leave them locked straight at their 0° limit), its anchors held.
+// knees backward and its elbows forward, never the other way. Measured on the bodies, not on the
+// joints' own angle: the shin's long axis in the thigh's frame (x = forward in the template)
+// swings to -x (the heel towards the buttock), the forearm's in the upper arm's frame to +x; a
+// reversed hinge axis would let them bend the other way and lock the anatomical direction.
 TEST(SceneJoints, RagdollKneesAndElbowsBendOneWay) {
   const Scene s = scene_from_json(json::parse(R"({"colliders": [{"type": "plane", "name": "ground"}],
     "ragdolls": [{"name": "r", "position": [0, 0, 0], "velocity": [0.3, 0, 0]}]})"),
                                   "s.json");
   auto sw = build_world(s);
-  std::map<std::string, std::pair<double, double>> range;  // name -> min, max angle (rad)
-  double drift = 0;
+  auto index = [&](const std::string& name) {
+    for (std::size_t i = 0; i < s.colliders.size(); ++i)
+      if (s.colliders[i].name == name) return i;
+    return s.colliders.size();
+  };
+  // Forward component of the child's long axis (pointing away from the joint) in the parent's frame.
+  auto forward = [&](const char* parent, const char* child) {
+    const auto rp = sw.world.pose(sw.colliders[index(parent)]).rotation;
+    const auto rc = sw.world.pose(sw.colliders[index(child)]).rotation;
+    return (rp.transpose() * rc * sim::Vec3(0, 0, -1)).x();
+  };
+  const std::pair<const char*, const char*> knees[] = {{"r_thigh_l", "r_shin_l"}, {"r_thigh_r", "r_shin_r"}};
+  const std::pair<const char*, const char*> elbows[] = {{"r_upper_arm_l", "r_forearm_l"},
+                                                        {"r_upper_arm_r", "r_forearm_r"}};
+  double knee_min = 0, knee_max = -1, elbow_min = 1, elbow_max = 0, drift = 0;
   for (int f = 0; f < 45; ++f) {
     sw.world.advance(1.0 / 30);
-    for (std::size_t k = 0; k < sw.joints.size(); ++k) {
-      const auto st = sw.world.joint_state(sw.joints[k]);
-      drift = std::max(drift, st.anchor_error);
-      auto [it, fresh] = range.try_emplace(s.joints[k].def.name, st.angle, st.angle);
-      it->second.first = std::min(it->second.first, st.angle);
-      it->second.second = std::max(it->second.second, st.angle);
+    for (const auto& [a, b] : knees) {
+      knee_min = std::min(knee_min, forward(a, b));
+      knee_max = std::max(knee_max, forward(a, b));
     }
+    for (const auto& [a, b] : elbows) {
+      elbow_min = std::min(elbow_min, forward(a, b));
+      elbow_max = std::max(elbow_max, forward(a, b));
+    }
+    for (const auto h : sw.joints) drift = std::max(drift, sw.world.joint_state(h).anchor_error);
   }
-  for (const char* j : {"r_knee_l", "r_knee_r"}) {
-    EXPECT_GT(range[j].second, 30 * kDeg) << j << " flexes";
-    EXPECT_GT(range[j].first, -1 * kDeg) << j << " does not hyperextend";
-  }
-  for (const char* j : {"r_elbow_l", "r_elbow_r"}) EXPECT_GT(range[j].first, -1 * kDeg) << j;
-  EXPECT_GT(std::max(range["r_elbow_l"].second, range["r_elbow_r"].second), 10 * kDeg) << "an elbow flexes";
+  EXPECT_LT(knee_min, -0.5) << "a knee flexes by more than 30 degrees, heel backward";
+  EXPECT_LT(knee_max, 0.03) << "no knee bends forward (within 2 degrees)";
+  EXPECT_GT(elbow_max, 0.17) << "an elbow flexes by more than 10 degrees, hand forward";
+  EXPECT_GT(elbow_min, -0.03) << "no elbow bends backward (within 2 degrees)";
   EXPECT_LT(drift, 1e-4);
 }
