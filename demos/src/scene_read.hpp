@@ -11,6 +11,8 @@
 ///   scene_forces.cpp     per-system forces and integrators, "force_fields", "attractor_springs"
 ///                        (§3.3, App. B)
 ///   scene_cloths.cpp     "cloths" (§3.9.2)
+///   scene_joints.cpp     "joints" between named bodies (Ch. 5)
+///   scene_generators.cpp "chains" and "ragdolls": expanded into dynamic colliders and joints
 ///   scene.cpp            scene_from_json (the top level, in file order), load_scene, build_world
 
 #include <array>
