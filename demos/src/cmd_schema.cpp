@@ -31,14 +31,20 @@ const char* kProbe = R"({
     {"type": "sphere", "motion": "kinematic"},
     {"type": "cylinder"},
     {"type": "mesh", "scale": 1},
-    {"type": "mesh", "scale": [1, 1, 1]}
+    {"type": "mesh", "scale": [1, 1, 1]},
+    {"type": "capsule", "motion": "dynamic"}
   ],
+  "chains": [{"from": [0, 0, 1], "to": [1, 0, 1]}],
+  "ragdolls": [{}],
+  "joints": [{"type": "hinge", "body_a": "world", "body_b": "x", "limits": {}, "motor": {}},
+             {"type": "spherical", "limits": {}}],
   "emitters": [{"name": "a", "shape": "mesh", "bursts": [{"count": 1}], "size_over_lifetime": [{}],
                 "split": {}, "color_over_lifetime": [{}], "path": {"keys": [{"time": 0}]},
                 "on_hit": "split", "on_hit_split": {}, "pair_forces": {}, "initial_particles": [{}],
                 "springs": [{}]}],
   "force_fields": [{"type": "uniform", "region": {"shape": "box"}, "path": {"keys": [{"time": 0}]}},
-                   {"type": "attractor", "region": {"shape": "sphere"}}, {"type": "vortex"}, {"type": "curl_noise"}],
+                   {"type": "attractor", "region": {"shape": "sphere"}}, {"type": "vortex"}, {"type": "curl_noise"},
+                   {"type": "blast"}],
   "attractor_springs": [{"path": {"keys": [{"time": 0}]}}],
   "cloths": [{"pins": [{"path": {"keys": [{"time": 0}]}}], "wind": {}, "aero": {}},
              {"pins": "top_edge", "areal_density": 1}]
@@ -57,7 +63,10 @@ std::string unit_of(const std::string& object, const std::string& key) {
       {"angular_velocity", "rad/s"}, {"density", "kg/m^3"}, {"strength", "m/s^2"}, {"size", "m"},
       {"repeat_interval", "s"}, {"age", "s"}, {"stiffness", "N/m"}, {"damping", "N s/m"},
       {"rest_length", "m"}, {"spacing", "m"}, {"thickness", "m"}, {"cutoff", "m"}, {"streak_s", "s"},
-      {"min_radius", "m"}, {"lifetime_deviation", "s"}};
+      {"min_radius", "m"}, {"lifetime_deviation", "s"}, {"anchor", "m"}, {"from", "m"}, {"to", "m"},
+      {"break_force_n", "N"}, {"max_torque_n_m", "N m"}, {"rpm", "rev/min"}, {"speed_deg_s", "deg/s"},
+      {"height_m", "m"}, {"mass_kg", "kg"}, {"slack", "fraction of the straight length"},
+      {"joint_damping", "N m s/rad"}};
   if (object.rfind("/camera", 0) == 0 && key == "height") return "m (above center)";
   if (object.rfind("/render", 0) == 0 && (key == "width" || key == "height")) return "pixels";
   auto ends = [&](const char* suffix) {
@@ -65,6 +74,10 @@ std::string unit_of(const std::string& object, const std::string& key) {
     return key.size() > s.size() && key.compare(key.size() - s.size(), s.size(), s) == 0;
   };
   if (key == "angular_velocity_deg") return "deg/s";
+  if (key == "speed_deg_s") return "deg/s";
+  if (key == "max_torque_n_m") return "N m";
+  if (key == "break_force_n") return "N";
+  if (key == "damping" && (object.rfind("/joints", 0) == 0 || object.rfind("/chains", 0) == 0)) return "N m s/rad";
   if (ends("_deg")) return "degrees";
   if (ends("_s")) return "s";
   if (ends("_m")) return "m";

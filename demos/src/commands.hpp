@@ -83,7 +83,13 @@ int sweep_command(const SweepOptions& options);
 int schema_command(const std::string& output);
 /// The schema's text (scene keys from the loader's readers, effect presets' knobs).
 std::string scene_schema_text();
-int simulate_command(const RunOptions& options, const std::string& export_csv);
+/// The CSV files `simreel simulate` writes (empty: not written); at least one is needed.
+struct SimulateExports {
+  std::string particles;  ///< --export: frame,time,system,id,x,y,z,vx,vy,vz
+  std::string bodies;     ///< --export-bodies: frame,time,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz
+  std::string joints;     ///< --export-joints: frame,time,joint,anchor_error,fx,fy,fz,force,angle,twist,broken
+};
+int simulate_command(const RunOptions& options, const SimulateExports& exports);
 int validate_command(const std::string& scene, const std::vector<std::string>& overrides);
 /// algorithm: "phash", "dhash", "chash" or "all" (the three on one line).
 int hash_command(const std::vector<std::string>& images, const std::string& algorithm);

@@ -88,11 +88,22 @@ int main(int argc, char** argv) {
   schema->add_option("-o,--output", schema_output, "Write it to FILE instead of stdout");
 
   simreel::app::RunOptions sim_opts;
-  std::string export_csv;
-  auto* simulate = app.add_subcommand("simulate", "Simulate without rendering and export particle state as CSV");
+  simreel::app::SimulateExports exports;
+  auto* simulate = app.add_subcommand("simulate", "Simulate without rendering and export particle, body and joint state as CSV");
   add_run_options(simulate, sim_opts);
-  simulate->add_option("--export", export_csv, "CSV file: frame,time,system,id,x,y,z,vx,vy,vz (SI units)")
-      ->required();
+  auto* export_opt =
+      simulate->add_option("--export", exports.particles, "CSV file: frame,time,system,id,x,y,z,vx,vy,vz (SI units)");
+  auto* bodies_opt = simulate->add_option(
+      "--export-bodies", exports.bodies,
+      "CSV file, a row per frame per dynamic body: frame,time,body,x,y,z (m),qw,qx,qy,qz,vx,vy,vz (m/s),wx,wy,wz (rad/s)");
+  auto* joints_opt = simulate->add_option(
+      "--export-joints", exports.joints,
+      "CSV file, a row per frame per joint: frame,time,joint,anchor_error (m),fx,fy,fz,force (N, on body b),angle,"
+      "twist (rad),broken (0/1)");
+  simulate->callback([&] {
+    if (export_opt->count() + bodies_opt->count() + joints_opt->count() == 0)
+      throw CLI::RequiredError("--export, --export-bodies or --export-joints");
+  });
 
   std::string validate_scene;
   std::vector<std::string> validate_overrides;
@@ -158,7 +169,7 @@ int main(int argc, char** argv) {
     if (render->parsed()) return simreel::app::render_command(render_opts);
     if (schema->parsed()) return simreel::app::schema_command(schema_output);
     if (sweep->parsed()) return simreel::app::sweep_command(sweep_opts);
-    if (simulate->parsed()) return simreel::app::simulate_command(sim_opts, export_csv);
+    if (simulate->parsed()) return simreel::app::simulate_command(sim_opts, exports);
     if (validate->parsed()) return simreel::app::validate_command(validate_scene, validate_overrides);
     if (hash->parsed()) return simreel::app::hash_command(images, algorithm);
     if (check->parsed()) return simreel::app::check_command(check_opts);

@@ -109,6 +109,18 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   read_array("cloths", [&](const json& j, const std::string& p, std::size_t i) {
     scene.cloths.push_back(cloth(j, p, file, errors, i, gravity));
   });
+  // Articulated bodies (Coutinho Ch. 5): the generators add bodies and joints, then joints[i]
+  // may name any body, the generated ones included (scene_joints.cpp, scene_generators.cpp).
+  read_array("chains", [&](const json& j, const std::string& p, std::size_t i) {
+    chain(j, p, file, errors, i, gravity, scene);
+  });
+  read_array("ragdolls", [&](const json& j, const std::string& p, std::size_t i) {
+    ragdoll(j, p, file, errors, i, gravity, scene);
+  });
+  check_body_names(scene, errors);
+  read_array("joints", [&](const json& j, const std::string& p, std::size_t i) {
+    scene.joints.push_back(joint(j, p, file, errors, i, scene));
+  });
   r.finish();
   if (!errors.empty()) throw SceneError(errors);
   return scene;
@@ -141,6 +153,11 @@ sim::BodyDef dynamic_body_def(const ColliderScene& c) {
       s = sim::ShapeDef::cylinder(c.cylinder.radius, c.cylinder.half_height);
       s.material = c.cylinder.material;
       break;
+    case ColliderScene::Type::capsule:
+      b.pose = c.capsule.transform;
+      s = sim::ShapeDef::capsule(c.capsule.radius, c.capsule.half_height);
+      s.material = c.capsule.material;
+      break;
     case ColliderScene::Type::plane:
     case ColliderScene::Type::mesh:
       // The reader rejects "dynamic" on these; the engine would reject the shape too.
@@ -162,7 +179,7 @@ sim::BodyDef dynamic_body_def(const ColliderScene& c) {
 SceneWorld build_world(const Scene& scene) {
   sim::WorldDef def = scene.world;
   def.seed = scene.seed;
-  SceneWorld out{sim::World(def), {}, {}, {}, {}, {}};
+  SceneWorld out{sim::World(def), {}, {}, {}, {}, {}, {}};
   try {
     for (const auto& c : scene.colliders) {
       if (c.dynamic.enabled) {
@@ -175,7 +192,26 @@ SceneWorld build_world(const Scene& scene) {
         case ColliderScene::Type::sphere: out.colliders.push_back(out.world.add_sphere(c.sphere)); break;
         case ColliderScene::Type::cylinder: out.colliders.push_back(out.world.add_cylinder(c.cylinder)); break;
         case ColliderScene::Type::mesh: out.colliders.push_back(out.world.add_mesh(c.mesh)); break;
+        case ColliderScene::Type::capsule: {
+          // No single-collider def for a capsule: a one-shape static or kinematic body.
+          sim::BodyDef b;
+          b.name = c.name;
+          b.type = c.capsule.path.empty() ? sim::BodyType::static_body : sim::BodyType::kinematic;
+          b.pose = c.capsule.transform;
+          b.path = c.capsule.path;
+          sim::ShapeDef s = sim::ShapeDef::capsule(c.capsule.radius, c.capsule.half_height);
+          s.material = c.capsule.material;
+          b.shapes.push_back(s);
+          out.colliders.push_back(out.world.add_body(b));
+          break;
+        }
       }
+    }
+    for (const JointScene& j : scene.joints) {
+      sim::JointDef d = j.def;
+      if (j.index_a != JointScene::kWorld) d.body_a = out.colliders.at(j.index_a);
+      if (j.index_b != JointScene::kWorld) d.body_b = out.colliders.at(j.index_b);
+      out.joints.push_back(out.world.add_joint(d));
     }
     for (const auto& e : scene.emitters) out.systems.push_back(out.world.add_particle_system(e.system));
     for (const auto& f : scene.force_fields) {

@@ -33,13 +33,24 @@ struct DynamicScene {
   sim::Vec3 gravity{0.0, 0.0, -9.81};              ///< (m/s²) the scene's "simulation"/"gravity"
 };
 
+/// A capsule collider or body (colliders[i] "type": "capsule"): the segment from -half_height to
+/// +half_height along its local z axis grown by `radius` (sim::ShapeDef::capsule).
+struct CapsuleScene {
+  sim::Transform transform;   ///< centre (m) and rotation (local z = the capsule's axis)
+  double radius = 0.25;       ///< (m) > 0
+  double half_height = 0.5;   ///< (m) > 0: half the inner segment (total length 2 (half_height + radius))
+  sim::Material material;
+  sim::KeyframePath path;     ///< kinematic capsules
+};
+
 struct ColliderScene {
   std::string name;
-  enum class Type { plane, box, sphere, cylinder, mesh } type = Type::plane;
+  enum class Type { plane, box, sphere, cylinder, mesh, capsule } type = Type::plane;
   sim::PlaneDef plane;
   sim::BoxDef box;
   sim::SphereDef sphere;
   sim::CylinderDef cylinder;
+  CapsuleScene capsule;
   sim::MeshDef mesh;  ///< vertices already scaled, in the mesh's local frame
   /// The imported file (positions unscaled, normals, UVs, materials) for drawing; `scale`
   /// below maps it to the collider's local frame.
@@ -76,6 +87,28 @@ struct ClothScene {
   float checker_m = 0.f;  ///< (m) checker cell on the cloth's UVs; 0 = plain
 };
 
+/// A joint between two scene bodies (joints[i], or made by a chain or ragdoll generator;
+/// Coutinho Ch. 5). README "joints[i]".
+struct JointScene {
+  /// Engine units (m, rad, N m s/rad, N); body_a / body_b are filled by build_world.
+  sim::JointDef def;
+  std::string body_a = "world";  ///< a collider's name or "world"
+  std::string body_b = "world";
+  /// Indices into Scene::colliders; kWorld = the static world.
+  static constexpr std::size_t kWorld = std::size_t(-1);
+  std::size_t index_a = kWorld;
+  std::size_t index_b = kWorld;
+};
+
+/// What a generator (chains[i], ragdolls[i]) added: colliders [first_collider, +collider_count)
+/// and joints [first_joint, +joint_count) of the Scene, for tests and messages.
+struct GeneratedGroup {
+  std::string kind;  ///< "chain" or "ragdoll"
+  std::string name;
+  std::size_t first_collider = 0, collider_count = 0;
+  std::size_t first_joint = 0, joint_count = 0;
+};
+
 /// A loaded, checked scene. Every value is in engine units (SI, radians) except where named.
 struct Scene {
   std::string file;  ///< path as given, used in messages
@@ -93,6 +126,9 @@ struct Scene {
   std::vector<ForceFieldScene> force_fields;
   std::vector<AttractorSpringScene> attractor_springs;
   std::vector<ClothScene> cloths;
+  /// joints[i] in file order after the joints of the generators (chains, then ragdolls).
+  std::vector<JointScene> joints;
+  std::vector<GeneratedGroup> generated;  ///< chains, then ragdolls, in file order
 };
 
 /// Turns a parsed document into a Scene, checking every key. @throws SceneError listing every
@@ -110,10 +146,11 @@ struct SceneWorld {
   std::vector<sim::ClothHandle> cloths;
   std::vector<sim::ForceFieldHandle> force_fields;            ///< scene order
   std::vector<sim::AttractorSpringHandle> attractor_springs;  ///< scene order
+  std::vector<sim::JointHandle> joints;                       ///< Scene::joints order
 };
 
 /// The engine body of a `"motion": "dynamic"` collider (`c.dynamic.enabled`; box, sphere or
-/// cylinder): one shape of the collider's geometry and response material at an identity offset,
+/// cylinder, capsule): one shape of the collider's geometry and response material at an identity offset,
 /// pose from the collider, density or mass, velocities (rad/s), damping and the scene's gravity.
 /// @throws std::invalid_argument for a plane or mesh (the loader never produces one).
 sim::BodyDef dynamic_body_def(const ColliderScene& c);

@@ -37,8 +37,8 @@ void collider_motion(ObjectReader& r, const std::string& type, bool has_path, Co
       }
     return;
   }
-  if (type != "box" && type != "sphere" && type != "cylinder") {
-    r.error_at(r.pointer("motion"), "expected \"dynamic\" only on a box, sphere or cylinder collider, found a " +
+  if (type != "box" && type != "sphere" && type != "cylinder" && type != "capsule") {
+    r.error_at(r.pointer("motion"), "expected \"dynamic\" only on a box, sphere, cylinder or capsule collider, found a " +
                                         type + " (planes and meshes are static or kinematic)");
     for (const char* key : kDynamicKeys) r.known(key);
     return;

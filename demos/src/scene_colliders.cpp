@@ -66,9 +66,9 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
                        std::vector<std::string>& errors, std::size_t index) {
   ColliderScene c;
   ObjectReader r(j, ptr, file, errors);
-  const std::string type = r.choice("type", "", {"plane", "box", "sphere", "cylinder", "mesh"});
+  const std::string type = r.choice("type", "", {"plane", "box", "sphere", "cylinder", "capsule", "mesh"});
   if (!r.has("type"))
-    r.error_at(ptr, "expected a \"type\": one of \"plane\", \"box\", \"sphere\", \"cylinder\", \"mesh\"");
+    r.error_at(ptr, "expected a \"type\": one of \"plane\", \"box\", \"sphere\", \"cylinder\", \"capsule\", \"mesh\"");
   c.name = r.string("name", type + std::to_string(index));
   std::array<double, 4> color = r.color("color", type == "plane" ? std::array<double, 4>{0.55, 0.56, 0.58, 1}
                                                                  : std::array<double, 4>{0.78, 0.36, 0.16, 1});
@@ -108,6 +108,15 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
     c.cylinder.half_height = r.number("half_height", 0.5, ranges::kColliderSize);
     c.cylinder.material = collider_material(r);
     c.cylinder.path = keyframe_path(r, "path");
+  } else if (type == "capsule") {
+    // Local z is the capsule's axis (rotation_deg turns it); total length 2 (half_height + radius).
+    c.type = ColliderScene::Type::capsule;
+    c.capsule.transform.translation = to_vec(r.vec3("position", {0, 0, 0}));
+    c.capsule.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
+    c.capsule.radius = r.number("radius", c.capsule.radius, ranges::kColliderSize);
+    c.capsule.half_height = r.number("half_height", c.capsule.half_height, ranges::kColliderSize);
+    c.capsule.material = collider_material(r);
+    c.capsule.path = keyframe_path(r, "path");
   } else if (type == "mesh") {
     c.type = ColliderScene::Type::mesh;
     c.mesh.transform.translation = to_vec(r.vec3("position", {0, 0, 0}));

@@ -43,6 +43,11 @@ std::variant<render::PlaneDesc, render::BoxDesc, render::MeshDesc> collider_desc
       d.material = collider_material(c);
       return d;
     }
+    case ColliderScene::Type::capsule: {
+      render::MeshDesc d = render::make_capsule_mesh(float(c.capsule.radius), float(c.capsule.half_height), 32);
+      d.material = collider_material(c);
+      return d;
+    }
     case ColliderScene::Type::mesh: break;
   }
   return mesh_desc(c);

@@ -11,12 +11,15 @@
 ///   scene_forces.cpp     per-system forces and integrators, "force_fields", "attractor_springs"
 ///                        (§3.3, App. B)
 ///   scene_cloths.cpp     "cloths" (§3.9.2)
+///   scene_joints.cpp     "joints" between named bodies (Ch. 5)
+///   scene_generators.cpp "chains" and "ragdolls": expanded into dynamic colliders and joints
 ///   scene.cpp            scene_from_json (the top level, in file order), load_scene, build_world
 
 #include <array>
 #include <cstddef>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -104,5 +107,24 @@ AttractorSpringScene attractor_spring(const json& j, const std::string& ptr, con
 // scene_cloths.cpp
 ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
                  std::vector<std::string>& errors, std::size_t index, const sim::Vec3& gravity);
+
+// scene_joints.cpp (Coutinho Ch. 5)
+/// joints[i]: type, body names (resolved against scene.colliders; "world" = the static world),
+/// anchor, axis, limits (degrees in JSON, radians in the JointDef), damping, motor, breaking.
+JointScene joint(const json& j, const std::string& ptr, const std::string& file,
+                 std::vector<std::string>& errors, std::size_t index, const Scene& scene);
+/// Reports colliders whose names repeat an earlier one (joints name bodies, so names must be unique).
+void check_body_names(const Scene& scene, std::vector<std::string>& errors);
+/// Index of the collider named `name`, JointScene::kWorld for "world", or nullopt with a message
+/// (expected, found, a "did you mean" hint) appended to `errors` at `pointer`.
+std::optional<std::size_t> body_index(const Scene& scene, const std::string& name, const std::string& pointer,
+                                      std::vector<std::string>& errors);
+
+// scene_generators.cpp: chains[i] and ragdolls[i] expand into dynamic colliders and joints of
+// `scene` (a GeneratedGroup records which).
+void chain(const json& j, const std::string& ptr, const std::string& file, std::vector<std::string>& errors,
+           std::size_t index, const sim::Vec3& gravity, Scene& scene);
+void ragdoll(const json& j, const std::string& ptr, const std::string& file, std::vector<std::string>& errors,
+             std::size_t index, const sim::Vec3& gravity, Scene& scene);
 
 }  // namespace simreel::app::scene_read

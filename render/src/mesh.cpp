@@ -81,6 +81,46 @@ MeshDesc make_sphere_mesh(float radius, int segments) {
   return m;
 }
 
+MeshDesc make_capsule_mesh(float radius, float half_height, int segments) {
+  if (!(radius > 0.f) || !(half_height > 0.f) || segments < 3) {
+    throw std::invalid_argument("make_capsule_mesh needs radius > 0, half_height > 0 and segments >= 3");
+  }
+  // A UV sphere cut at its equator, the halves moved apart by 2 half_height: the equator ring is
+  // there twice (z = -half_height and +half_height) and the band between them is the side.
+  const int slices = segments;
+  const int half_stacks = std::max(segments / 4, 1);
+  const float pi = std::numbers::pi_v<float>;
+  MeshDesc m;
+  int rows = 0;
+  for (int hemisphere = 0; hemisphere < 2; ++hemisphere) {
+    const float shift = hemisphere == 0 ? -half_height : half_height;
+    for (int k = 0; k <= half_stacks; ++k) {
+      const int j = hemisphere == 0 ? k : half_stacks + k;  // stack index over the whole sphere
+      const float theta = pi * float(j) / float(2 * half_stacks);
+      const float z = -std::cos(theta);
+      const float ring = std::sin(theta);
+      for (int i = 0; i <= slices; ++i) {
+        const float phi = 2.f * pi * float(i) / float(slices);
+        const float nx = ring * std::cos(phi), ny = ring * std::sin(phi);
+        m.positions.insert(m.positions.end(), {radius * nx, radius * ny, radius * z + shift});
+        m.normals.insert(m.normals.end(), {nx, ny, z});
+        m.uvs.insert(m.uvs.end(), {radius * phi, radius * theta + (hemisphere == 0 ? 0.f : 2.f * half_height)});
+      }
+      ++rows;
+    }
+  }
+  const auto row = std::uint32_t(slices + 1);
+  for (int j = 0; j + 1 < rows; ++j) {
+    for (int i = 0; i < slices; ++i) {
+      const std::uint32_t a = std::uint32_t(j) * row + std::uint32_t(i);
+      const std::uint32_t b = a + 1, c = a + row, d = a + row + 1;
+      if (j != 0) m.indices.insert(m.indices.end(), {a, b, d});
+      if (j != rows - 2) m.indices.insert(m.indices.end(), {a, d, c});
+    }
+  }
+  return m;
+}
+
 MeshDesc make_cylinder_mesh(float radius, float half_height, int segments) {
   if (!(radius > 0.f) || !(half_height > 0.f) || segments < 3) {
     throw std::invalid_argument("make_cylinder_mesh needs radius > 0, half_height > 0 and segments >= 3");

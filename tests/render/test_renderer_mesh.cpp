@@ -2,6 +2,7 @@
 // the built-in box, two-sided lighting, textures), shadows cast by meshes, errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -96,6 +97,32 @@ TEST(MeshHelpers, CylinderHasThePrismVolumeAndOutwardNormals) {
   }
   EXPECT_THROW(make_cylinder_mesh(0.f, 1.f, 8), std::invalid_argument);
   EXPECT_THROW(make_sphere_mesh(1.f, 2), std::invalid_argument);
+}
+
+// The capsule (sim::ShapeDef::capsule): a sphere of radius r cut at its equator and pulled apart
+// by 2 h. Its volume converges to the exact 4/3 π r³ + 2 π r² h (outward winding, closed), and
+// every normal is the unit vector from the segment's nearest point.
+TEST(MeshHelpers, CapsuleConvergesToTheCapsuleVolumeWithOutwardNormals) {
+  const double r = 0.3, h = 0.5;
+  const double exact = 4.0 / 3.0 * std::numbers::pi * r * r * r + 2.0 * std::numbers::pi * r * r * h;
+  double previous_error = 1.0;
+  for (const int segments : {8, 16, 32, 64}) {
+    const MeshDesc m = make_capsule_mesh(float(r), float(h), segments);
+    EXPECT_GT(signed_volume(m), 0.0) << segments;
+    const double error = std::abs(signed_volume(m) - exact) / exact;
+    EXPECT_LT(error, previous_error / 3.0) << segments;
+    previous_error = error;
+    for (std::size_t i = 0; i < m.positions.size(); i += 3) {
+      const Eigen::Vector3f p(m.positions[i], m.positions[i + 1], m.positions[i + 2]);
+      const Eigen::Vector3f nrm(m.normals[i], m.normals[i + 1], m.normals[i + 2]);
+      const Eigen::Vector3f axis_point(0.f, 0.f, std::clamp(p.z(), float(-h), float(h)));
+      EXPECT_NEAR(nrm.norm(), 1.f, 1e-5f);
+      EXPECT_LT((axis_point + float(r) * nrm - p).norm(), 1e-5f);
+    }
+  }
+  EXPECT_LT(previous_error, 6e-3);
+  EXPECT_THROW(make_capsule_mesh(0.1f, 0.f, 8), std::invalid_argument);
+  EXPECT_THROW(make_capsule_mesh(0.1f, 0.1f, 2), std::invalid_argument);
 }
 
 TEST(MeshHelpers, ComputedNormalsMatchTheSphereRadii) {

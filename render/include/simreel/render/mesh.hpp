@@ -65,4 +65,11 @@ MeshDesc make_sphere_mesh(float radius, int segments);
 /// half_height <= 0 or segments < 3.
 MeshDesc make_cylinder_mesh(float radius, float half_height, int segments);
 
+/// Capsule along z centred at the origin: the segment from -half_height to +half_height grown by
+/// `radius` (sim::ShapeDef::capsule), i.e. two hemispheres of `segments / 4` stacks (>= 1) joined
+/// by a side band; `segments` (>= 3) slices around z, outward smooth normals, UVs in metres (u:
+/// arc length around z, v: arc length from the south pole). @throws std::invalid_argument if
+/// radius or half_height <= 0 or segments < 3.
+MeshDesc make_capsule_mesh(float radius, float half_height, int segments);
+
 }  // namespace simreel::render
