@@ -79,10 +79,13 @@ void gather_joints(WorldState& w) {
   d.joint_bodies.clear();
   d.joint_entry.clear();
   d.no_collide.clear();
-  const std::vector<JointEntry>& joints = w.joints.dense();
-  for (std::uint32_t i = 0; i < joints.size(); ++i) {
-    const JointEntry& e = joints[i];
-    if (e.broken) continue;
+  for (std::uint32_t i = 0; i < w.joints.size(); ++i) {
+    JointEntry& e = w.joints.at(i);
+    if (e.broken) {  // a broken joint carries nothing from the step after it broke
+      e.reading.force.setZero();
+      e.reading.torque.setZero();
+      continue;
+    }
     d.joint_models.push_back(e.model);
     d.joint_bodies.push_back({rigid_of(w, e.body_a), rigid_of(w, e.body_b)});
     d.joint_entry.push_back(i);
