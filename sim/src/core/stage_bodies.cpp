@@ -10,7 +10,10 @@
 // Nothing runs without a dynamic body, so scenes before Ch. 4 are bit-identical. Serial, in the
 // bodies' dense order: deterministic at any thread count.
 #include "core/stages.hpp"
+#include <sstream>
+
 #include "rigid/integrate.hpp"
+#include "simreel/sim/world.hpp"
 
 namespace simreel::sim::detail {
 namespace {
@@ -124,6 +127,18 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   for (Body& b : bodies) {
     if (!b.dynamic()) continue;
     const std::uint32_t i = b.rigid;
+    // Stop before the shapes and the moved list carry NaNs to the collisions and the renderer.
+    // A speed above that of light (or a spin whose rim would pass it) is an explosion of the
+    // solve, not motion: it stops the run too, long before it overflows.
+    constexpr double kLight = 299792458.0;  // (m/s)
+    if (!(r.position[i].allFinite() && r.orientation[i].coeffs().allFinite() &&
+          r.linear_velocity[i].norm() < kLight && r.angular_velocity[i].norm() < kLight)) {
+      std::ostringstream m;
+      m.precision(9);
+      m << "body '" << b.name << "': non-finite position or velocity (faster than light) at internal step "
+        << w.steps + 1 << ", t = " << t1 << " s";
+      throw NonFiniteState(m.str());
+    }
     const Quat& q = r.orientation[i];
     const Vec3 arm = q * b.local_com;
     b.pose.rotation = q;
