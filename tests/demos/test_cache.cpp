@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -184,23 +185,32 @@ bool run_and_kill(const std::vector<std::string>& args, std::chrono::microsecond
 }
 
 // A bake killed with SIGKILL at 10 random moments, each time resumed with --resume, then
-// finished, holds exactly the files (manifest, states, PLY) of an uninterrupted bake.
+// finished, holds exactly the files (manifest, states, PLY) of an uninterrupted bake. Each run
+// is killed within its first tenth of a full bake (start-up, part-written files and renames
+// included), so the ten kills land across the whole bake.
 TEST(BakeResume, KilledTenTimesAndResumedEqualsUninterrupted) {
   TempDir tmp;
   const std::string scene = scene_path("fountain").string();
   const auto t0 = std::chrono::steady_clock::now();
-  const auto ref = run_simreel("bake " + scene + " --frames 45 --ply -q --cache " + (tmp / "ref").string());
+  const auto ref = run_simreel("bake " + scene + " --frames 90 --ply -q --cache " + (tmp / "ref").string());
   ASSERT_EQ(ref.code, 0) << ref.err;
   const auto full = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0);
 
-  const std::vector<std::string> args{"bake", scene, "--frames", "45", "--ply", "-q", "--resume", "--cache",
+  const std::vector<std::string> args{"bake", scene, "--frames", "90", "--ply", "-q", "--resume", "--cache",
                                       (tmp / "killed").string()};
   std::mt19937 rng(18);
-  std::uniform_int_distribution<long long> when(full.count() / 20, full.count());
+  std::uniform_int_distribution<long long> when(full.count() / 50, full.count() / 10);
   int killed = 0;
   for (int k = 0; k < 10; ++k) killed += run_and_kill(args, std::chrono::microseconds(when(rng))) ? 1 : 0;
-  EXPECT_GE(killed, 5) << "too few kills landed while the bake ran";
-  std::string cmd = "bake " + scene + " --frames 45 --ply -q --resume --cache " + (tmp / "killed").string();
+  EXPECT_GE(killed, 8) << "too few kills landed while the bake ran";
+  ASSERT_TRUE(fs::exists(tmp / "killed" / "manifest.json"));
+  EXPECT_NE(slurp(tmp / "killed" / "manifest.json").find("\"complete\": false"), std::string::npos)
+      << "the killed bake finished before the last run";
+  int baked = 0;
+  for (const auto& e : fs::directory_iterator(tmp / "killed" / "state")) baked += e.path().extension() == ".state";
+  EXPECT_GT(baked, 0) << "no kill landed after a frame was baked";
+  std::printf("10 runs killed (%d while running) left %d of 90 frames; the last run resumes\n", killed, baked);
+  std::string cmd = "bake " + scene + " --frames 90 --ply -q --resume --cache " + (tmp / "killed").string();
   const auto last = run_simreel(cmd);
   ASSERT_EQ(last.code, 0) << last.err;
 
