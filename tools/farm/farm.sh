@@ -19,7 +19,7 @@
 #   --vary P=V1,V2    sweep: one array task per value; --sheet-frames K frames of each on the sheet
 #   --wait            wait for the last job and exit with its status
 # DIR gets cache/ (the bake), frames/ (PNG), logs/, jobs/ (the job scripts), SCENE.mp4;
-# for a sweep: variants/NN/ (frames) and sheet.png.
+# for a sweep: variants/NN/ (frames), sheet.png (one row per value, frames across) and sheet.txt.
 set -euo pipefail
 
 die() { echo "farm.sh: $*" >&2; exit 2; }
@@ -100,6 +100,7 @@ JOB
   render=$(sbatch "${sbatch_opts[@]}" -J "$stem-render" --dependency="afterok:$bake" --kill-on-invalid-dep=yes --array="0-$((tasks - 1))" \
     -o "$out/logs/render-%a.log" "$out/jobs/render.sh")
   join_opts=("${sbatch_opts[@]}" -J "$stem-join" --dependency="afterok:$render" --kill-on-invalid-dep=yes -o "$out/logs/join.log")
+  result="$out/$stem.mp4"
   echo "bake job $bake; render array $render (${tasks} tasks of $chunk frames); join job after them -> $out/$stem.mp4"
 else
   pointer=${vary%%=*}
@@ -115,11 +116,12 @@ set -euo pipefail
 i=\$SLURM_ARRAY_TASK_ID
 value=\$(sed -n "\$(( i + 1 ))p" $(q "$out/jobs/values.txt"))
 dir=\$(printf '%s/variants/%02d' $(q "$out") "\$i")
-exec $(q "$simreel") render $(q "$scene") --frames $frames $(q "${common[@]}" "${render_opts[@]}") --set $(q "$pointer")="\$value" -q -o "\$dir"
+exec $(q "$simreel") render $(q "$scene") --frames $frames $(q "${common[@]}" "${render_opts[@]}") --set $(printf %q "$pointer")="\$value" -q -o "\$dir"
 JOB
   cat > "$out/jobs/sheet.sh" <<JOB
 #!/bin/bash
-# One row per variant, its frames $picks across (ffmpeg xstack), labelled by the values file.
+# One row per variant (in the order of values.txt, listed in sheet.txt), its frames $picks
+# across (ffmpeg xstack).
 set -euo pipefail
 cd $(q "$out")
 inputs=() layout=() n=0 y=0
@@ -136,18 +138,22 @@ IFS='|'; grid="\${layout[*]}"; unset IFS
 tmp=".sheet.png.tmp-\$\$.png"
 ffmpeg -loglevel error -y "\${inputs[@]}" -filter_complex "xstack=inputs=\$n:layout=\$grid" -frames:v 1 "\$tmp"
 mv "\$tmp" sheet.png
+{ echo "rows: $pointer = (top to bottom); columns: frames $picks"; cat jobs/values.txt; } > sheet.txt
 JOB
   chmod +x "$out/jobs/"*.sh
   render=$(sbatch "${sbatch_opts[@]}" -J "$stem-sweep" --array="0-$((tasks - 1))" -o "$out/logs/variant-%a.log" \
     "$out/jobs/variant.sh")
   join_opts=("${sbatch_opts[@]}" -J "$stem-sheet" --dependency="afterok:$render" --kill-on-invalid-dep=yes -o "$out/logs/sheet.log")
   echo "sweep array $render ($tasks variants of $pointer); sheet job after it -> $out/sheet.png"
+  result="$out/sheet.png"
   cp "$out/jobs/sheet.sh" "$out/jobs/join.sh"
 fi
 
 if [[ $wait -eq 1 ]]; then
-  # sbatch --wait blocks until the job ends and exits with its status.
-  if sbatch "${join_opts[@]}" --wait "$out/jobs/join.sh" >/dev/null; then
+  # sbatch --wait blocks until the job ends and exits with its status (a job cancelled because a
+  # job it depends on failed may still return 0: the result file decides).
+  rm -f "$result"
+  if sbatch "${join_opts[@]}" --wait "$out/jobs/join.sh" >/dev/null && [[ -s $result ]]; then
     echo "done: $out"
   else
     echo "farm.sh: the final job failed (or a job it depends on); see $out/logs/" >&2

@@ -35,7 +35,7 @@ t1=$(date +%s.%N)
   e=$(date +%s.%N)
   echo "farm wall time: $(awk "BEGIN {print $e - $s}") s"
   if [[ $8 -eq 1 ]]; then
-    "$1"/farm.sh "$2" --out "$3/sweep" --frames 12 --size 160x90 --simreel "$7" \
+    "$1"/farm.sh "$2" --out "$3/sweep" --frames 40 --size 160x90 --simreel "$7" \
       --vary /emitters/0/rate=200,800 --sheet-frames 3 --wait
   fi
 ' farm "$here" "$scene" "$work" "$frames" "$chunk" "$size" "$simreel" "$sweep"
