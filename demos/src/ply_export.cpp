@@ -33,7 +33,7 @@ void particles_ply(const sim::ParticleView& v, std::string& out) {
   out += "element vertex " + std::to_string(v.count) + "\n";
   out += kVertexProperties;
   out += "end_header\n";
-  out.reserve(out.size() + v.count * 33);
+  out.reserve(out.size() + v.count * 36);
   for (std::size_t i = 0; i < v.count; ++i) {
     for (int k = 0; k < 3; ++k) put(out, v.position[3 * i + k]);
     for (int k = 0; k < 3; ++k) put(out, v.velocity[3 * i + k]);

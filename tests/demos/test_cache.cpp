@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -326,7 +327,34 @@ TEST_F(CacheRefused, ResumeOfAnotherBakeIsRefused) {
   EXPECT_NE(r.err.find("cannot resume: seed"), std::string::npos) << r.err;
 }
 
-// PLY files: a header a reader understands and one vertex record per live particle.
+// Particle PLY: one 36-byte vertex record per live particle, holding the particles' positions and
+// ids in the world's order.
+TEST(BakePly, OneRecordPerLiveParticle) {
+  TempDir tmp;
+  const auto r = run_simreel("bake " + scene_path("fountain").string() + " --frames 21 --ply -q --cache " +
+                             (tmp / "c").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Scene scene = load_scene(scene_path("fountain"));
+  SceneWorld sw = build_world(scene);
+  advance(sw, scene, 20);
+  const simreel::sim::ParticleView v = sw.world.particles(sw.systems[0]);
+  ASSERT_GT(v.count, 0u);
+  const std::string ply = slurp(tmp / "c" / "ply" / "system0.00020.ply");
+  EXPECT_NE(ply.find("element vertex " + std::to_string(v.count) + "\n"), std::string::npos);
+  const std::size_t body = ply.find("end_header\n") + 11;
+  ASSERT_EQ(ply.size() - body, v.count * 36);
+  for (std::size_t i : {std::size_t(0), v.count - 1}) {
+    float x[3];
+    std::uint32_t id = 0;
+    std::memcpy(x, ply.data() + body + 36 * i, sizeof x);
+    std::memcpy(&id, ply.data() + body + 36 * i + 32, sizeof id);
+    EXPECT_EQ(x[0], v.position[3 * i]);
+    EXPECT_EQ(x[2], v.position[3 * i + 2]);
+    EXPECT_EQ(id, std::uint32_t(v.id[i]));
+  }
+}
+
+// Cloth PLY: a header a reader understands, every vertex and every triangle.
 TEST(BakePly, ParticlesAndClothAsBinaryPly) {
   TempDir tmp;
   const auto r = run_simreel("bake " + scene_path("flag").string() + " --frames 3 --ply -q --cache " +
