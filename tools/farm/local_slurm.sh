@@ -7,7 +7,8 @@
 # usage: local_slurm.sh [--install] [--keep DIR] -- COMMAND [ARGS...]
 #   --install   apt-get install slurm-wlm munge when missing (needs root and the Debian mirror)
 #   --keep DIR  use DIR for the cluster's files and keep it (logs) instead of a temporary folder
-# Environment: SIMREEL_SLURM_PORT (slurmctld port, default 16817; slurmd uses the next one).
+# Environment: SIMREEL_SLURM_PORT (slurmctld port; slurmd uses the next one). Default: two free
+# ports found at start, so clusters of concurrent runs do not meet.
 # Runs as root (SlurmUser=SlurmdUser=root): meant for containers and CI machines.
 set -euo pipefail
 
@@ -34,7 +35,29 @@ fi
 
 if [[ -n $keep ]]; then mkdir -p "$keep"; dir=$(realpath "$keep"); else dir=$(mktemp -d /tmp/simreel-slurm-XXXXXX); fi
 mkdir -p "$dir/state" "$dir/spool"
-port=${SIMREEL_SLURM_PORT:-16817}
+# Two adjacent free ports from a random start (concurrent clusters do not pick the same).
+free_port_pair() {
+  python3 - <<'PY'
+import random, socket
+for _ in range(200):
+    base = random.randrange(20000, 60000, 2)
+    socks = []
+    try:
+        for p in (base, base + 1):
+            s = socket.socket()
+            socks.append(s)
+            s.bind(("127.0.0.1", p))
+        print(base)
+        break
+    except OSError:
+        pass
+    finally:
+        for s in socks:
+            s.close()
+PY
+}
+port=${SIMREEL_SLURM_PORT:-$(free_port_pair)}
+[[ -n $port ]] || { echo "local_slurm.sh: no free port pair" >&2; exit 1; }
 pids=()
 cleanup() {
   local rc=$?
