@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <ostream>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -47,6 +48,10 @@ struct Split {
   int save_at;  ///< frame whose state is saved and restored
   int end;      ///< frames simulated in all
 };
+
+void PrintTo(const Split& s, std::ostream* os) {
+  *os << s.scene << " saved at frame " << s.save_at << ", continued to " << s.end;
+}
 
 class StateRoundTrip : public ::testing::TestWithParam<Split> {};
 
