@@ -237,6 +237,7 @@ void remove_body(WorldState& w, const Handle& h) {
   // the swap-remove below changes).
   wake_all(w);
   const Body& gone = w.bodies[h];
+  remove_joints_of(w, h);  // its joints go with it (their handles go stale)
   if (gone.dynamic()) --w.dyn.dynamic_count;
   if (gone.rigid != kNoRigid) remove_rigid(w, gone.rigid);
   w.bodies.remove(h);

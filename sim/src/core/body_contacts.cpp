@@ -108,7 +108,7 @@ class Builder {
       const Collider& plane = w_.shapes[p];
       if (plane.shape != Collider::Shape::plane) continue;
       for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
-        if (!dynamic(s) || !active(s)) continue;
+        if (!dynamic(s) || !active(s) || no_collide(d_, owner_[p].body, owner_[s].body)) continue;
         add(key(p, s, 0), collide_plane(plane.point, plane.normal, posed(w_.shapes[s]),
                                         kBodyContactMargin),
             p, s);
@@ -136,6 +136,7 @@ class Builder {
         const Proxy& b = d_.proxies[j];
         // A dynamic side, and a side that can move (two sleeping or resting sides: carried).
         if (!(a.dynamic || b.dynamic) || !(a.active || b.active) || a.body == b.body) continue;
+        if (no_collide(d_, a.body, b.body)) continue;  // joined (JointDef::collide_connected)
         if (a.lo.y() > b.hi.y() || b.lo.y() > a.hi.y() || a.lo.z() > b.hi.z() || b.lo.z() > a.hi.z())
           continue;
         d_.pairs.emplace_back(std::min(a.shape, b.shape), std::max(a.shape, b.shape));

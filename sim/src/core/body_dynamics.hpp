@@ -19,6 +19,9 @@
 #include "collision/manifold.hpp"
 #include "rigid/body_state.hpp"
 #include "rigid/contact_solver.hpp"
+#include "rigid/joint_solver.hpp"
+#include "simreel/sim/handle.hpp"
+#include "simreel/sim/joint.hpp"
 
 namespace simreel::sim::detail {
 
@@ -73,6 +76,17 @@ inline constexpr double kSleepLinearSpeed = 0.05;                     ///< (m/s)
 inline constexpr double kSleepAngularSpeed = 2.0 * 3.14159265358979 / 180.0;  ///< (rad/s)
 inline constexpr double kTimeToSleep = 0.5;                           ///< (s)
 
+/// A registered joint (World::add_joint; Coutinho Ch. 5): its definition, its geometry in its
+/// bodies' frames, the bodies by handle (resolved to rigid entries every step: removals move
+/// rigid entries), and what it did over the last step.
+struct JointEntry {
+  JointDef def;
+  JointModel model;
+  Handle body_a, body_b;  ///< null: the world
+  bool broken = false;
+  JointReading reading;   ///< force, torque, broken (geometry is measured on demand)
+};
+
 struct BodyDynamics {
   RigidBodies rigid;
   ContactSolver solver;
@@ -93,7 +107,30 @@ struct BodyDynamics {
   /// apply_coupling's per-body sums, reused from step to step (no allocation once grown).
   std::vector<Vec3> coupling_impulse, coupling_moment;
   std::vector<std::uint8_t> coupling_touched;
+  /// Joints of this step (joints.cpp gather_joints): the unbroken joints' models and rigid
+  /// entries, their dense indices in WorldState::joints, and the body pairs (dense body indices,
+  /// sorted) that must not collide.
+  JointSolver joint_solver;
+  std::vector<JointModel> joint_models;
+  std::vector<JointBodies> joint_bodies;
+  std::vector<std::uint32_t> joint_entry;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> no_collide;
 };
+
+/// Resolves this step's joints (joints.cpp): fills joint_models/joint_bodies/joint_entry from
+/// the unbroken joints and no_collide from those that do not let their bodies collide.
+void gather_joints(WorldState& w);
+
+/// After the velocity solve of a step of length h: each joint's force and torque from the
+/// solver's impulses; joints whose force exceeded their break_force break.
+void finish_joints(WorldState& w, double h);
+
+/// Removes every joint attached to the body of dense index `body` (a body being removed).
+void remove_joints_of(WorldState& w, const Handle& body);
+
+/// Whether the bodies of dense indices i and j are joined by a joint that keeps them from
+/// colliding.
+[[nodiscard]] bool no_collide(const BodyDynamics& d, std::uint32_t i, std::uint32_t j);
 
 /// Readies w.dyn.coupling for this step (body_coupling.cpp): which shapes belong to dynamic
 /// bodies, an empty log. Called at the start of the particle collisions.

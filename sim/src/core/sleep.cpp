@@ -81,6 +81,17 @@ bool wake_touched(WorldState& w) {
       woke = true;
     }
   }
+  // A joint pulls: a sleeping body joined to a moving one wakes (joints.cpp gathers them).
+  for (const JointBodies& j : d.joint_bodies) {
+    if (asleep(d.rigid, j.a) && moving(d.rigid, j.b)) {
+      wake_island(w, j.a);
+      woke = true;
+    }
+    if (asleep(d.rigid, j.b) && moving(d.rigid, j.a)) {
+      wake_island(w, j.b);
+      woke = true;
+    }
+  }
   return woke;
 }
 
@@ -97,6 +108,10 @@ void update_sleep(WorldState& w, double h) {
     if (m.manifold.count == 0 || m.first_point == kCarriedManifold) continue;
     if (m.rigid_a != kStaticBody) d.parent[m.rigid_a] = 0;
     if (m.rigid_b != kStaticBody) d.parent[m.rigid_b] = 0;
+  }
+  for (const JointBodies& j : d.joint_bodies) {  // a joint holds a body as a contact does
+    if (j.a != kStaticBody) d.parent[j.a] = 0;
+    if (j.b != kStaticBody) d.parent[j.b] = 0;
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     if (!r.is_dynamic(i)) continue;
@@ -116,6 +131,13 @@ void update_sleep(WorldState& w, double h) {
     if (da && db) unite(d.parent, m.rigid_a, m.rigid_b);
     if (da && moving(r, m.rigid_b) && !db) d.rest_time[m.rigid_a] = 0.0;
     if (db && moving(r, m.rigid_a) && !da) d.rest_time[m.rigid_b] = 0.0;
+  }
+  for (const JointBodies& j : d.joint_bodies) {  // jointed bodies sleep and wake together
+    const bool da = j.a != kStaticBody && r.is_dynamic(j.a);
+    const bool db = j.b != kStaticBody && r.is_dynamic(j.b);
+    if (da && db) unite(d.parent, j.a, j.b);
+    if (da && moving(r, j.b) && !db) d.rest_time[j.a] = 0.0;
+    if (db && moving(r, j.a) && !da) d.rest_time[j.b] = 0.0;
   }
   if (!d.allow_sleeping) return;
   // An island sleeps when its least-rested body has rested long enough: the root keeps the

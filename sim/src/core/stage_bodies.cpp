@@ -28,6 +28,9 @@ void stage_bodies(WorldState& w, double t0, double t1) {
       r.linear_velocity[b.rigid] = b.velocity;
       r.angular_velocity[b.rigid] = b.angular_velocity;
     }
+  // This step's joints by rigid entry (removals move rigid entries), before the contacts: joined
+  // bodies skip each other's contacts and wake each other.
+  gather_joints(w);
   // Bodies that particles or cloth pushed, or that a force field acts on, wake before their
   // contacts are found.
   wake_coupled(w, t0, t1);
@@ -40,9 +43,29 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   // Particles' and cloth's impulses of this step, force fields (§3.7; body_coupling.cpp).
   apply_coupling(w, t0, t1);
   d.solver.prepare(r, d.points, h);
+  JointSolver& js = d.joint_solver;
+  js.prepare(r, d.joint_models, d.joint_bodies, h);
   integrate_velocities(r, h);
-  d.solver.solve(r, d.points);
+  if (js.empty()) {
+    d.solver.solve(r, d.points);
+  } else {
+    // Contacts and joints together (§5.4; joint_solver.hpp): block Gauss–Seidel whose every
+    // sweep ends with the exact joint solve, so contact impulses reach the whole articulation.
+    d.solver.warm_start(r, d.points);
+    js.solve_equality(r);
+    for (int it = 0; it < d.solver.settings().velocity_iterations; ++it) {
+      d.solver.iterate_velocities(r, d.points);
+      js.iterate_rows(r);
+      js.solve_equality(r);
+    }
+    d.solver.solve_positions(r);
+    d.solver.finish(r);
+    js.finish(r);
+    finish_joints(w, h);
+  }
   integrate_positions(r, h);
+  // Drift (§5.4): the anchors projected back together, limits back inside.
+  if (!js.empty()) js.project_positions(r, d.joint_models, d.joint_bodies);
   clear_forces(r);
   // The solver's impulses go back into the manifolds: next step's warm start (tangent impulses
   // as world vectors, persistent_manifold.hpp).

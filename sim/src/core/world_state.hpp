@@ -75,6 +75,7 @@ struct WorldState {
   SlotTable<std::unique_ptr<AttractorSpringDef>> attractors{ObjectKind::attractor_spring,
                                                              "attractor-spring"};
   SlotTable<Cloth> cloths{ObjectKind::cloth, "cloth"};
+  SlotTable<JointEntry> joints{ObjectKind::joint, "joint"};
   std::vector<MovedObject> moved;
   std::vector<Handle> removed;  ///< removals since the last advance(), reported by the next
   ParticleCollider particle_collider;

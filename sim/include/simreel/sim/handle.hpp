@@ -18,6 +18,7 @@ enum class ObjectKind : std::uint8_t {
   cloth = 3,
   force_field = 4,
   attractor_spring = 5,
+  joint = 6,
 };
 
 /// A small value naming one registered object: slot index + generation (Box2D v3's id pool). The
@@ -56,5 +57,6 @@ using ParticleSystemHandle = TypedHandle<ObjectKind::particle_system>;
 using ClothHandle = TypedHandle<ObjectKind::cloth>;
 using ForceFieldHandle = TypedHandle<ObjectKind::force_field>;
 using AttractorSpringHandle = TypedHandle<ObjectKind::attractor_spring>;
+using JointHandle = TypedHandle<ObjectKind::joint>;
 
 }  // namespace simreel::sim

@@ -17,6 +17,7 @@
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/forces.hpp"
 #include "simreel/sim/handle.hpp"
+#include "simreel/sim/joint.hpp"
 #include "simreel/sim/moved_object.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/state_error.hpp"
@@ -127,6 +128,25 @@ class World {
   ///         and the time. The world is then left mid-advance and should be discarded.
   const std::vector<MovedObject>& advance(double sampling_time);
 
+  // --- Joints (joint.hpp; Coutinho Ch. 5) ----------------------------------------------------
+  /// Joins two bodies (or a body and the world) from the next step on. The anchor and axis are
+  /// read in the world frame now and fixed in each body's frame: the bodies are not moved, so a
+  /// joint whose anchor is not where the bodies meet holds them at that distance. The joints and
+  /// the contacts of the dynamic bodies are solved together each step (§5.2–5.4); the joined
+  /// bodies do not collide with each other unless JointDef::collide_connected.
+  /// @throws std::out_of_range on a stale body handle; std::invalid_argument (naming the field,
+  ///         "JointDef.axis") when both bodies are null or equal, neither is dynamic, the anchor or
+  ///         axis is not finite or the axis is zero, a limit range does not contain 0 or is not
+  ///         finite, cone_angle is not in (0, π) with limits on a spherical joint, damping,
+  ///         max_motor_torque or break_force is negative or NaN.
+  JointHandle add_joint(const JointDef& def);
+  /// What the joint did over the last step and where its anchors are (joint.hpp).
+  /// @throws std::out_of_range if stale.
+  [[nodiscard]] JointReading joint_state(JointHandle h) const;
+  [[nodiscard]] const JointDef& definition(JointHandle h) const;
+  /// Every joint, in the engine's dense order (registration order until a removal).
+  [[nodiscard]] std::vector<JointHandle> joints() const;
+
   // --- Removal -------------------------------------------------------------------------------
   /// Removes a registered object. Its handle (and every copy) is stale at once: every accessor
   /// and remove() reject it with std::out_of_range, also after its slot is reused by a later
@@ -148,6 +168,9 @@ class World {
   void remove(ClothHandle h);
   void remove(ForceFieldHandle h);
   void remove(AttractorSpringHandle h);
+  /// A joint stops acting from the next step (removing a body removes its joints with it, their
+  /// handles going stale; joints are never in the moved list).
+  void remove(JointHandle h);
 
   /// FNV-1a 64 hash of the complete simulation state, in a fixed order: time and step count;
   /// for every particle system (in the order of particle_systems()) its live particle count, all

@@ -1,0 +1,162 @@
+#pragma once
+// Joint solver for articulated rigid bodies (Coutinho Ch. 5). Private; works on RigidBodies by
+// index like the contact solver, and is driven with it (core/stage_bodies.cpp).
+//
+// Formulation (and why):
+// - Lagrangian multipliers (§5.1–5.3): every joint contributes equality rows J_i v = 0 on the
+//   velocities of its two bodies (spherical: the anchor points' velocities agree, eq. 5.5;
+//   hinge: also the relative angular velocity across its axis is zero; fixed: all of it). The
+//   multipliers of all joints come from ONE linear system K λ = -J v with K = J M⁻¹ Jᵀ, the
+//   impulse form (forces × h) of the book's eq. 5.12 system: its 3×3 blocks are the book's
+//   (1/m E - r̃ I⁻¹ r̃) matrices of eq. 5.8, with the signs of Fig. 5.4 (+ for the joint's body b,
+//   - for body a). K is sparse (a block couples two joints only through a shared body), so it is
+//   factorised as a sparse LDLᵀ with a fill-reducing ordering (Eigen's SimplicialLDLT, AMD): on
+//   a tree (a chain, a ragdoll) that ordering eliminates leaves first and gives no fill-in, the
+//   O(n) solve of Baraff 1996 ("Linear-time dynamics using Lagrange multipliers"); closed loops
+//   get a little fill. A tiny diagonal regularisation (1e-10 of K's mean diagonal) keeps
+//   redundant loops (a planar four-bar of hinges) factorisable.
+// - Solved with the contacts (§5.4): the contact solver's sequential impulses and the exact
+//   joint solve alternate (block Gauss–Seidel); each sweep ends with the joint solve, so every
+//   collision impulse on one link is passed through the joints to the whole articulation before
+//   the next sweep, and the velocities leaving the solver satisfy the joints exactly. This is
+//   the book's "all collision impulses (external and internal) computed together" (§5.4), with
+//   the contacts' inequalities handled iteratively instead of by one LCP.
+// - Limits, motors and joint damping are one-dimensional angular rows solved by sequential
+//   impulses beside the contacts (a limit: impulse >= 0, speculative until it is reached; a
+//   motor: |impulse| <= max torque × h; damping: an implicit soft row).
+// - Drift (§5.4's fictitious zero-rest-length spring): instead of a spring, whose stiffness must
+//   be tuned per mass and which makes the system stiff, the positions are projected back onto the
+//   joints after the step by Newton iterations on the position errors C with the step's K
+//   (K Δ = -C; a few iterations take C to round-off), then limits are projected the same way.
+//   The projection moves positions only, so it adds no kinetic energy.
+// - Determinism: rows in joint order, bodies in index order; no threads, no hashing.
+// - Memory: rows, triplets and vectors are resized, never shrunk; after the first steps of a
+//   fixed set of joints a step allocates only inside Eigen's factorisation.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "rigid/body_state.hpp"
+#include "rigid/contact_solver.hpp"
+#include "simreel/sim/joint.hpp"
+
+namespace simreel::sim::detail {
+
+/// A joint's constant geometry and parameters, in its bodies' frames. A side that is
+/// kStaticBody has its anchor, axis and reference in world coordinates (a static body never
+/// moves); a side with a rigid entry has them in that entry's frame (position = centre of mass for
+/// dynamic bodies, the body origin for kinematic ones; the body's orientation).
+struct JointModel {
+  JointType type = JointType::spherical;
+  Vec3 local_anchor_a = Vec3::Zero(), local_anchor_b = Vec3::Zero();  ///< (m)
+  Vec3 local_axis_a = Vec3::UnitZ(), local_axis_b = Vec3::UnitZ();    ///< unit
+  Vec3 local_ref_a = Vec3::UnitX(), local_ref_b = Vec3::UnitX();      ///< unit, ⊥ axis
+  /// q_a⁻¹ q_b at registration (sides without a rigid entry count as the identity).
+  Quat rel0 = Quat::Identity();
+  bool limit_enabled = false;
+  double lower_angle = 0.0, upper_angle = 0.0;  ///< (rad) hinge
+  double cone_angle = 0.0;                      ///< (rad) spherical swing
+  double twist_lower = -3.141592653589793, twist_upper = 3.141592653589793;  ///< (rad)
+  double damping = 0.0;                         ///< (N m s/rad)
+  bool motor_enabled = false;
+  double motor_speed = 0.0, max_motor_torque = 0.0;
+};
+
+/// The two rigid entries a joint acts on this step (kStaticBody for the world or a static body).
+struct JointBodies {
+  std::uint32_t a = kStaticBody, b = kStaticBody;
+};
+
+/// World-frame geometry of a joint at the bodies' current poses.
+struct JointFrame {
+  Vec3 pa, pb;      ///< (m) anchor as carried by a, by b
+  Vec3 ra, rb;      ///< (m) lever arms pa - x_a, pb - x_b (zero for a static side)
+  Vec3 axis_a, axis_b, ref_a, ref_b;  ///< unit
+  Quat qa, qb;      ///< orientations (identity for a static side)
+};
+[[nodiscard]] JointFrame joint_frame(const RigidBodies& r, const JointModel& m, JointBodies j);
+
+/// Angles of a joint (rad): hinge angle of b relative to a about the axis, spherical swing
+/// between the two axes and twist about the axis (Coutinho-style swing–twist of q_a⁻¹ q_b q_rel0⁻¹).
+struct JointAngles {
+  double hinge = 0.0, swing = 0.0, twist = 0.0;
+};
+[[nodiscard]] JointAngles joint_angles(const JointModel& m, const JointFrame& f);
+
+/// What the solver applied to a joint over the step: impulses on body b (N s, N m s, world).
+struct JointImpulse {
+  Vec3 linear = Vec3::Zero();
+  Vec3 angular = Vec3::Zero();
+};
+
+class JointSolver {
+ public:
+  /// Builds the rows of every joint with at least one moving side, assembles K = J M⁻¹ Jᵀ and
+  /// factorises it. Call after the contact solver's prepare(), before the velocity integration
+  /// (the rows depend on positions only).
+  void prepare(const RigidBodies& r, std::span<const JointModel> models,
+               std::span<const JointBodies> bodies, double h);
+
+  [[nodiscard]] bool empty() const { return eq_.empty() && ang_.empty(); }
+
+  /// Solves K Δλ = -J v for the current velocities and applies Δλ: afterwards J v = 0 to
+  /// round-off. The impulses are summed per joint (impulses()).
+  void solve_equality(RigidBodies& r);
+
+  /// One sweep of sequential impulses over limits, motors and damping rows.
+  void iterate_rows(RigidBodies& r);
+
+  /// L = I_w ω for every dynamic body a row touched (like ContactSolver::finish).
+  void finish(RigidBodies& r) const;
+
+  /// After integrate_positions(): Newton iterations K Δ = -C(x) on the equality rows' position
+  /// errors (K of this step), then limit violations removed one by one, then equality again.
+  /// Stops when every anchor error is below `tolerance` (m) or after `iterations` rounds.
+  void project_positions(RigidBodies& r, std::span<const JointModel> models,
+                         std::span<const JointBodies> bodies, int iterations = 4,
+                         double tolerance = 1e-9);
+
+  /// Per joint (indices of prepare()'s spans): the impulses applied to body b this step.
+  [[nodiscard]] std::span<const JointImpulse> impulses() const { return impulse_; }
+
+ private:
+  /// One row of the exact system: J = (ja_lin, ja_ang, jb_lin, jb_ang), M⁻¹Jᵀ per side.
+  struct EqRow {
+    std::uint32_t a, b, joint;
+    std::uint8_t kind;  ///< 0..2 point along x, y, z; 3.. angular
+    Vec3 ja_lin, ja_ang, jb_lin, jb_ang;
+    Vec3 ma_lin, ma_ang, mb_lin, mb_ang;
+  };
+  /// One angular row solved by sequential impulses on (ω_b - ω_a)·d.
+  struct AngRow {
+    std::uint32_t a, b, joint;
+    Vec3 d, ia_d, ib_d;
+    double mass;     ///< 1 / (k + gamma), k = d·(I_a⁻¹ + I_b⁻¹) d
+    double gamma;    ///< soft rows (damping): 1 / (c h); 0 otherwise
+    double target;   ///< (rad/s) relative angular speed to reach
+    double lo, hi;   ///< bounds of the accumulated impulse (N m s)
+    double acc;
+  };
+  void assemble(const RigidBodies& r);
+  void apply(RigidBodies& r, const Eigen::VectorXd& lambda, bool record);
+  void rows_for(const RigidBodies& r, const JointModel& m, JointBodies j, std::uint32_t joint,
+                double h);
+
+  std::vector<EqRow> eq_;
+  std::vector<AngRow> ang_;
+  std::vector<JointImpulse> impulse_;
+  std::vector<Eigen::Triplet<double>> triplets_;
+  std::vector<std::uint64_t> pattern_, last_pattern_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> touch_;  ///< (body, row*2+side) scratch
+  Eigen::SparseMatrix<double> K_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  bool factor_ok_ = false;
+  Eigen::VectorXd rhs_, lambda_;
+  std::vector<Vec3> dx_, dtheta_;  ///< per-body position corrections (projection scratch)
+};
+
+}  // namespace simreel::sim::detail
