@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <limits>
 #include <ostream>
 #include <cstdio>
 #include <cstring>
@@ -21,6 +22,8 @@
 
 #include "cli_util.hpp"
 #include "scene.hpp"
+#include "simreel/sim/joint.hpp"
+#include "simreel/sim/world.hpp"
 
 extern char** environ;
 
@@ -92,6 +95,75 @@ INSTANTIATE_TEST_SUITE_P(Scenes, StateRoundTrip,
                                            Split{"explosion", 6, 30}, Split{"jet_crates", 30, 55},
                                            Split{"tumble", 75, 100}),
                          [](const auto& info) { return std::string(info.param.scene); });
+
+/// A chain of four boxes hung from the world by spherical joints, released sideways so it
+/// swings into the ground; the second link turns a motor-driven hinge box; the last joint breaks
+/// at a low force during the swing (Coutinho Ch. 5).
+struct JointWorld {
+  simreel::sim::World world;
+  std::vector<simreel::sim::JointHandle> joints;
+  JointWorld() {
+    using namespace simreel::sim;
+    BodyDef ground;
+    ground.shapes = {ShapeDef::plane()};
+    world.add_body(ground);
+    BodyHandle prev;  // null: the world
+    for (int i = 0; i < 4; ++i) {
+      BodyDef b;
+      b.type = BodyType::dynamic;
+      b.pose.translation = Vec3(0.3 * (i + 1), 0.0, 1.2);
+      b.shapes = {ShapeDef::box(Vec3(0.1, 0.06, 0.06))};
+      const BodyHandle h = world.add_body(b);
+      JointDef j;
+      j.type = i == 1 ? JointType::hinge : JointType::spherical;
+      j.body_a = prev;
+      j.body_b = h;
+      j.anchor = Vec3(0.3 * i + 0.15, 0.0, 1.2);
+      j.axis = Vec3::UnitY();
+      j.motor_enabled = i == 1;
+      j.motor_speed = 2.0;
+      j.max_motor_torque = 5.0;
+      j.break_force = i == 3 ? 40.0 : std::numeric_limits<double>::infinity();
+      joints.push_back(world.add_joint(j));
+      prev = h;
+    }
+  }
+};
+
+// Joints: a world restored mid-swing continues bit-identically, from before the last joint
+// breaks (the break included) and from after it (it stays broken).
+TEST(StateRoundTrip, JointedChainContinuesBitIdentically) {
+  constexpr double dt = 1.0 / 30.0;
+  constexpr int kEnd = 60;
+  JointWorld straight, first;
+  for (int f = 0; f < kEnd; ++f) straight.world.advance(dt);
+  ASSERT_TRUE(straight.world.joint_state(straight.joints[3]).broken) << "the test needs the last joint to break";
+  int k = 0;  // the frame the last joint is first seen broken
+  for (; k < kEnd && !first.world.joint_state(first.joints[3]).broken; ++k) first.world.advance(dt);
+  ASSERT_GT(k, 3);
+  ASSERT_LT(k + 3, kEnd);
+  std::string a;
+  straight.world.save_state(a);
+  for (const int save_at : {k - 2, k + 2}) {
+    JointWorld replay, restored;
+    for (int f = 0; f < save_at; ++f) replay.world.advance(dt);
+    EXPECT_EQ(replay.world.joint_state(replay.joints[3]).broken, save_at > k);
+    std::string saved;
+    replay.world.save_state(saved);
+    restored.world.load_state(saved);
+    for (int f = save_at; f < kEnd; ++f) restored.world.advance(dt);
+    EXPECT_TRUE(restored.world.joint_state(restored.joints[3]).broken);
+    std::string b;
+    restored.world.save_state(b);
+    EXPECT_TRUE(a == b) << "saved at frame " << save_at << ": the states differ after continuing";
+    for (std::size_t i = 0; i < 4; ++i) {
+      const auto ra = straight.world.joint_state(straight.joints[i]);
+      const auto rb = restored.world.joint_state(restored.joints[i]);
+      EXPECT_EQ(ra.force, rb.force) << "joint " << i << ", saved at frame " << save_at;
+      EXPECT_EQ(ra.angle, rb.angle) << "joint " << i << ", saved at frame " << save_at;
+    }
+  }
+}
 
 // The tumble split above really saves sleeping bodies and live contacts (else it proves less).
 TEST(StateRoundTrip, TumbleSplitHoldsSleepingBodiesAndContacts) {

@@ -6,8 +6,8 @@
 // count then the elements. Structs with padding are written field by field, so the bytes of a
 // state depend on its values only (a cache resumed after a kill is byte-identical).
 //
-// Sections are per subsystem (state_snapshot.cpp): adding a subsystem (joints) adds a section
-// and bumps kStateFormat.
+// Sections are per subsystem (state_snapshot.cpp): adding a subsystem adds a section and bumps
+// kStateFormat.
 
 #include <cstdint>
 #include <cstring>
@@ -23,7 +23,7 @@
 namespace simreel::sim::detail {
 
 /// Version of the section layout; World::load_state refuses any other.
-inline constexpr std::uint32_t kStateFormat = 1;
+inline constexpr std::uint32_t kStateFormat = 2;  // 2: joints
 
 /// Appends to a byte string (reused from frame to frame: no allocation once grown).
 class StateWriter {

@@ -14,8 +14,13 @@
 // proxies, solver rows, grids, workspaces) and the model (definitions, topology, mesh trees,
 // noise lattices) are not: they come from the scene.
 //
-// A new subsystem adds a section here (joints: after "CONT", written by a save_joints /
-// load_joints pair like the ones below) and bumps kStateFormat.
+// Joints (Coutinho Ch. 5): whether each broke and what it applied over the last step (its
+// reading; a sleeping joint keeps the one it fell asleep with). The joint solver itself keeps
+// nothing from step to step (its sequential-impulse rows start from zero; its cached sparsity
+// pattern only skips an analysis that gives the same ordering).
+//
+// A new subsystem adds a section here, written by a save_X / load_X pair like the ones below,
+// and bumps kStateFormat.
 #include <algorithm>
 #include <string>
 
@@ -254,6 +259,32 @@ void load_contacts(detail::BodyDynamics& d, StateReader& in) {
   in.end();
 }
 
+// --- joints: broken or not, last step's force and torque ------------------------------------
+
+void save_joints(const WorldState& w, StateWriter& out) {
+  out.begin("JOIN");
+  out.value(std::uint64_t(w.joints.size()));
+  for (const detail::JointEntry& j : w.joints.dense()) {
+    out.value(std::uint8_t(j.broken));
+    out.value(j.reading.force);
+    out.value(j.reading.torque);
+    out.value(std::uint8_t(j.reading.broken));
+  }
+  out.end();
+}
+
+void load_joints(WorldState& w, StateReader& in) {
+  in.begin("JOIN");
+  in.count(w.joints.size(), "joints");
+  for (detail::JointEntry& j : w.joints.dense()) {
+    j.broken = in.value<std::uint8_t>() != 0;
+    in.value(j.reading.force);
+    in.value(j.reading.torque);
+    j.reading.broken = in.value<std::uint8_t>() != 0;
+  }
+  in.end();
+}
+
 // --- particle systems ------------------------------------------------------------------------
 
 void save_store(const detail::ParticleStore& st, StateWriter& out) {
@@ -401,6 +432,7 @@ void World::save_state(std::string& out) const {
   save_shapes(w, s);
   save_rigid(w.dyn.rigid, s);
   save_contacts(w.dyn, s);
+  save_joints(w, s);
   save_systems(w, s);
   save_cloths(w, s);
 }
@@ -419,6 +451,7 @@ void World::load_state(std::string_view bytes) {
   load_shapes(w, s);
   load_rigid(w.dyn.rigid, s);
   load_contacts(w.dyn, s);
+  load_joints(w, s);
   load_systems(w, s);
   load_cloths(w, s);
   if (!s.done()) throw StateError("state: " + std::to_string(bytes.size() - s.position()) + " bytes after the last section");
