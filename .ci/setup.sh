@@ -6,7 +6,7 @@
 set -euo pipefail
 PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev libpng-dev
       libassimp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg
-      assimp-testmodels python3-jsonschema libbullet-dev)
+      assimp-testmodels python3-jsonschema libbullet-dev slurm-wlm munge)
 if [ "${1:-}" = "--sanitize" ]; then
   PKGS=(clang libclang-rt-14-dev)
 fi

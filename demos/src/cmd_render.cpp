@@ -16,6 +16,7 @@
 #include "json_reader.hpp"
 #include "run_options.hpp"
 #include "scene_player.hpp"
+#include "sim_cache.hpp"
 #include "simreel/render/atomic_file.hpp"
 #include "simreel/render/frame_sink.hpp"
 #include "simreel/render/text_overlay.hpp"
@@ -136,6 +137,25 @@ int render_command(const RenderOptions& o) {
   if (!o.bitrate.empty() && o.bitrate.find_first_not_of("0123456789.kKM") != std::string::npos)
     throw SceneError("--bitrate " + o.bitrate + ": expected a number with an optional k or M suffix, e.g. 4M");
 
+  // A cache must be the bake of this very scene (file bytes, overrides, seed, fps, build) and
+  // hold every frame of the range: checked before anything is written.
+  std::uint64_t cache_key = 0;
+  if (!o.cache.empty()) {
+    const CacheManifest m = read_manifest(o.cache);
+    if (const std::string d = identity_difference(m.id, cache_identity(scene, o.scene, o.overrides)); !d.empty())
+      throw SceneError(manifest_path(o.cache).string() + ": the cache does not match " + o.scene + ": " + d);
+    cache_key = m.id.key();
+    if (end > m.frames)
+      throw SceneError(manifest_path(o.cache).string() + ": frames " + std::to_string(first) + ".." +
+                       std::to_string(end - 1) + " requested, the cache holds frames 0.." +
+                       std::to_string(m.frames - 1));
+    std::vector<std::string> missing;
+    for (int f = first; f < end; ++f)
+      if (std::string e = check_frame_header(o.cache, f, cache_key); !e.empty()) missing.push_back(e);
+    if (!missing.empty()) throw SceneError(missing);
+  }
+  std::string cached_state;
+
   // From here on Ctrl-C stops between frames and closes what was opened.
   const StopSignals stop;
   ScenePlayer player(scene);
@@ -225,7 +245,16 @@ int render_command(const RenderOptions& o) {
     if (StopSignals::received() != 0) break;
     if (!wanted(frame)) continue;
     // Frame k shows the state at t = k / fps: frame 0 is the initial state.
-    player.advance_to(frame);
+    if (o.cache.empty()) {
+      player.advance_to(frame);
+    } else {
+      if (std::string e = read_frame(o.cache, frame, cache_key, cached_state); !e.empty()) throw SceneError(e);
+      try {
+        player.restore(frame, cached_state);
+      } catch (const sim::StateError& e) {
+        throw SceneError(frame_path(o.cache, frame).string() + ": " + e.what());
+      }
+    }
     auto image = std::make_shared<render::Image>(player.render());
     if (!o.hash_file.empty()) hash_writer.write(image, frame);
     if (o.overlay) {

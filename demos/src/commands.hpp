@@ -39,6 +39,16 @@ struct RenderOptions : RunOptions {
   bool overlay = false;              ///< frame number and time drawn onto written frames
   bool sync_writes = false;          ///< write outputs on the render thread (for measurements)
   bool quiet = false;
+  /// --cache DIR: restore each frame from a `simreel bake` cache instead of simulating.
+  std::string cache;
+};
+
+/// `simreel bake`: the engine state per frame into a cache folder (sim_cache.hpp).
+struct BakeOptions : RunOptions {
+  std::string cache;    ///< --cache DIR
+  bool resume = false;  ///< continue from the last complete frame of DIR
+  bool ply = false;     ///< also DIR/ply/*.ply per frame (particles, cloth)
+  bool quiet = false;
 };
 
 struct CheckOptions {
@@ -72,6 +82,9 @@ struct SweepOptions : RunOptions {
 /// Exit codes: 0, 1, 2 as above; 130 (128 + SIGINT) or 143 (SIGTERM) when interrupted, after
 /// finishing the frame being made and closing every output so that it plays.
 int render_command(const RenderOptions& options);
+/// 0 baked; 2 bad options, scene, or a cache that --resume cannot continue (names the file and
+/// what differs); 1 a run-time failure (disk full, diverged).
+int bake_command(const BakeOptions& options);
 /// Re-renders what each golden hash record describes and compares hashes frame by frame; prints
 /// "N passed, M failed". 0 all within tolerance (or updated), 1 a mismatch, 2 a bad golden file,
 /// scene or path (the other goldens are still checked).

@@ -64,6 +64,21 @@ int main(int argc, char** argv) {
   render->add_flag("--sync-writes", render_opts.sync_writes,
                    "Write outputs on the render thread instead of writer threads (for measurements)");
   render->add_flag("-q,--quiet", render_opts.quiet, "No progress line");
+  render->add_option("--cache", render_opts.cache,
+                     "Restore each frame from this `simreel bake` folder instead of simulating (same scene, --set, "
+                     "--seed and --fps as the bake); frames are byte-identical to a straight render");
+
+  simreel::app::BakeOptions bake_opts;
+  auto* bake = app.add_subcommand("bake", "Simulate once and write the complete engine state per frame into a cache folder");
+  add_run_options(bake, bake_opts);
+  bake->add_option("--cache", bake_opts.cache, "Cache folder (manifest.json, state/frame_NNNNN.state, ply/)")->required();
+  bake->add_flag("--resume", bake_opts.resume,
+                 "Continue a killed bake from its last complete frame (the result is byte-identical to an "
+                 "uninterrupted bake)");
+  bake->add_flag("--ply", bake_opts.ply,
+                 "Also write each frame's particles and cloth as binary PLY (ply/system<I>.<FRAME>.ply, "
+                 "ply/cloth<I>.<FRAME>.ply) for Blender, Houdini, MeshLab, Open3D");
+  bake->add_flag("-q,--quiet", bake_opts.quiet, "No progress line");
 
   simreel::app::SweepOptions sweep_opts;
   auto* sweep = app.add_subcommand("sweep", "Render every combination of scene values (a wedge) into one labelled sheet");
@@ -167,6 +182,7 @@ int main(int argc, char** argv) {
 
   try {
     if (render->parsed()) return simreel::app::render_command(render_opts);
+    if (bake->parsed()) return simreel::app::bake_command(bake_opts);
     if (schema->parsed()) return simreel::app::schema_command(schema_output);
     if (sweep->parsed()) return simreel::app::sweep_command(sweep_opts);
     if (simulate->parsed()) return simreel::app::simulate_command(sim_opts, exports);

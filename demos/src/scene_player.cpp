@@ -24,6 +24,16 @@ void ScenePlayer::advance_to(int frame) {
   }
 }
 
+void ScenePlayer::restore(int frame, std::string_view state) {
+  sw_.world.load_state(state);
+  list_.clear();
+  // Every moving body's pose: the renderer may still show another frame's (set_transform
+  // replaces, so this is exactly the state a straight run leaves). Static bodies never move.
+  append_moved(sw_.world.poses(), list_);
+  renderer_.apply(list_);
+  frame_ = frame;
+}
+
 render::Image ScenePlayer::render() {
   list_.clear();
   append_frame(scene_, sw_, double(frame_) / scene_.fps, list_);

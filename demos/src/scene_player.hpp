@@ -5,6 +5,7 @@
 /// built by scene_list_builder.hpp (the GL-free half, tested without a context).
 
 #include <memory>
+#include <string_view>
 
 #include "scene.hpp"
 #include "simreel/render/context.hpp"
@@ -24,6 +25,12 @@ class ScenePlayer {
   /// initial state. Moved colliders reach the renderer at every step, drawn or not.
   /// A frame at or before the current one does nothing (the player only goes forward).
   void advance_to(int frame);
+
+  /// Jumps to frame `frame` by loading its engine state (World::save_state bytes of the same
+  /// scene, e.g. from a `simreel bake` cache) instead of simulating, and gives the renderer every
+  /// moving body's pose: the next render() draws exactly what a player advanced to `frame` would.
+  /// Frames may be restored in any order. @throws sim::StateError when the state does not fit.
+  void restore(int frame, std::string_view state);
 
   /// Draws the current frame: particles, cloth vertices and the camera at the frame's time.
   render::Image render();

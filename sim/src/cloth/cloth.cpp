@@ -11,6 +11,7 @@
 #include "cloth/cloth_collide.hpp"
 #include "cloth/cloth_state.hpp"
 #include "cloth/gust_noise.hpp"
+#include "core/state_io.hpp"
 #include "core/validate.hpp"
 
 namespace simreel::sim {
@@ -230,6 +231,28 @@ ClothStats Cloth::stats() const {
 const ClothDef& Cloth::definition() const { return s_->def; }
 const std::shared_ptr<const ClothTopology>& Cloth::topology() const { return s_->topo; }
 const std::vector<Vec3>& Cloth::positions() const { return s_->x; }
+
+void Cloth::save_state(detail::StateWriter& out) const {
+  const State& S = *s_;
+  out.value(std::uint64_t(S.n));
+  out.array(S.x);
+  out.array(S.v);
+  out.array(S.x_start);
+  out.array(S.dv);  // the conjugate gradient starts from the last step's Δv (implicit.cpp)
+}
+
+void Cloth::load_state(detail::StateReader& in) {
+  State& S = *s_;
+  in.count(S.n, ("vertices of cloth '" + S.def.name + "'").c_str());
+  in.array(S.x, S.n, "cloth positions");
+  in.array(S.v, S.n, "cloth velocities");
+  in.array(S.x_start, S.n, "cloth start positions");
+  in.array(S.dv, S.n, "cloth velocity changes");
+  if (S.x.size() != S.n || S.v.size() != S.n || S.x_start.size() != S.n || S.dv.size() != S.n)
+    throw StateError("state: cloth '" + S.def.name + "' arrays do not hold its " +
+                     std::to_string(S.n) + " vertices");
+  S.refresh_views();
+}
 const std::vector<Vec3>& Cloth::velocities() const { return s_->v; }
 const std::vector<Vec3>& Cloth::start_positions() const { return s_->x_start; }
 double Cloth::inverse_mass(std::size_t i) const {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "core/state_io.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
 namespace simreel::sim::detail {
@@ -199,6 +200,36 @@ void ParticleCollider::remap_colliders(const std::vector<std::uint32_t>& new_ind
     c.n.resize(keep);
     c.pt.resize(keep);
     c.pn.resize(keep);
+  }
+}
+
+void ParticleCollider::save_warm(StateWriter& out) const {
+  out.value(std::uint64_t(caches_.size()));
+  for (const WarmCache& c : caches_) {
+    out.value(c.group);
+    out.array(c.ki);
+    out.array(c.kj);
+    out.array(c.n);
+    out.array(c.pt);
+    out.array(c.pn);
+  }
+}
+
+void ParticleCollider::load_warm(StateReader& in) {
+  const auto groups = in.value<std::uint64_t>();
+  if (groups > (std::uint64_t{1} << 20)) throw StateError("state: too many particle contact groups");
+  caches_.resize(std::size_t(groups));
+  constexpr std::size_t kMax = std::size_t{1} << 40;
+  for (WarmCache& c : caches_) {
+    in.value(c.group);
+    in.array(c.ki, kMax, "particle warm-start keys");
+    in.array(c.kj, c.ki.size(), "particle warm-start keys");
+    in.array(c.n, c.ki.size(), "particle warm-start normals");
+    in.array(c.pt, c.ki.size(), "particle warm-start impulses");
+    in.array(c.pn, c.ki.size(), "particle warm-start impulses");
+    if (c.kj.size() != c.ki.size() || c.n.size() != c.ki.size() || c.pt.size() != c.ki.size() ||
+        c.pn.size() != c.ki.size())
+      throw StateError("state: particle warm-start arrays of different lengths");
   }
 }
 

@@ -39,6 +39,9 @@
 
 namespace simreel::sim::detail {
 
+class StateWriter;
+class StateReader;
+
 /// One participating particle set (a system) and its surface parameters.
 struct ParticleGroupMember {
   ParticleStore* store = nullptr;
@@ -122,6 +125,10 @@ class ParticleCollider {
   /// A system was removed: its group's cache is dropped (entries of its particles in other
   /// groups' caches never match again: serials are not reused).
   void forget_system(std::uint32_t serial);
+  /// The warm-start caches (the previous step's resting impulses of every group), the only
+  /// state kept from one step to the next, for World::save_state / load_state.
+  void save_warm(StateWriter& out) const;
+  void load_warm(StateReader& in);
 
  private:
   /// Previous step's resting impulses of one group (keyed by its first system).

@@ -28,6 +28,8 @@ namespace simreel::sim {
 namespace detail {
 struct Collider;
 struct BodyImpulses;
+class StateWriter;
+class StateReader;
 }
 
 /// How a cloth's state is advanced over one internal step (Coutinho Appendix B).
@@ -201,6 +203,13 @@ class Cloth {
   void apply_impulses(const std::vector<Vec3>& impulses);
   /// Wind velocity (m/s) at world point p and time t, gusts included.
   [[nodiscard]] Vec3 wind_at(const Vec3& p, double t) const;
+
+  /// The state that carries from one step to the next (positions, velocities, start-of-step
+  /// positions, the implicit solver's last Δv: its next warm start), for World::save_state.
+  void save_state(detail::StateWriter& out) const;
+  /// Restores what save_state wrote for a cloth of the same grid, then refreshes the views.
+  /// @throws StateError when the vertex count differs or the bytes are truncated.
+  void load_state(detail::StateReader& in);
 
  private:
   struct State;

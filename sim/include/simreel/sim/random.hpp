@@ -35,6 +35,13 @@ class Rng {
     bool has_cached;
   };
   [[nodiscard]] State state() const { return {{s_[0], s_[1], s_[2], s_[3]}, cached_, has_cached_}; }
+  /// Restores a state taken by state() (a cache resumed, World::load_state): the generator then
+  /// draws exactly what the one it was taken from would have drawn next.
+  void set_state(const State& st) {
+    for (int k = 0; k < 4; ++k) s_[k] = st.s[k];
+    cached_ = st.cached;
+    has_cached_ = st.has_cached;
+  }
 
  private:
   std::uint64_t s_[4];

@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "simreel/sim/joint.hpp"
 #include "simreel/sim/moved_object.hpp"
 #include "simreel/sim/particle_system.hpp"
+#include "simreel/sim/state_error.hpp"
 #include "simreel/sim/types.hpp"
 #include "simreel/sim/world_def.hpp"
 
@@ -181,6 +183,27 @@ class World {
   /// change of one bit of that state changes it with overwhelming probability. Cost: linear in
   /// the state size. Definitions (model) are not hashed.
   [[nodiscard]] std::uint64_t state_hash() const;
+
+  /// The complete state that carries from one advance() to the next, as bytes (a private binary
+  /// format with a version and one checked section per subsystem; docs/cache.md): time and step
+  /// count, body and shape poses and velocities, rigid state, contact manifolds with their
+  /// warm-start impulses, sleep state, every live particle, emitter schedules and random
+  /// generators, particle warm starts, cloth state. Replaces `out`'s contents (its capacity is
+  /// reused). Deterministic: equal states give equal bytes. Definitions are not included.
+  void save_state(std::string& out) const;
+  /// Restores a state written by save_state() of a world registered with the same definitions in
+  /// the same order (the same scene): this world then continues bit-identically to the one it was
+  /// saved from (same state_hash() now and after any further advance()). The next advance()
+  /// reports only what moves from here on; poses() gives every moving body's current pose.
+  /// @throws StateError (state_error.hpp) naming what differs when the bytes are truncated, of
+  ///         another format, or for other objects (counts, particle capacity, body types); the
+  ///         world is then left partly loaded and should be discarded.
+  void load_state(std::string_view bytes);
+  /// The pose of every kinematic and dynamic body (the engine's dense order) as the moved list
+  /// reports it: what a renderer needs after load_state() to show the restored state.
+  [[nodiscard]] std::vector<MovedObject> poses() const;
+  /// Version of save_state()'s layout (bumped whenever a section changes).
+  [[nodiscard]] static std::uint32_t state_format();
 
   /// Current pose of a body (for the initial render list): its frame's origin and rotation (a
   /// one-shape body with an identity offset: that shape's centre and rotation), except a body

@@ -1,0 +1,477 @@
+// World::save_state / load_state: the complete state that carries from one advance() to the next,
+// one section per subsystem (state_io.hpp), so that a world built from the same definitions and
+// loaded with a saved state continues bit-identically to the world it was saved from (a
+// simulation cache resumed or rendered from any frame; docs/cache.md).
+//
+// What is saved is what a step reads before it writes it: time and step count; per body its pose,
+// velocities and last reported pose; per shape its pose and the previous step's pose (swept
+// tests); the rigid state of every dynamic and kinematic body (Coutinho §4.2: x, q, v, L, ω, the
+// inverse masses and inertias a sleeping body zeroes, the split-impulse velocities); last step's
+// contact manifolds with their accumulated impulses (warm start, §4.8) and the sleep bookkeeping;
+// per particle system every live particle's attributes, the emitter schedule, bursts, next id,
+// its random generators, springs and adaptive step; the particle-particle warm starts; per cloth
+// its positions, velocities and last Δv (cloth.cpp). Scratch rebuilt every step (broad-phase
+// proxies, solver rows, grids, workspaces) and the model (definitions, topology, mesh trees,
+// noise lattices) are not: they come from the scene.
+//
+// Joints (Coutinho Ch. 5): whether each broke and what it applied over the last step (its
+// reading; a sleeping joint keeps the one it fell asleep with). The joint solver itself keeps
+// nothing from step to step (its sequential-impulse rows start from zero; its cached sparsity
+// pattern only skips an analysis that gives the same ordering).
+//
+// A new subsystem adds a section here, written by a save_X / load_X pair like the ones below,
+// and bumps kStateFormat.
+#include <algorithm>
+#include <string>
+
+#include "core/state_io.hpp"
+#include "core/world_impl.hpp"
+
+namespace simreel::sim {
+
+namespace {
+
+using detail::StateReader;
+using detail::StateWriter;
+using detail::WorldState;
+
+constexpr std::uint64_t kMagic = 0x3154535245455253ULL;  // "SREESTS1" little-endian
+
+// --- world: time and step count ------------------------------------------------------------
+
+void save_clock(const WorldState& w, StateWriter& out) {
+  out.begin("WRLD");
+  out.value(w.time);
+  out.value(w.steps);
+  out.end();
+}
+
+void load_clock(WorldState& w, StateReader& in) {
+  in.begin("WRLD");
+  in.value(w.time);
+  in.value(w.steps);
+  in.end();
+}
+
+// --- bodies: poses and velocities of the body frames, what was last reported ---------------
+
+void save_bodies(const WorldState& w, StateWriter& out) {
+  out.begin("BODY");
+  const std::vector<detail::Body>& bodies = w.bodies.dense();
+  out.value(std::uint64_t(bodies.size()));
+  for (const detail::Body& b : bodies) {
+    out.value(std::uint8_t(b.type));
+    out.value(b.pose.translation);
+    out.value(b.pose.rotation);
+    out.value(b.velocity);
+    out.value(b.angular_velocity);
+    out.value(b.reported_translation);
+    out.value(b.reported_rotation);
+  }
+  out.end();
+}
+
+void load_bodies(WorldState& w, StateReader& in) {
+  in.begin("BODY");
+  std::vector<detail::Body>& bodies = w.bodies.dense();
+  in.count(bodies.size(), "bodies");
+  for (detail::Body& b : bodies) {
+    if (in.value<std::uint8_t>() != std::uint8_t(b.type))
+      throw StateError("state: body '" + b.name + "' has another motion type");
+    in.value(b.pose.translation);
+    in.value(b.pose.rotation);
+    in.value(b.velocity);
+    in.value(b.angular_velocity);
+    in.value(b.reported_translation);
+    in.value(b.reported_rotation);
+  }
+  in.end();
+}
+
+// --- shapes: world poses at the end of the last step and the step before -------------------
+
+void save_shapes(const WorldState& w, StateWriter& out) {
+  out.begin("SHAP");
+  out.value(std::uint64_t(w.shapes.size()));
+  for (const detail::Collider& c : w.shapes) {
+    out.value(std::uint8_t(c.shape));
+    out.value(c.point);
+    out.value(c.normal);
+    out.value(c.center);
+    out.value(c.rotation);
+    out.value(c.R);
+    out.value(c.velocity);
+    out.value(c.angular_velocity);
+    out.value(c.prev_center);
+    out.value(c.prev_R);
+    out.value(c.aabb_center);
+    out.value(c.aabb_half);
+  }
+  out.end();
+}
+
+void load_shapes(WorldState& w, StateReader& in) {
+  in.begin("SHAP");
+  in.count(w.shapes.size(), "shapes");
+  for (detail::Collider& c : w.shapes) {
+    if (in.value<std::uint8_t>() != std::uint8_t(c.shape)) throw StateError("state: a shape has another type");
+    in.value(c.point);
+    in.value(c.normal);
+    in.value(c.center);
+    in.value(c.rotation);
+    in.value(c.R);
+    in.value(c.velocity);
+    in.value(c.angular_velocity);
+    in.value(c.prev_center);
+    in.value(c.prev_R);
+    in.value(c.aabb_center);
+    in.value(c.aabb_half);
+  }
+  in.end();
+}
+
+// --- rigid state of dynamic and kinematic bodies (rigid/body_state.hpp) --------------------
+
+void save_rigid(const detail::RigidBodies& r, StateWriter& out) {
+  out.begin("RIGD");
+  out.value(std::uint64_t(r.size()));
+  out.array(r.position);
+  out.array(r.orientation);
+  out.array(r.linear_velocity);
+  out.array(r.angular_momentum);
+  out.array(r.angular_velocity);
+  out.array(r.mass);
+  out.array(r.inv_mass);
+  out.array(r.inertia_body);
+  out.array(r.inv_inertia_body);
+  out.array(r.inv_inertia_world);
+  out.array(r.force);
+  out.array(r.torque);
+  out.array(r.linear_drag);
+  out.array(r.angular_drag);
+  out.array(r.bias_velocity);
+  out.array(r.bias_angular_velocity);
+  out.array(r.asleep);
+  out.end();
+}
+
+void load_rigid(detail::RigidBodies& r, StateReader& in) {
+  in.begin("RIGD");
+  const std::size_t n = r.size();
+  in.count(n, "rigid bodies");
+  in.array(r.position, n, "rigid positions");
+  in.array(r.orientation, n, "rigid orientations");
+  in.array(r.linear_velocity, n, "rigid velocities");
+  in.array(r.angular_momentum, n, "rigid angular momenta");
+  in.array(r.angular_velocity, n, "rigid angular velocities");
+  in.array(r.mass, n, "rigid masses");
+  in.array(r.inv_mass, n, "rigid inverse masses");
+  in.array(r.inertia_body, n, "rigid inertias");
+  in.array(r.inv_inertia_body, n, "rigid inverse inertias");
+  in.array(r.inv_inertia_world, n, "rigid world inverse inertias");
+  in.array(r.force, n, "rigid forces");
+  in.array(r.torque, n, "rigid torques");
+  in.array(r.linear_drag, n, "rigid drags");
+  in.array(r.angular_drag, n, "rigid drags");
+  in.array(r.bias_velocity, n, "rigid bias velocities");
+  in.array(r.bias_angular_velocity, n, "rigid bias velocities");
+  in.array(r.asleep, n, "rigid sleep flags");
+  for (std::size_t k : {r.orientation.size(), r.linear_velocity.size(), r.angular_momentum.size(),
+                        r.angular_velocity.size(), r.mass.size(), r.inv_mass.size(),
+                        r.inertia_body.size(), r.inv_inertia_body.size(),
+                        r.inv_inertia_world.size(), r.force.size(), r.torque.size(),
+                        r.linear_drag.size(), r.angular_drag.size(), r.bias_velocity.size(),
+                        r.bias_angular_velocity.size(), r.asleep.size()})
+    if (k != n) throw StateError("state: rigid arrays do not hold " + std::to_string(n) + " bodies");
+  in.end();
+}
+
+// --- contacts: last step's manifolds with their impulses (warm start), sleep bookkeeping -----
+
+void save_contacts(const detail::BodyDynamics& d, StateWriter& out) {
+  out.begin("CONT");
+  // After a step, `previous` holds that step's manifolds (stage_bodies.cpp swaps them in).
+  out.value(std::uint64_t(d.previous.size()));
+  for (const detail::BodyManifold& m : d.previous) {
+    out.value(m.key.body_a);
+    out.value(m.key.shape_a);
+    out.value(m.key.body_b);
+    out.value(m.key.shape_b);
+    out.value(m.key.sub);
+    out.value(m.rigid_a);
+    out.value(m.rigid_b);
+    out.value(m.first_point);
+    out.value(std::int32_t(m.manifold.count));
+    out.value(m.manifold.normal);
+    for (int k = 0; k < m.manifold.count; ++k) {
+      const detail::ManifoldPoint& p = m.manifold.points[std::size_t(k)];
+      out.value(p.point_a);
+      out.value(p.point_b);
+      out.value(p.separation);
+      out.value(std::uint8_t(p.id.type_a));
+      out.value(std::uint8_t(p.id.type_b));
+      out.value(p.id.index_a);
+      out.value(p.id.index_b);
+      out.value(p.normal_impulse);
+      out.value(p.tangent_impulse);
+    }
+  }
+  out.array(d.rest_time);
+  out.array(d.island);
+  out.end();
+}
+
+void load_contacts(detail::BodyDynamics& d, StateReader& in) {
+  in.begin("CONT");
+  const auto n = in.value<std::uint64_t>();
+  if (n > (std::uint64_t{1} << 32)) throw StateError("state: too many contact manifolds");
+  d.previous.assign(std::size_t(n), detail::BodyManifold{});
+  for (detail::BodyManifold& m : d.previous) {
+    in.value(m.key.body_a);
+    in.value(m.key.shape_a);
+    in.value(m.key.body_b);
+    in.value(m.key.shape_b);
+    in.value(m.key.sub);
+    in.value(m.rigid_a);
+    in.value(m.rigid_b);
+    in.value(m.first_point);
+    const auto count = in.value<std::int32_t>();
+    if (count < 0 || count > detail::kMaxManifoldPoints) throw StateError("state: a manifold has a bad point count");
+    m.manifold.count = count;
+    in.value(m.manifold.normal);
+    for (int k = 0; k < count; ++k) {
+      detail::ManifoldPoint& p = m.manifold.points[std::size_t(k)];
+      in.value(p.point_a);
+      in.value(p.point_b);
+      in.value(p.separation);
+      p.id.type_a = detail::FeatureType(in.value<std::uint8_t>());
+      p.id.type_b = detail::FeatureType(in.value<std::uint8_t>());
+      in.value(p.id.index_a);
+      in.value(p.id.index_b);
+      in.value(p.normal_impulse);
+      in.value(p.tangent_impulse);
+    }
+  }
+  d.manifolds.clear();
+  d.points.clear();
+  in.array(d.rest_time, d.rigid.size(), "rest times");
+  in.array(d.island, d.rigid.size(), "islands");
+  in.end();
+}
+
+// --- joints: broken or not, last step's force and torque ------------------------------------
+
+void save_joints(const WorldState& w, StateWriter& out) {
+  out.begin("JOIN");
+  out.value(std::uint64_t(w.joints.size()));
+  for (const detail::JointEntry& j : w.joints.dense()) {
+    out.value(std::uint8_t(j.broken));
+    out.value(j.reading.force);
+    out.value(j.reading.torque);
+    out.value(std::uint8_t(j.reading.broken));
+  }
+  out.end();
+}
+
+void load_joints(WorldState& w, StateReader& in) {
+  in.begin("JOIN");
+  in.count(w.joints.size(), "joints");
+  for (detail::JointEntry& j : w.joints.dense()) {
+    j.broken = in.value<std::uint8_t>() != 0;
+    in.value(j.reading.force);
+    in.value(j.reading.torque);
+    j.reading.broken = in.value<std::uint8_t>() != 0;
+  }
+  in.end();
+}
+
+// --- particle systems ------------------------------------------------------------------------
+
+void save_store(const detail::ParticleStore& st, StateWriter& out) {
+  const std::size_t n = st.count;
+  out.value(std::uint64_t(n));
+  out.array(st.position, 3 * n);
+  out.array(st.velocity, 3 * n);
+  out.array(st.prev_position, st.track_prev ? 3 * n : 0);
+  out.array(st.color, 4 * n);
+  out.array(st.radius, n);
+  out.array(st.mass, n);
+  out.array(st.age, n);
+  out.array(st.lifetime, n);
+  out.array(st.id, n);
+  out.array(st.charge, st.has_charge ? n : 0);
+  out.array(st.base_radius, n);
+  out.array(st.tint, n);
+  out.array(st.split_generation, n);
+  out.array(st.split_countdown, n);
+}
+
+void load_store(detail::ParticleStore& st, StateReader& in, const std::string& name) {
+  // The arrays were reserved for max_particles at registration: reading within that never
+  // reallocates (the views' pointers stay put).
+  const std::size_t room = std::max(st.position.capacity() / 3, st.count);
+  const auto n64 = in.value<std::uint64_t>();
+  if (n64 > room)
+    throw StateError("state: particle system '" + name + "' holds " + std::to_string(n64) +
+                     " particles, this world has room for " + std::to_string(room));
+  const std::size_t n = std::size_t(n64);
+  st.count = n;
+  in.array(st.position, 3 * n, "particle positions");
+  in.array(st.velocity, 3 * n, "particle velocities");
+  in.array(st.prev_position, st.track_prev ? 3 * n : 0, "particle start positions");
+  in.array(st.color, 4 * n, "particle colours");
+  in.array(st.radius, n, "particle radii");
+  in.array(st.mass, n, "particle masses");
+  in.array(st.age, n, "particle ages");
+  in.array(st.lifetime, n, "particle lifetimes");
+  in.array(st.id, n, "particle ids");
+  in.array(st.charge, st.has_charge ? n : 0, "particle charges");
+  in.array(st.base_radius, n, "particle base radii");
+  in.array(st.tint, n, "particle tints");
+  in.array(st.split_generation, n, "particle split generations");
+  in.array(st.split_countdown, n, "particle split countdowns");
+  const bool ok = st.position.size() == 3 * n && st.velocity.size() == 3 * n &&
+                  st.prev_position.size() == (st.track_prev ? 3 * n : 0) && st.color.size() == 4 * n &&
+                  st.radius.size() == n && st.mass.size() == n && st.age.size() == n &&
+                  st.lifetime.size() == n && st.id.size() == n &&
+                  st.charge.size() == (st.has_charge ? n : 0) && st.base_radius.size() == n &&
+                  st.tint.size() == n && st.split_generation.size() == n &&
+                  st.split_countdown.size() == n;
+  if (!ok) throw StateError("state: particle system '" + name + "' arrays do not hold its " +
+                            std::to_string(n) + " particles");
+}
+
+void save_systems(const WorldState& w, StateWriter& out) {
+  out.begin("PSYS");
+  out.value(std::uint64_t(w.systems.size()));
+  for (const detail::ParticleSystemState& ps : w.systems.dense()) {
+    save_store(ps.store, out);
+    out.value(ps.next_id);
+    out.value(ps.emitter.scheduled);
+    out.array(ps.emitter.bursts_fired);
+    out.rng(ps.emitter.rng);
+    out.rng(ps.split_rng);
+    out.rng(ps.charge_rng);
+    out.rng(ps.splash_rng);
+    out.value(std::uint64_t(ps.springs.size()));  // springs die with their particles
+    for (const SpringDef& s : ps.springs) {
+      out.value(s.a);
+      out.value(s.b);
+      out.value(s.stiffness);
+      out.value(s.damping);
+      out.value(s.rest_length);
+    }
+    out.value(ps.integrator_state.next_h);
+    out.value(ps.integrator_state.substeps);
+    out.value(ps.integrator_state.rejected);
+    out.value(ps.removed_inside);
+  }
+  w.particle_collider.save_warm(out);
+  out.end();
+}
+
+void load_systems(WorldState& w, StateReader& in) {
+  in.begin("PSYS");
+  in.count(w.systems.size(), "particle systems");
+  for (detail::ParticleSystemState& ps : w.systems.dense()) {
+    load_store(ps.store, in, ps.def.name);
+    in.value(ps.next_id);
+    in.value(ps.emitter.scheduled);
+    in.array(ps.emitter.bursts_fired, ps.def.emitter.bursts.size(), "emitter bursts");
+    in.rng(ps.emitter.rng);
+    in.rng(ps.split_rng);
+    in.rng(ps.charge_rng);
+    in.rng(ps.splash_rng);
+    const auto springs = in.value<std::uint64_t>();
+    if (springs > ps.springs.size())
+      throw StateError("state: particle system '" + ps.def.name + "' holds " + std::to_string(springs) +
+                       " springs, its definition " + std::to_string(ps.springs.size()));
+    ps.springs.resize(std::size_t(springs));
+    for (SpringDef& s : ps.springs) {
+      in.value(s.a);
+      in.value(s.b);
+      in.value(s.stiffness);
+      in.value(s.damping);
+      in.value(s.rest_length);
+    }
+    in.value(ps.integrator_state.next_h);
+    in.value(ps.integrator_state.substeps);
+    in.value(ps.integrator_state.rejected);
+    in.value(ps.removed_inside);
+  }
+  w.particle_collider.load_warm(in);
+  in.end();
+}
+
+// --- cloths (cloth.cpp) ----------------------------------------------------------------------
+
+void save_cloths(const WorldState& w, StateWriter& out) {
+  out.begin("CLTH");
+  out.value(std::uint64_t(w.cloths.size()));
+  for (const Cloth& c : w.cloths.dense()) c.save_state(out);
+  out.end();
+}
+
+void load_cloths(WorldState& w, StateReader& in) {
+  in.begin("CLTH");
+  in.count(w.cloths.size(), "cloths");
+  for (Cloth& c : w.cloths.dense()) c.load_state(in);
+  in.end();
+}
+
+}  // namespace
+
+void World::save_state(std::string& out) const {
+  const WorldState& w = *impl_;
+  out.clear();
+  StateWriter s(out);
+  s.value(kMagic);
+  s.value(detail::kStateFormat);
+  save_clock(w, s);
+  save_bodies(w, s);
+  save_shapes(w, s);
+  save_rigid(w.dyn.rigid, s);
+  save_contacts(w.dyn, s);
+  save_joints(w, s);
+  save_systems(w, s);
+  save_cloths(w, s);
+}
+
+void World::load_state(std::string_view bytes) {
+  WorldState& w = *impl_;
+  StateReader s(bytes);
+  if (s.value<std::uint64_t>() != kMagic) throw StateError("state: not a simreel engine state");
+  if (const auto f = s.value<std::uint32_t>(); f != detail::kStateFormat)
+    throw StateError("state: format " + std::to_string(f) + ", this build reads format " +
+                     std::to_string(detail::kStateFormat));
+  if (!w.removed.empty())
+    throw StateError("state: the world has unreported removals; load a state before removing objects");
+  load_clock(w, s);
+  load_bodies(w, s);
+  load_shapes(w, s);
+  load_rigid(w.dyn.rigid, s);
+  load_contacts(w.dyn, s);
+  load_joints(w, s);
+  load_systems(w, s);
+  load_cloths(w, s);
+  if (!s.done()) throw StateError("state: " + std::to_string(bytes.size() - s.position()) + " bytes after the last section");
+  w.moved.clear();
+}
+
+std::uint32_t World::state_format() { return detail::kStateFormat; }
+
+std::vector<MovedObject> World::poses() const {
+  const WorldState& w = *impl_;
+  std::vector<MovedObject> out;
+  const std::vector<detail::Body>& bodies = w.bodies.dense();
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const detail::Body& b = bodies[i];
+    if (!b.kinematic() && !b.dynamic()) continue;
+    MovedObject m = b.report_pose(w.shapes);
+    m.handle = w.bodies.handle(i);
+    out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace simreel::sim
