@@ -155,7 +155,9 @@ TEST(Cloth, DrapeOverBoxLeavesNoVertexInside) {
       if (std::abs(p.z() - (2 * box.half_extents.z() + def.thickness)) < 1e-3) ++on_top;
     }
   }
-  EXPECT_GT(on_top, std::size_t(50));  // the cloth really lies on the box top
+  // The cloth really lies on the box top (the rows next to the box's edges are lifted by the
+  // triangles resting on those edges, issue 16).
+  EXPECT_GT(on_top, std::size_t(40));
 }
 
 Vec3 vertex(const ClothView& v, std::size_t i) {
@@ -190,7 +192,9 @@ TEST(Cloth, NoVertexInsideSphereAfterDrape) {
     }
     ASSERT_LE(w.cloth_stats(h).max_strain, 0.10 + kStrainEps) << "frame " << f;
   }
-  EXPECT_LT(closest, ball.radius + def.thickness + 1e-3);  // it rests on the sphere
+  // It rests on the sphere: since issue 16 the triangles touch it, so the vertices stand off by
+  // up to the chord's sag, spacing² / (8 r) = 2.5 mm here.
+  EXPECT_LT(closest, ball.radius + def.thickness + 3.5e-3);
   EXPECT_GT(on_ground, std::size_t(20));                    // and its hem on the ground
 }
 
@@ -216,7 +220,9 @@ TEST(Cloth, DropOverCylinderLeavesNoVertexInside) {
       const Vec3 q = vertex(v, i) - rail.transform.translation;
       const double rho = std::hypot(q.x(), q.z());  // distance from the axis
       ASSERT_GE(rho, rail.radius + def.thickness - 1e-4) << "vertex " << i << " frame " << f;
-      if (rho < rail.radius + def.thickness + 1e-3) ++on_rail;
+      // Triangles rest on the rail (issue 16): vertices stand off by up to the chord's sag,
+      // spacing² / (8 r) = 5 mm here.
+      if (rho < rail.radius + def.thickness + 6e-3) ++on_rail;
     }
     ASSERT_LE(w.cloth_stats(h).max_strain, 0.10 + kStrainEps) << "frame " << f;
   }
@@ -532,3 +538,116 @@ TEST(Cloth, GustsAreDeterministicFromSeed) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Issue 16: triangles and edges collide, not just vertices.
+
+/// The cloth's vertices as doubles.
+std::vector<Vec3> positions_of(const ClothView& v) {
+  std::vector<Vec3> x(v.vertex_count);
+  for (std::size_t i = 0; i < v.vertex_count; ++i) x[i] = vertex(v, i);
+  return x;
+}
+
+/// Height (m) at which segment a-b crosses the plane y = 0, or NaN if it does not cross it.
+double crossing_height(const Vec3& a, const Vec3& b) {
+  if ((a.y() < 0.0) == (b.y() < 0.0) || a.y() == b.y()) return std::nan("");
+  const double s = a.y() / (a.y() - b.y());
+  return a.z() + s * (b.z() - a.z());
+}
+
+// A 24 x 24 cloth of 2.6 m (vertex spacing 11.3 cm) dropped on a 6 cm-thick box ridge (a wall
+// along x, between rows 11 and 12): the cloth's middle line never goes below the ridge's top at
+// any frame, and at the end the cloth hangs over it on both sides. With vertex-only collisions
+// the vertices miss the ridge and the cloth falls flat through it.
+TEST(Cloth, DropOnThinRidgeDrapesOverIt) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  w.add_plane(PlaneDef{});
+  BoxDef ridge;
+  ridge.half_extents = Vec3(1.6, 0.03, 0.25);
+  ridge.transform.translation = Vec3(0.0, 0.0, 0.25);
+  w.add_box(ridge);
+  const double top = 0.5;
+  ClothDef def = flat_cloth(24, 2.6, 0.5, 0.8);
+  const ClothHandle h = w.add_cloth(def);
+  double lowest_middle = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 120; ++f) {
+    w.advance(kFrame);
+    const std::vector<Vec3> x = positions_of(w.cloth(h));
+    for (std::size_t c = 0; c < def.columns; ++c) {
+      // The stretch edge and both diagonals of the cells between rows 11 and 12.
+      const std::size_t i = 11 * def.columns + c, j = 12 * def.columns + c;
+      for (const double z : {crossing_height(x[i], x[j]),
+                             c + 1 < def.columns ? crossing_height(x[i], x[j + 1]) : std::nan(""),
+                             c + 1 < def.columns ? crossing_height(x[i + 1], x[j]) : std::nan("")})
+        if (std::isfinite(z) && std::abs(x[i].x()) < 1.2) lowest_middle = std::min(lowest_middle, z);
+    }
+    // (A millimetre of the 5 mm thickness may be given up to the strain limit, never more.)
+    ASSERT_GE(lowest_middle, top - 1e-3) << "the cloth passed through the ridge by frame " << f;
+  }
+  const ClothStats st = w.cloth_stats(h);
+  EXPECT_LT(lowest_middle, top + def.thickness + 0.01);  // it rests on the ridge
+  EXPECT_LT(st.min_z, 0.05);                             // and its sides reach the ground
+  EXPECT_LE(st.max_strain, 0.10 + kStrainEps);
+}
+
+/// Distance (m) from p to triangle (a, b, c) (brute force on the closest point).
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a).normalized();
+  const Vec3 q = p - n.dot(p - a) * n;
+  const Vec3 e[3] = {b - a, c - b, a - c};
+  const Vec3 o[3] = {a, b, c};
+  bool inside = true;
+  for (int k = 0; k < 3; ++k) inside = inside && e[k].cross(q - o[k]).dot(n) >= 0.0;
+  if (inside) return std::abs(n.dot(p - a));
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const double s = std::clamp((p - o[k]).dot(e[k]) / e[k].squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (p - (o[k] + s * e[k])).norm());
+  }
+  return best;
+}
+
+// A kinematic sphere (radius 8 cm, less than two vertex spacings) pushed at 2 m/s down through a
+// horizontal 1 m sheet pinned on its four sides: at every frame the sphere's centre stays above
+// the sheet and no triangle comes within radius + thickness of it (less a hair), and the sheet
+// stretches under it (far past the strain limit: the kinematic body wins). With vertex-only
+// collisions the sphere slips between the vertices.
+TEST(Cloth, KinematicSphereStretchesPinnedSheetNeverThrough) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  ClothDef def = flat_cloth(24, 1.0, 0.2, 0.0);
+  for (std::size_t k = 0; k < 24; ++k) {
+    def.pins.push_back({0, k, {}});
+    def.pins.push_back({23, k, {}});
+    if (k > 0 && k < 23) {
+      def.pins.push_back({k, 0, {}});
+      def.pins.push_back({k, 23, {}});
+    }
+  }
+  def.gravity = Vec3::Zero();
+  SphereDef ball;
+  ball.radius = 0.08;
+  ball.path.smooth = false;
+  ball.path.keys = {{0.0, Vec3(0.021, 0.013, 0.3), Quat::Identity()},
+                    {0.35, Vec3(0.021, 0.013, -0.4), Quat::Identity()}};
+  ball.transform.translation = ball.path.keys[0].position;
+  w.add_sphere(ball);
+  const ClothHandle h = w.add_cloth(def);
+  const ClothView v0 = w.cloth(h);
+  const std::vector<std::uint32_t> tri(v0.triangles, v0.triangles + 3 * v0.triangle_count);
+  double deepest = 0.0;
+  for (int f = 0; f < 30; ++f) {
+    w.advance(kFrame);
+    const Vec3 centre = ball.path.sample(w.time()).translation;
+    const std::vector<Vec3> x = positions_of(w.cloth(h));
+    double closest = std::numeric_limits<double>::infinity(), below = std::numeric_limits<double>::infinity();
+    for (std::size_t t = 0; 3 * t < tri.size(); ++t)
+      closest = std::min(closest, point_triangle_distance(centre, x[tri[3 * t]], x[tri[3 * t + 1]],
+                                                          x[tri[3 * t + 2]]));
+    for (const Vec3& p : x) below = std::min(below, p.z());
+    deepest = std::min(deepest, below);
+    ASSERT_GE(closest, ball.radius + def.thickness - 1e-4) << "frame " << f;
+    ASSERT_LT(below, centre.z()) << "the sphere is below the sheet at frame " << f;
+  }
+  EXPECT_LT(deepest, -0.3);  // the sheet went down with the sphere
+}
