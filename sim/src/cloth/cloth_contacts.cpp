@@ -96,6 +96,20 @@ bool collider_near(const Collider& c, const Vec3& lo, const Vec3& hi, double mar
          ((c.aabb_center - hi).array() <= grow.array()).all();
 }
 
+/// Could the distance between the primitives made of points [0, split) and [split, 4) drop below
+/// delta during the step, given their distances d0 at the start and d1 at the end? The distance
+/// changes at most at rate L (m per step) = the largest relative displacement of a point of one
+/// against a point of the other, so it stays >= (d0 + d1 - L) / 2.
+bool may_meet(const Vec3 X0[4], const Vec3 X1[4], int split, double d0, double d1, double delta) {
+  const Vec3 ref = X1[0] - X0[0];
+  double la = 0.0, lb = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const double m = (X1[k] - X0[k] - ref).norm();
+    (k < split ? la : lb) = std::max(k < split ? la : lb, m);
+  }
+  return 0.5 * (d0 + d1 - (la + lb)) < delta;
+}
+
 /// Vertex p against triangle (a, b, c) with wanted separation delta. On a contact fills `out`
 /// (weights: +1 on p, minus the barycentric weights on the triangle) and returns true.
 bool vertex_triangle(const ContactScratch& S, std::uint32_t p, std::uint32_t a, std::uint32_t b,
@@ -108,6 +122,9 @@ bool vertex_triangle(const ContactScratch& S, std::uint32_t p, std::uint32_t a, 
   bool crossed = false;
   const Vec3 n1 = (X1[1] - X1[0]).cross(X1[2] - X1[0]);
   if (d >= delta) {
+    const Vec3 w0 = cg::closest_on_triangle(X0[3], X0[0], X0[1], X0[2]);
+    const double d0 = (X0[3] - (w0[0] * X0[0] + w0[1] * X0[1] + w0[2] * X0[2])).norm();
+    if (!may_meet(X0, X1, 3, d0, d, delta)) return false;
     double roots[3];
     const int nr = cg::coplanar_times(X0, X1, roots);
     for (int k = 0; k < nr && !crossed; ++k) {
@@ -165,6 +182,10 @@ bool edge_edge(const ContactScratch& S, std::uint32_t a, std::uint32_t b, std::u
   double d = (pa - pc).norm();
   bool crossed = false;
   if (d >= delta) {
+    double s0, u0;
+    cg::closest_segments(X0[0], X0[1], X0[2], X0[3], s0, u0);
+    const double d0 = (cg::lerp(X0[0], X0[1], s0) - cg::lerp(X0[2], X0[3], u0)).norm();
+    if (!may_meet(X0, X1, 2, d0, d, delta)) return false;
     double roots[3];
     const int nr = cg::coplanar_times(X0, X1, roots);
     for (int k = 0; k < nr && !crossed; ++k) {
@@ -311,9 +332,8 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
       if (collider_near(col, all.lo, all.hi, max_thickness)) add_features(col, std::int32_t(c), S);
     }
   if (S.points.empty() && S.segments.empty() && !pairs) return stats;
-  double max_radius = 0.0;
-  for (std::size_t i = cloth_nodes; i < S.x.size(); ++i) max_radius = std::max(max_radius, S.radius[i]);
-  const double margin = max_thickness + max_radius;
+  // Triangle boxes grow by the thickness; feature queries grow by their own radius.
+  const double margin = max_thickness;
 
   // Self contacts use at most a quarter of the shortest rest edge, so neighbours in a flat
   // sheet never count as touching.
