@@ -610,7 +610,7 @@ double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 
 // A kinematic sphere (radius 8 cm, less than two vertex spacings) pushed at 2 m/s down through a
 // horizontal 1 m sheet pinned on its four sides: at every frame the sphere's centre stays above
-// the sheet and no triangle comes within radius + thickness of it (less a hair), and the sheet
+// the sheet and no triangle comes within radius + thickness / 2 of it, and the sheet
 // stretches under it (far past the strain limit: the kinematic body wins). With vertex-only
 // collisions the sphere slips between the vertices.
 TEST(Cloth, KinematicSphereStretchesPinnedSheetNeverThrough) {
@@ -646,7 +646,8 @@ TEST(Cloth, KinematicSphereStretchesPinnedSheetNeverThrough) {
                                                           x[tri[3 * t + 2]]));
     for (const Vec3& p : x) below = std::min(below, p.z());
     deepest = std::min(deepest, below);
-    ASSERT_GE(closest, ball.radius + def.thickness - 1e-4) << "frame " << f;
+    // Contact rounds stop once no pair is closer than half the thickness (cloth_contacts.hpp).
+    ASSERT_GE(closest, ball.radius + 0.5 * def.thickness) << "frame " << f;
     ASSERT_LT(below, centre.z()) << "the sphere is below the sheet at frame " << f;
   }
   EXPECT_LT(deepest, -0.3);  // the sheet went down with the sphere
