@@ -779,3 +779,4 @@ TEST(Cloth, TwoClothsDroppedOnEachOtherNeverIntersect) {
   }
   EXPECT_GT(worst[0], 0u);
 }
+

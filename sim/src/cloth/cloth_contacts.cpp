@@ -19,13 +19,25 @@ using Contact = ContactScratch::Contact;
 constexpr int kRounds = 8;          // detect-and-resolve rounds before the failsafe
 constexpr int kFailsafeRounds = 16;  // failsafe rounds (each only grows the set at rest)
 constexpr double kShortEnough = 0.5;  // a round that found no pair closer than this × delta ends
+constexpr double kColliderShortEnough = 0.1;  // the same for contacts with collider features
+
+/// Is c the shape of a dynamic body (it logs impulses)?
+bool dynamic_shape(const Collider& c, const BodyImpulses* impulses) {
+  if (impulses == nullptr) return false;
+  const std::size_t k = std::size_t(&c - impulses->shapes);
+  return k < impulses->rigid.size() && impulses->rigid[k] != BodyImpulses::kNone;
+}
 
 /// Appends a collider's corners, centres, edges and axes as immovable nodes: start-of-step pose
-/// (prev_center, prev_R) to end-of-step pose, each feature point moving on a straight line.
-void add_features(const Collider& c, std::int32_t ci, ContactScratch& S) {
+/// (prev_center, prev_R) to end-of-step pose, each feature point moving on a straight line. A
+/// dynamic body steps after the cloth (stages.hpp), so its features run from its current pose
+/// along its current point velocities over the step h: the cloth is pushed ahead of where the
+/// body is about to go, and the body takes the opposite impulse (Coutinho §3.7).
+void add_features(const Collider& c, std::int32_t ci, bool dynamic, double h, ContactScratch& S) {
   auto node = [&](const Vec3& local, double r) {
-    S.x0.push_back(c.prev_center + c.prev_R * local);
-    S.x.push_back(c.center + c.R * local);
+    const Vec3 p = c.center + c.R * local;
+    S.x0.push_back(dynamic ? p : Vec3(c.prev_center + c.prev_R * local));
+    S.x.push_back(dynamic ? Vec3(p + h * c.point_velocity(p)) : p);
     S.winv.push_back(0.0);
     S.radius.push_back(r);
     S.cloth_of.push_back(-1 - ci);
@@ -87,9 +99,13 @@ void add_features(const Collider& c, std::int32_t ci, ContactScratch& S) {
 }
 
 /// Does the collider's box, grown by its motion and `margin`, meet [lo, hi]?
-bool collider_near(const Collider& c, const Vec3& lo, const Vec3& hi, double margin) {
+bool collider_near(const Collider& c, const Vec3& lo, const Vec3& hi, double margin, bool dynamic,
+                   double h) {
   if (c.shape == Collider::Shape::plane) return false;
+  const double spin = dynamic ? h * c.angular_velocity.norm() : 0.0;
   const double motion =
+      (dynamic ? h * c.velocity.norm() + spin * ((c.aabb_center - c.center).norm() + c.aabb_half.norm())
+               : 0.0) +
       (c.center - c.prev_center).norm() +
       (c.R - c.prev_R).norm() * ((c.aabb_center - c.center).norm() + c.aabb_half.norm());
   const Vec3 grow = c.aabb_half + Vec3::Constant(margin + motion);
@@ -331,7 +347,9 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
         planes.push_back(std::int32_t(c));
         continue;
       }
-      if (collider_near(col, all.lo, all.hi, max_thickness)) add_features(col, std::int32_t(c), S);
+      const bool dynamic = dynamic_shape(col, impulses);
+      if (collider_near(col, all.lo, all.hi, max_thickness, dynamic, h))
+        add_features(col, std::int32_t(c), dynamic, h, S);
     }
   if (S.points.empty() && S.segments.empty() && !pairs) return stats;
   // Triangle boxes grow by the thickness; feature queries grow by their own radius.
@@ -496,15 +514,20 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
     stats.rounds = std::size_t(round + 1);
     if (round < kRounds) {
       // Every detected contact is brought to its full distance; another round is needed only
-      // if one was found short by more than half of it (crossed or nearly: the rounds exist to
-      // keep things from passing through, not to polish the thickness).
+      // if a cloth pair was found short by more than half of it (crossed or nearly: the rounds
+      // exist to keep things from passing through, not to polish the thickness), or a collider
+      // contact by more than a tenth (a body pushing the cloth keeps it at its thickness).
       double worst = 0.0;
       for (const Contact& k : S.contacts) {
         const double short_by = resolve(k, S, h, cloths, colliders, impulses);
         if (short_by > 0.0) {
           ++stats.contacts;
-          worst = std::max(worst, short_by);
-          if (k.collider >= 0 && (*colliders)[std::size_t(k.collider)].moving) stats.kinematic = true;
+          worst = std::max(worst, k.collider >= 0 ? kShortEnough / kColliderShortEnough * short_by
+                                                  : short_by);
+          if (k.collider >= 0) {
+            const Collider& col = (*colliders)[std::size_t(k.collider)];
+            if (col.moving && !dynamic_shape(col, impulses)) stats.kinematic = true;
+          }
         }
       }
       if (worst < kShortEnough) break;

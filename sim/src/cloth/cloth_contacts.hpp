@@ -54,7 +54,7 @@ struct ContactStats {
   std::size_t contacts = 0;   ///< pair contacts resolved (over all rounds)
   std::size_t rounds = 0;     ///< detect-and-resolve rounds run
   std::size_t failsafe = 0;   ///< vertices returned to their start positions
-  bool kinematic = false;     ///< a contact was with a kinematic collider's feature
+  bool kinematic = false;     ///< a contact was with a kinematic (not dynamic) body's feature
 };
 
 /// Reusable buffers (no allocation per step once warm, except the AABB tree's).
