@@ -28,7 +28,8 @@
 // chunked reductions (bit-identical at any thread count) — 2.11 s on 1 thread (each spring block
 // applied twice), 10.5 s CPU / 21.5 s wall on 2 threads of this shared 2-core machine; spring
 // blocks stored in float — 1.76 s (conversions, and 2 more CG iterations per step).
-// Env CLOTH_THREADS sets WorldDef::threads (default 1).
+// Env CLOTH_THREADS sets WorldDef::threads (default 1); CLOTH_SELF=1 turns self-collision on
+// (issue 16), to measure its cost apart.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -50,6 +51,7 @@ ClothDef peer_cloth(std::size_t nodes) {
   d.transform.translation = Vec3(0, 0, 2.0);  // horizontal, falls and swings from its corners
   d.pins = {{0, 0, {}}, {0, nodes - 1, {}}};
   if (const char* tol = std::getenv("CLOTH_CG_TOL")) d.cg_tolerance = std::atof(tol);
+  if (const char* self = std::getenv("CLOTH_SELF")) d.self_collision = std::atoi(self) != 0;
   return d;
 }
 
