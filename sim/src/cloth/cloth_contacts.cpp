@@ -127,6 +127,11 @@ bool may_meet(const Vec3 X0[4], const Vec3 X1[4], int split, double d0, double d
   return 0.5 * (d0 + d1 - (la + lb)) < delta;
 }
 
+/// Do [lo1, hi1] and [lo2, hi2] overlap?
+bool boxes_meet(const Vec3& lo1, const Vec3& hi1, const Vec3& lo2, const Vec3& hi2) {
+  return (lo1.array() <= hi2.array()).all() && (lo2.array() <= hi1.array()).all();
+}
+
 /// Vertex p against triangle (a, b, c) with wanted separation delta. On a contact fills `out`
 /// (weights: +1 on p, minus the barycentric weights on the triangle) and returns true.
 bool vertex_triangle(const ContactScratch& S, std::uint32_t p, std::uint32_t a, std::uint32_t b,
@@ -408,6 +413,7 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
       const Vec3 lo = S.x0[p].cwiseMin(S.x[p]) - Vec3::Constant(S.radius[p]);
       const Vec3 hi = S.x0[p].cwiseMax(S.x[p]) + Vec3::Constant(S.radius[p]);
       bvh.query(lo, hi, [&](std::uint32_t gt) {
+        if (!boxes_meet(S.boxes[gt].a, S.boxes[gt].b, lo, hi)) return;  // leaves hold 4
         std::uint32_t k, id[3];
         tri_nodes(gt, k, id);
         if (vertex_triangle(S, p, id[0], id[1], id[2], cloths[k].thickness + S.radius[p],
@@ -426,6 +432,7 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
       const Vec3 hi = S.x0[a].cwiseMax(S.x[a]).cwiseMax(S.x0[b]).cwiseMax(S.x[b]) +
                       Vec3::Constant(S.radius[a]);
       bvh.query(lo, hi, [&](std::uint32_t gt) {
+        if (!boxes_meet(S.boxes[gt].a, S.boxes[gt].b, lo, hi)) return;  // leaves hold 4
         std::uint32_t k, id[3];
         const std::uint32_t t = tri_nodes(gt, k, id);
         const ClothTopology& T = *cloths[k].topo;
@@ -448,6 +455,7 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
         if (!cloths[kp].self && !cloths[kp].others) continue;
         const Vec3 lo = S.x0[p].cwiseMin(S.x[p]), hi = S.x0[p].cwiseMax(S.x[p]);
         bvh.query(lo, hi, [&](std::uint32_t gt) {
+          if (!boxes_meet(S.boxes[gt].a, S.boxes[gt].b, lo, hi)) return;  // leaves hold 4
           std::uint32_t k, id[3];
           tri_nodes(gt, k, id);
           if (id[0] == p || id[1] == p || id[2] == p) return;
@@ -470,6 +478,7 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
           const Vec3 lo = S.x0[a].cwiseMin(S.x[a]).cwiseMin(S.x0[b]).cwiseMin(S.x[b]);
           const Vec3 hi = S.x0[a].cwiseMax(S.x[a]).cwiseMax(S.x0[b]).cwiseMax(S.x[b]);
           bvh.query(lo, hi, [&](std::uint32_t gt) {
+            if (!boxes_meet(S.boxes[gt].a, S.boxes[gt].b, lo, hi)) return;  // leaves hold 4
             std::uint32_t k, id[3];
             const std::uint32_t t = tri_nodes(gt, k, id);
             const double delta = pair_delta(k1, std::int32_t(k));
@@ -481,6 +490,10 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
               const std::uint32_t ca = S.offset[k] + T.edges[2 * e], cb = S.offset[k] + T.edges[2 * e + 1];
               if (ca == a || ca == b || cb == a || cb == b) continue;
               if (S.winv[a] + S.winv[b] + S.winv[ca] + S.winv[cb] == 0.0) continue;
+              const Vec3 clo = S.x0[ca].cwiseMin(S.x[ca]).cwiseMin(S.x0[cb]).cwiseMin(S.x[cb]);
+              const Vec3 chi = S.x0[ca].cwiseMax(S.x[ca]).cwiseMax(S.x0[cb]).cwiseMax(S.x[cb]);
+              const Vec3 g = Vec3::Constant(delta);
+              if (!boxes_meet(clo - g, chi + g, lo, hi)) continue;
               if (edge_edge(S, a, b, ca, cb, delta, Vec3::Zero(), c)) {
                 c.friction = friction_of(k1, std::int32_t(k));
                 c.collider = -1;
