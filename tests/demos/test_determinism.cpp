@@ -101,7 +101,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
   static const std::map<std::string, std::uint64_t> table = {
       {"curtain", 0xbc9a42a97e737ff8ull},
       {"drape", 0xdff44e389b2b4371ull},
-      {"tablecloth", 0x8703aac023a747b1ull},
+      {"tablecloth", 0x98173dc203bdabc6ull},
       {"explosion", 0xe1a447278f4912d0ull},
       {"fire_smoke", 0x54d96cb321b3cbb7ull},
       {"fireworks", 0xa843a276bd6be29eull},

@@ -5,8 +5,11 @@
 
 namespace simreel::sim::detail {
 
+constexpr int kStrainRounds = 3;  // strain pass -> contacts, after the first contact pass
+
 ContactCloth ClothAccess::view(Cloth& c) { return c.s_->contact_view(); }
 void ClothAccess::refresh(Cloth& c) { c.s_->refresh_views(); }
+bool ClothAccess::limit_strain(Cloth& c) { return c.s_->max_deformation_pass(); }
 
 ContactStats collide_cloths(std::vector<Cloth>& cloths, const std::vector<Collider>& colliders,
                             double h, ContactScratch& scratch, BodyImpulses* impulses) {
@@ -28,8 +31,19 @@ ContactStats collide_cloths(std::vector<Cloth>& cloths, const std::vector<Collid
   // Cloths that do not collide with colliders still get no collider features: the features
   // are shared, so only pass them when every cloth collides.
   for (Cloth& c : cloths) collide &= c.definition().collide;
-  ContactStats st = collide_cloth_features(views, collide && !colliders.empty() ? &colliders : nullptr,
-                                           true, h, scratch, impulses);
+  const std::vector<Collider>* cs = collide && !colliders.empty() ? &colliders : nullptr;
+  ContactStats st = collide_cloth_features(views, cs, true, h, scratch, impulses);
+  // The contacts may stretch springs past the limit: the strain pass again, then the contacts
+  // again, a few times; the contacts have the last word (folds never cross).
+  for (int round = 0; round < kStrainRounds && (st.contacts > 0 || st.failsafe > 0); ++round) {
+    bool moved = false;
+    for (Cloth& c : cloths) moved |= ClothAccess::limit_strain(c);
+    if (!moved) break;
+    const ContactStats again = collide_cloth_features(views, cs, true, h, scratch, impulses);
+    st.contacts += again.contacts;
+    st.failsafe += again.failsafe;
+    if (again.contacts == 0 && again.failsafe == 0) break;
+  }
   if (st.contacts > 0 || st.failsafe > 0)
     for (Cloth& c : cloths) ClothAccess::refresh(c);
   return st;

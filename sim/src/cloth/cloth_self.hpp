@@ -13,6 +13,8 @@ namespace simreel::sim::detail {
 struct ClothAccess {
   static ContactCloth view(Cloth& c);
   static void refresh(Cloth& c);  ///< float views after a change of state
+  /// The maximum-deformation pass again (§3.9.2) over the step's paths; true if it moved a vertex.
+  static bool limit_strain(Cloth& c);
 };
 
 /// After every cloth stepped over [t0, t0 + h]: vertex–triangle and edge–edge contacts of each
