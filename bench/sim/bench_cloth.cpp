@@ -28,7 +28,16 @@
 // chunked reductions (bit-identical at any thread count) — 2.11 s on 1 thread (each spring block
 // applied twice), 10.5 s CPU / 21.5 s wall on 2 threads of this shared 2-core machine; spring
 // blocks stored in float — 1.76 s (conversions, and 2 more CG iterations per step).
-// Env CLOTH_THREADS sets WorldDef::threads (default 1).
+// Measured 2026-11-22 (wt-16, issue 16, same shared machine, load ~5): the peer scene has no
+// collider, so the triangle/edge contacts cost it nothing (identical counters):
+//   64 x 64:   CPU 1.40 s (wall 2.2-2.3 s) at 1 and 2 threads (the cloth step is serial: no
+//              gain from 2 threads), CG 30.6/step, passes 10.9/step, max strain 0.100
+//   128 x 128: CPU 7.1-7.3 s at 1 and 2 threads, CG 35.3, passes 27.7, strain 0.100
+//   64 x 64 with CLOTH_SELF=1 (self-collision): CPU 7.2 s (5x), CG 35.3, passes 36.9, max
+//              strain 0.105 (the self contacts have the last word over the strain limit)
+// Bullet 3.24's btSoftBody is not run beside it here (no peer program for cloth yet).
+// Env CLOTH_THREADS sets WorldDef::threads (default 1); CLOTH_SELF=1 turns self-collision on
+// (issue 16), to measure its cost apart.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -50,6 +59,7 @@ ClothDef peer_cloth(std::size_t nodes) {
   d.transform.translation = Vec3(0, 0, 2.0);  // horizontal, falls and swings from its corners
   d.pins = {{0, 0, {}}, {0, nodes - 1, {}}};
   if (const char* tol = std::getenv("CLOTH_CG_TOL")) d.cg_tolerance = std::atof(tol);
+  if (const char* self = std::getenv("CLOTH_SELF")) d.self_collision = std::atoi(self) != 0;
   return d;
 }
 

@@ -99,6 +99,8 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   d.friction = r.number("friction", d.friction, ranges::kClothFriction);
   d.collide = r.boolean("collide", d.collide);
   d.collide_particles = r.boolean("collide_particles", d.collide_particles);
+  d.self_collision = r.boolean("self_collision", d.self_collision);
+  d.collide_cloths = r.boolean("collide_cloths", d.collide_cloths);
   d.restitution = r.number("restitution", d.restitution, ranges::kClothRestitution);
   d.gravity = gravity;
   const auto color = r.color("color", {0.75, 0.12, 0.12, 1});

@@ -155,7 +155,9 @@ TEST(Cloth, DrapeOverBoxLeavesNoVertexInside) {
       if (std::abs(p.z() - (2 * box.half_extents.z() + def.thickness)) < 1e-3) ++on_top;
     }
   }
-  EXPECT_GT(on_top, std::size_t(50));  // the cloth really lies on the box top
+  // The cloth really lies on the box top (the rows next to the box's edges are lifted by the
+  // triangles resting on those edges, issue 16).
+  EXPECT_GT(on_top, std::size_t(40));
 }
 
 Vec3 vertex(const ClothView& v, std::size_t i) {
@@ -190,7 +192,9 @@ TEST(Cloth, NoVertexInsideSphereAfterDrape) {
     }
     ASSERT_LE(w.cloth_stats(h).max_strain, 0.10 + kStrainEps) << "frame " << f;
   }
-  EXPECT_LT(closest, ball.radius + def.thickness + 1e-3);  // it rests on the sphere
+  // It rests on the sphere: since issue 16 the triangles touch it, so the vertices stand off by
+  // up to the chord's sag, spacing² / (8 r) = 2.5 mm here.
+  EXPECT_LT(closest, ball.radius + def.thickness + 3.5e-3);
   EXPECT_GT(on_ground, std::size_t(20));                    // and its hem on the ground
 }
 
@@ -216,7 +220,9 @@ TEST(Cloth, DropOverCylinderLeavesNoVertexInside) {
       const Vec3 q = vertex(v, i) - rail.transform.translation;
       const double rho = std::hypot(q.x(), q.z());  // distance from the axis
       ASSERT_GE(rho, rail.radius + def.thickness - 1e-4) << "vertex " << i << " frame " << f;
-      if (rho < rail.radius + def.thickness + 1e-3) ++on_rail;
+      // Triangles rest on the rail (issue 16): vertices stand off by up to the chord's sag,
+      // spacing² / (8 r) = 5 mm here.
+      if (rho < rail.radius + def.thickness + 6e-3) ++on_rail;
     }
     ASSERT_LE(w.cloth_stats(h).max_strain, 0.10 + kStrainEps) << "frame " << f;
   }
@@ -532,3 +538,245 @@ TEST(Cloth, GustsAreDeterministicFromSeed) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Issue 16: triangles and edges collide, not just vertices.
+
+/// The cloth's vertices as doubles.
+std::vector<Vec3> positions_of(const ClothView& v) {
+  std::vector<Vec3> x(v.vertex_count);
+  for (std::size_t i = 0; i < v.vertex_count; ++i) x[i] = vertex(v, i);
+  return x;
+}
+
+/// Height (m) at which segment a-b crosses the plane y = 0, or NaN if it does not cross it.
+double crossing_height(const Vec3& a, const Vec3& b) {
+  if ((a.y() < 0.0) == (b.y() < 0.0) || a.y() == b.y()) return std::nan("");
+  const double s = a.y() / (a.y() - b.y());
+  return a.z() + s * (b.z() - a.z());
+}
+
+// A 24 x 24 cloth of 2.6 m (vertex spacing 11.3 cm) dropped on a 6 cm-thick box ridge (a wall
+// along x, between rows 11 and 12): the cloth's middle line never goes below the ridge's top at
+// any frame, and at the end the cloth hangs over it on both sides. With vertex-only collisions
+// the vertices miss the ridge and the cloth falls flat through it.
+TEST(Cloth, DropOnThinRidgeDrapesOverIt) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  w.add_plane(PlaneDef{});
+  BoxDef ridge;
+  ridge.half_extents = Vec3(1.6, 0.03, 0.25);
+  ridge.transform.translation = Vec3(0.0, 0.0, 0.25);
+  w.add_box(ridge);
+  const double top = 0.5;
+  ClothDef def = flat_cloth(24, 2.6, 0.5, 0.8);
+  const ClothHandle h = w.add_cloth(def);
+  double lowest_middle = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 120; ++f) {
+    w.advance(kFrame);
+    const std::vector<Vec3> x = positions_of(w.cloth(h));
+    for (std::size_t c = 0; c < def.columns; ++c) {
+      // The stretch edge and both diagonals of the cells between rows 11 and 12.
+      const std::size_t i = 11 * def.columns + c, j = 12 * def.columns + c;
+      for (const double z : {crossing_height(x[i], x[j]),
+                             c + 1 < def.columns ? crossing_height(x[i], x[j + 1]) : std::nan(""),
+                             c + 1 < def.columns ? crossing_height(x[i + 1], x[j]) : std::nan("")})
+        if (std::isfinite(z) && std::abs(x[i].x()) < 1.2) lowest_middle = std::min(lowest_middle, z);
+    }
+    // (A millimetre of the 5 mm thickness may be given up to the strain limit, never more.)
+    ASSERT_GE(lowest_middle, top - 1e-3) << "the cloth passed through the ridge by frame " << f;
+  }
+  const ClothStats st = w.cloth_stats(h);
+  EXPECT_LT(lowest_middle, top + def.thickness + 0.01);  // it rests on the ridge
+  EXPECT_LT(st.min_z, 0.05);                             // and its sides reach the ground
+  EXPECT_LE(st.max_strain, 0.10 + kStrainEps);
+}
+
+/// Distance (m) from p to triangle (a, b, c) (brute force on the closest point).
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a).normalized();
+  const Vec3 q = p - n.dot(p - a) * n;
+  const Vec3 e[3] = {b - a, c - b, a - c};
+  const Vec3 o[3] = {a, b, c};
+  bool inside = true;
+  for (int k = 0; k < 3; ++k) inside = inside && e[k].cross(q - o[k]).dot(n) >= 0.0;
+  if (inside) return std::abs(n.dot(p - a));
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const double s = std::clamp((p - o[k]).dot(e[k]) / e[k].squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (p - (o[k] + s * e[k])).norm());
+  }
+  return best;
+}
+
+// A kinematic sphere (radius 8 cm, less than two vertex spacings) pushed at 2 m/s down through a
+// horizontal 1 m sheet pinned on its four sides: at every frame the sphere's centre stays above
+// the sheet and no triangle comes within radius + thickness / 2 of it, and the sheet
+// stretches under it (far past the strain limit: the kinematic body wins). With vertex-only
+// collisions the sphere slips between the vertices.
+TEST(Cloth, KinematicSphereStretchesPinnedSheetNeverThrough) {
+  World w(WorldDef{kFrame, 1, 0.05});
+  ClothDef def = flat_cloth(24, 1.0, 0.2, 0.0);
+  for (std::size_t k = 0; k < 24; ++k) {
+    def.pins.push_back({0, k, {}});
+    def.pins.push_back({23, k, {}});
+    if (k > 0 && k < 23) {
+      def.pins.push_back({k, 0, {}});
+      def.pins.push_back({k, 23, {}});
+    }
+  }
+  def.gravity = Vec3::Zero();
+  SphereDef ball;
+  ball.radius = 0.08;
+  ball.path.smooth = false;
+  ball.path.keys = {{0.0, Vec3(0.021, 0.013, 0.3), Quat::Identity()},
+                    {0.35, Vec3(0.021, 0.013, -0.4), Quat::Identity()}};
+  ball.transform.translation = ball.path.keys[0].position;
+  w.add_sphere(ball);
+  const ClothHandle h = w.add_cloth(def);
+  const ClothView v0 = w.cloth(h);
+  const std::vector<std::uint32_t> tri(v0.triangles, v0.triangles + 3 * v0.triangle_count);
+  double deepest = 0.0;
+  for (int f = 0; f < 30; ++f) {
+    w.advance(kFrame);
+    const Vec3 centre = ball.path.sample(w.time()).translation;
+    const std::vector<Vec3> x = positions_of(w.cloth(h));
+    double closest = std::numeric_limits<double>::infinity(), below = std::numeric_limits<double>::infinity();
+    for (std::size_t t = 0; 3 * t < tri.size(); ++t)
+      closest = std::min(closest, point_triangle_distance(centre, x[tri[3 * t]], x[tri[3 * t + 1]],
+                                                          x[tri[3 * t + 2]]));
+    for (const Vec3& p : x) below = std::min(below, p.z());
+    deepest = std::min(deepest, below);
+    // Contact rounds stop once no pair is closer than half the thickness (cloth_contacts.hpp).
+    ASSERT_GE(closest, ball.radius + 0.5 * def.thickness) << "frame " << f;
+    ASSERT_LT(below, centre.z()) << "the sphere is below the sheet at frame " << f;
+  }
+  EXPECT_LT(deepest, -0.3);  // the sheet went down with the sphere
+}
+
+// ---------------------------------------------------------------------------------------------
+// Issue 16: self-collision and cloth–cloth.
+
+double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+
+/// Does segment pq cross triangle abc (proper crossing, general position)?
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                              const Vec3& c) {
+  const double sp = orient(a, b, c, p), sq = orient(a, b, c, q);
+  if ((sp > 0.0) == (sq > 0.0) || sp == 0.0 || sq == 0.0) return false;
+  const double s1 = orient(p, q, a, b), s2 = orient(p, q, b, c), s3 = orient(p, q, c, a);
+  return (s1 > 0.0 && s2 > 0.0 && s3 > 0.0) || (s1 < 0.0 && s2 < 0.0 && s3 < 0.0);
+}
+
+/// Do triangles A and B (no shared vertex) intersect? Two triangles in general position meet iff
+/// an edge of one crosses the other (the exact test of the issue, in double precision).
+bool triangles_intersect(const Vec3 A[3], const Vec3 B[3]) {
+  for (int k = 0; k < 3; ++k) {
+    if (segment_crosses_triangle(A[k], A[(k + 1) % 3], B[0], B[1], B[2])) return true;
+    if (segment_crosses_triangle(B[k], B[(k + 1) % 3], A[0], A[1], A[2])) return true;
+  }
+  return false;
+}
+
+/// Intersecting pairs among the triangles of the given cloth views (pairs sharing a vertex of
+/// the same cloth excluded), by sweep over x then the exact test. `self`: count pairs within a
+/// cloth; `across`: pairs between cloths.
+std::size_t intersecting_pairs(const std::vector<ClothView>& views, bool self, bool across) {
+  struct T {
+    Vec3 p[3];
+    std::uint32_t id[3];
+    std::size_t cloth;
+    double lo_x, hi_x;
+    Vec3 lo, hi;
+  };
+  std::vector<T> ts;
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const ClothView& v = views[k];
+    for (std::size_t t = 0; t < v.triangle_count; ++t) {
+      T x;
+      x.cloth = k;
+      x.lo = Vec3::Constant(1e300);
+      x.hi = -x.lo;
+      for (int j = 0; j < 3; ++j) {
+        x.id[j] = v.triangles[3 * t + std::size_t(j)];
+        x.p[j] = vertex(v, x.id[j]);
+        x.lo = x.lo.cwiseMin(x.p[j]);
+        x.hi = x.hi.cwiseMax(x.p[j]);
+      }
+      x.lo_x = x.lo.x();
+      x.hi_x = x.hi.x();
+      ts.push_back(x);
+    }
+  }
+  std::sort(ts.begin(), ts.end(), [](const T& a, const T& b) { return a.lo_x < b.lo_x; });
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < ts.size(); ++i)
+    for (std::size_t j = i + 1; j < ts.size() && ts[j].lo_x <= ts[i].hi_x; ++j) {
+      const T &a = ts[i], &b = ts[j];
+      if (a.cloth == b.cloth ? !self : !across) continue;
+      if (((a.lo.array() > b.hi.array()) || (b.lo.array() > a.hi.array())).any()) continue;
+      if (a.cloth == b.cloth) {
+        bool shared = false;
+        for (auto u : a.id)
+          for (auto w : b.id) shared = shared || u == w;
+        if (shared) continue;
+      }
+      if (triangles_intersect(a.p, b.p)) ++count;
+    }
+  return count;
+}
+
+// A 48 x 48 cloth of 1.5 m dropped standing on one edge, tilted, so it folds onto itself on the
+// ground: with self-collision no two triangles intersect after any frame; without it, they do.
+TEST(Cloth, SelfCollisionFoldsNeverIntersect) {
+  std::size_t worst[2] = {0, 0};
+  for (int on = 0; on < 2; ++on) {
+    World w(WorldDef{kFrame, 1, 0.05});
+    w.add_plane(PlaneDef{});
+    ClothDef d;
+    d.rows = d.columns = 48;
+    d.width = d.height = 1.5;
+    d.mass = 0.4;
+    d.transform.rotation = Quat(Eigen::AngleAxisd(std::numbers::pi / 2 - 0.35, Vec3::UnitX()));
+    d.transform.translation = Vec3(0.0, 0.0, 0.73);
+    d.self_collision = on == 1;
+    const ClothHandle h = w.add_cloth(d);
+    for (int f = 0; f < 45; ++f) {
+      w.advance(kFrame);
+      const std::size_t n = intersecting_pairs({w.cloth(h)}, true, false);
+      worst[on] = std::max(worst[on], n);
+      if (on == 1) ASSERT_EQ(n, 0u) << "frame " << f;
+    }
+  }
+  EXPECT_GT(worst[0], 0u);  // the scene does fold through itself without the pass
+}
+
+// Two 32 x 32 cloths dropped on each other onto the ground, the upper one turned by 30 degrees:
+// no triangle of one ever intersects a triangle of the other; with collide_cloths off they pass
+// through each other.
+TEST(Cloth, TwoClothsDroppedOnEachOtherNeverIntersect) {
+  std::size_t worst[2] = {0, 0};
+  for (int on = 0; on < 2; ++on) {
+    World w(WorldDef{kFrame, 1, 0.05});
+    w.add_plane(PlaneDef{});
+    SphereDef ball;  // the lower cloth drapes over it, the upper one onto the lower
+    ball.radius = 0.25;
+    ball.transform.translation = Vec3(0.0, 0.0, 0.25);
+    w.add_sphere(ball);
+    ClothDef lower = flat_cloth(32, 1.0, 0.2, 0.6);
+    ClothDef upper = flat_cloth(32, 1.0, 0.2, 0.9);
+    upper.transform.rotation = Quat(Eigen::AngleAxisd(std::numbers::pi / 6, Vec3::UnitZ()));
+    upper.transform.translation = Vec3(0.1, 0.05, 0.9);
+    lower.collide_cloths = upper.collide_cloths = on == 1;
+    std::vector<ClothHandle> hs = {w.add_cloth(lower), w.add_cloth(upper)};
+    for (int f = 0; f < 45; ++f) {
+      w.advance(kFrame);
+      const std::size_t n = intersecting_pairs({w.cloth(hs[0]), w.cloth(hs[1])}, false, true);
+      worst[on] = std::max(worst[on], n);
+      if (on == 1) ASSERT_EQ(n, 0u) << "frame " << f;
+    }
+  }
+  EXPECT_GT(worst[0], 0u);
+}
+

@@ -18,6 +18,8 @@ namespace simreel::sim {
 
 using detail::mix;
 
+constexpr int kFeatureRounds = 3;  // feature contacts -> vertex pass -> strain limit, at most
+
 namespace {
 
 [[noreturn]] void bad(const std::string& field, const std::string& expected, double got) {
@@ -180,7 +182,30 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
                           S.def.friction, S.hit, S.vertex_mass, impulses);
   }
+  S.strain_passes = 0;
   S.max_deformation_pass();
+  S.contact_stats = {};
+  if (collide) {
+    // Triangles and edges against collider corners, edges and axes (cloth_contacts.hpp); a
+    // correction is followed by the vertex pass and the maximum-deformation pass again, so the
+    // step ends within the strain limit and clear of the colliders when both can hold (a few
+    // rounds). When they cannot, the strain limit has the last word against static colliders
+    // and dynamic bodies, and the collision against a kinematic body (pushing a pinned sheet):
+    // nothing passes through it, the sheet stretches. (A dynamic body does not feel the strain
+    // limit's tension: letting it win would drag the sheet along without end, so a heavy fast
+    // body can still pass through a pinned sheet. Known limit.)
+    S.contact_views.assign(1, S.contact_view());
+    S.contact_views[0].self = S.contact_views[0].others = false;
+    for (int round = 0; round <= kFeatureRounds; ++round) {
+      const detail::ContactStats st = detail::collide_cloth_features(
+          S.contact_views, colliders, false, h, S.contact_scratch, impulses);
+      S.contact_stats.contacts += st.contacts;
+      if (st.contacts == 0) break;
+      detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
+                            S.def.friction, S.hit, S.vertex_mass, impulses);
+      if ((round == kFeatureRounds && st.kinematic) || !S.max_deformation_pass()) break;
+    }
+  }
   bool finite = true;
   for (std::size_t i = 0; i < S.n; ++i) finite = finite && S.x[i].allFinite() && S.v[i].allFinite();
   if (!finite) return false;

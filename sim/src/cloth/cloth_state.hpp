@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "cloth/cloth_contacts.hpp"
 #include "cloth/sym3.hpp"
 #include "simreel/sim/cloth.hpp"
 
@@ -45,6 +46,14 @@ struct Cloth::State {
   // Float copies for views.
   std::vector<float> fpos, fnor, fvel;
   std::size_t cg_iterations = 0, strain_passes = 0;
+  detail::ContactScratch contact_scratch;  // triangle and edge contacts (cloth_contacts.hpp)
+  std::vector<detail::ContactCloth> contact_views;
+  detail::ContactStats contact_stats;      // of the last step's collider-feature pass
+
+  [[nodiscard]] detail::ContactCloth contact_view() {
+    return {&x, &v, &x_start, &free, topo.get(), vertex_mass, def.thickness, def.friction,
+            def.self_collision, def.collide_cloths};
+  }
 
   [[nodiscard]] double k_of(std::size_t s) const {
     switch (topo->kind[s]) {
@@ -70,7 +79,8 @@ struct Cloth::State {
   void forces(double t);
   void integrate_implicit(double h, double t1);
   void integrate_explicit(double h, double t1, bool semi);
-  void max_deformation_pass();
+  /// Returns true if it moved a vertex; adds its passes to strain_passes.
+  bool max_deformation_pass();
   void refresh_views();
   Vec3 wind(const Vec3& p, double t) const;
 };

@@ -17,9 +17,9 @@ namespace simreel::sim {
 /// a spring whose two vertices took different t can still be over the limit, so the pass is
 /// repeated (each repeat only shortens paths, and t = 0 everywhere is the valid start state) until
 /// no spring is over the limit: a departure from the book, counted in ClothStats::strain_passes.
-void Cloth::State::max_deformation_pass() {
-  strain_passes = 0;
-  if (!std::isfinite(def.max_strain)) return;
+bool Cloth::State::max_deformation_pass() {
+  if (!std::isfinite(def.max_strain)) return false;
+  const std::size_t passes_before = strain_passes;
   const ClothTopology& T = *topo;
   const double stretch_max = 1.0 + def.max_strain;
   // Solve for a limit a hair inside the true one so rounding never leaves a spring over it.
@@ -36,14 +36,14 @@ void Cloth::State::max_deformation_pass() {
     bool violated = false, changed = false;
     // The first pass is the book's: every t_p from the positions the integrator gave, minima
     // applied together. Repeats (if needed) update t in place, which converges faster.
-    const bool book_pass = strain_passes == 0;
+    const bool book_pass = strain_passes == passes_before;
     std::vector<double>& tw = book_pass ? t_next : t;
     if (book_pass)
       for (std::size_t i = 0; i < n; ++i) t_next[i] = t[i];
     // A repeat only revisits springs with an end whose t changed in the previous pass or this
     // one: every other spring has the positions it had when last found within the limit, so
     // skipping it changes nothing (the result is the same as checking all of them).
-    const auto pass = std::int32_t(strain_passes);
+    const auto pass = std::int32_t(strain_passes - passes_before);
     for (std::size_t s = 0; s < T.limited_count; ++s) {
       const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
       if (!book_pass && changed_in[a] < pass - 1 && changed_in[b] < pass - 1) continue;
@@ -53,7 +53,7 @@ void Cloth::State::max_deformation_pass() {
       if (l2 <= stretch_max * stretch_max * L * L) continue;
       violated = true;
       double tp = 0.0;  // after kMaxPasses: both back to the start of the step (last resort)
-      if (strain_passes < kMaxPasses) {
+      if (strain_passes - passes_before < kMaxPasses) {
         const Vec3 k1 = origin[a] - origin[b];
         const Vec3 k2 = t[a] * path[a] - t[b] * path[b];
         const double A = k2.squaredNorm();
@@ -84,15 +84,16 @@ void Cloth::State::max_deformation_pass() {
     any_moved = true;
     if (book_pass)
       for (std::size_t i = 0; i < n; ++i) t[i] = t_next[i];
-    if (!changed && strain_passes > kMaxPasses) break;  // only the start state itself violates
+    if (!changed && strain_passes - passes_before > kMaxPasses) break;  // only the start state itself violates
   }
-  if (!any_moved) return;
+  if (!any_moved) return false;
   for (std::size_t i = 0; i < n; ++i) {
     if (!free[i] || t[i] == 1.0) continue;
     x[i] = origin[i] + t[i] * path[i];
     // Velocity consistent with the corrected displacement over the step.
     v[i] *= t[i];
   }
+  return true;
 }
 
 }  // namespace simreel::sim

@@ -1,6 +1,7 @@
 // Cloth topology (Coutinho §3.9.2, fig. 3.45): the grid's stretch, shear and bend springs and
 // the vertex adjacency, built once and shared by every instance of the same grid.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 
 #include "simreel/sim/cloth.hpp"
@@ -58,6 +59,25 @@ ClothTopology::ClothTopology(std::size_t rows_, std::size_t columns_, double wid
       const std::uint32_t a = id(r, c), b = id(r, c + 1), cc = id(r + 1, c), d = id(r + 1, c + 1);
       triangles.insert(triangles.end(), {a, cc, d, a, d, b});
     }
+  // Unique edges of the triangles, each with the first triangle holding it.
+  {
+    std::vector<std::array<std::uint32_t, 3>> e;  // (a, b, triangle * 3 + k)
+    for (std::size_t t = 0; 3 * t < triangles.size(); ++t)
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t i = triangles[3 * t + k], j = triangles[3 * t + (k + 1) % 3];
+        e.push_back({std::min(i, j), std::max(i, j), std::uint32_t(3 * t + k)});
+      }
+    std::sort(e.begin(), e.end());
+    triangle_edges.assign(triangles.size(), 0);
+    for (std::size_t k = 0; k < e.size(); ++k) {
+      if (k == 0 || e[k][0] != e[k - 1][0] || e[k][1] != e[k - 1][1]) {
+        edges.push_back(e[k][0]);
+        edges.push_back(e[k][1]);
+        edge_triangle.push_back(e[k][2] / 3);
+      }
+      triangle_edges[e[k][2]] = std::uint32_t(edge_triangle.size() - 1);
+    }
+  }
   // Adjacency in CSR form, springs of each vertex in spring order (a fixed summation order).
   adj_start.assign(n + 1, 0);
   for (std::size_t s = 0; s < spring_a.size(); ++s) {

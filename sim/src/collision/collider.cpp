@@ -3,6 +3,7 @@
 // and the validation of shape definitions. The sweeps are in sweep.cpp, the resting-contact
 // features in surface_contacts.cpp, the particle pass in particle_response.cpp.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -181,6 +182,54 @@ std::shared_ptr<const MeshShape> make_mesh(const ShapeDef& def, const std::strin
     i = j;
   }
   shape->closed = closed;
+  // Sharp convex and open edges with their vertices (cloth contacts, cloth_contacts.hpp).
+  {
+    std::vector<std::array<std::uint32_t, 3>> he;  // (i, j, kept triangle)
+    for (std::size_t t = 0, kept = 0; t < def.triangles.size(); ++t) {
+      const auto& tri = def.triangles[t];
+      const Vec3 n = (def.vertices[tri[1]] - def.vertices[tri[0]])
+                         .cross(def.vertices[tri[2]] - def.vertices[tri[0]]);
+      if (!(n.norm() > 0.0)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t i = tri[std::size_t(k)], j = tri[std::size_t((k + 1) % 3)];
+        he.push_back({std::min(i, j), std::max(i, j), std::uint32_t(kept)});
+      }
+      ++kept;
+    }
+    std::sort(he.begin(), he.end());
+    std::vector<std::int64_t> remap(def.vertices.size(), -1);
+    auto vid = [&](std::uint32_t v) {
+      if (remap[v] < 0) {
+        remap[v] = std::int64_t(shape->sharp_vertices.size());
+        shape->sharp_vertices.push_back(def.vertices[v]);
+      }
+      return std::uint32_t(remap[v]);
+    };
+    const double cos_sharp = std::cos(20.0 * 3.14159265358979323846 / 180.0);
+    for (std::size_t i = 0; i < he.size();) {
+      std::size_t j = i;
+      while (j < he.size() && he[j][0] == he[i][0] && he[j][1] == he[i][1]) ++j;
+      bool sharp = j - i != 2;
+      if (!sharp) {
+        const Triangle& t1 = shape->triangles[he[i][2]];
+        const Triangle& t2 = shape->triangles[he[i + 1][2]];
+        const Vec3 c2 = (t2.a + t2.b + t2.c) / 3.0;
+        const bool convex = (c2 - def.vertices[he[i][0]]).dot(t1.normal) < 0.0;
+        sharp = convex && t1.normal.dot(t2.normal) < cos_sharp;
+      }
+      if (sharp) {
+        shape->sharp_edges.push_back({vid(he[i][0]), vid(he[i][1])});
+        Vec3 out = Vec3::Zero();
+        if (j - i == 2)
+          out = shape->triangles[he[i][2]].normal + shape->triangles[he[i + 1][2]].normal;
+        shape->sharp_edge_out.push_back(out);
+        shape->sharp_vertex_out.resize(shape->sharp_vertices.size(), Vec3::Zero());
+        shape->sharp_vertex_out[remap[he[i][0]]] += out;
+        shape->sharp_vertex_out[remap[he[i][1]]] += out;
+      }
+      i = j;
+    }
+  }
   shape->bvh = Bvh(shape->triangles);
   const Aabb& b = shape->bvh.bounds();
   shape->local_center = 0.5 * (b.lo + b.hi);

@@ -4,6 +4,7 @@
 // end-of-step pose), §3.4.2 (particles inside a body are removed), §3.6.1 (impulse with
 // restitution and Coulomb friction, critical friction), §3.6.3 (resting contact).
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -24,6 +25,11 @@ struct MeshShape {
   std::vector<Triangle> triangles;
   Bvh bvh;
   bool closed = false;  ///< every edge shared by exactly two triangles
+  /// Convex edges sharper than ~20 degrees and open edges (indices into sharp_vertices), and
+  /// their end points, local frame: the features cloth triangles and edges collide with.
+  std::vector<std::array<std::uint32_t, 2>> sharp_edges;
+  std::vector<Vec3> sharp_vertices;
+  std::vector<Vec3> sharp_edge_out, sharp_vertex_out;  ///< outward (sum of face normals; 0 if open)
   Vec3 local_center = Vec3::Zero();  ///< of the local AABB
   Vec3 local_half = Vec3::Zero();
   /// Parity of crossings of a fixed, slightly oblique ray from p (local frame): inside a closed mesh.

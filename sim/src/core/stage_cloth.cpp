@@ -18,6 +18,9 @@ void stage_cloth(WorldState& w, double t0, double t1) {
       << "): non-finite vertex state at internal step " << w.steps + 1 << ", t = " << t1 << " s";
     throw NonFiniteState(m.str());
   }
+  // Self-collision and cloth–cloth contacts once every cloth has moved (issue 16).
+  if (!cloths.empty())
+    collide_cloths(cloths, w.shapes, t1 - t0, w.cloth_contact_scratch, coupling_log(w));
   for (Cloth& cloth : cloths) {
     if (!cloth.definition().collide_particles) continue;
     for (ParticleSystemState& ps : w.systems.dense())

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cloth/cloth_particles.hpp"
+#include "cloth/cloth_self.hpp"
 #include "collision/collider_impl.hpp"
 #include "collision/particle_collisions.hpp"
 #include "core/body_dynamics.hpp"
@@ -80,6 +81,7 @@ struct WorldState {
   std::vector<Handle> removed;  ///< removals since the last advance(), reported by the next
   ParticleCollider particle_collider;
   ClothParticleScratch cloth_scratch;  ///< particles against cloth (issue 6)
+  ContactScratch cloth_contact_scratch;  ///< self and cloth–cloth contacts (issue 16)
   BodyDynamics dyn;  ///< dynamic bodies (Ch. 4): rigid state, solver, manifolds
 
   /// Is system i integrated by the general path (integrators.hpp) rather than the fast one?

@@ -30,6 +30,7 @@ struct Collider;
 struct BodyImpulses;
 class StateWriter;
 class StateReader;
+struct ClothAccess;
 }
 
 /// How a cloth's state is advanced over one internal step (Coutinho Appendix B).
@@ -101,7 +102,14 @@ struct ClothDef {
   AeroDef aero;
   double thickness = 0.005;  ///< (m) vertices keep this distance from collider surfaces, >= 0
   double friction = 0.3;     ///< Coulomb coefficient for cloth-collider contact, >= 0
-  bool collide = true;       ///< collide with the world's colliders
+  /// Collide with the world's colliders: vertices against surfaces, and triangles and edges
+  /// against collider corners, edges and axes (a thin pole, a box's edge), continuously in time.
+  bool collide = true;
+  /// Vertex–triangle and edge–edge contacts of the cloth with itself (folds never cross), at
+  /// `thickness` (capped at a quarter of the shortest edge). Off by default: it costs time.
+  bool self_collision = false;
+  /// Contacts with other cloths that also allow it (both must), at the larger thickness.
+  bool collide_cloths = true;
   /// Particles (rain, jets) of systems with ParticleSystemDef::collide hit the cloth's triangles;
   /// each impulse is shared by the triangle's vertices by barycentric weight (see World::advance).
   bool collide_particles = true;
@@ -132,6 +140,9 @@ class ClothTopology {
   std::vector<std::uint32_t> adj_start, adj_spring, adj_other;
   std::vector<std::uint32_t> triangles;  ///< (t x 3) indices, counter-clockwise seen from local +z
   std::vector<float> uvs;                ///< (n x 2) u = column / (columns-1), v = row / (rows-1)
+  /// Unique triangle edges (e x 2, a < b), for the edge–edge contacts; edge_triangle[e] is the
+  /// first triangle holding edge e, triangle_edges (t x 3) the edges of each triangle.
+  std::vector<std::uint32_t> edges, edge_triangle, triangle_edges;
   std::vector<Vec3> local_rest;          ///< (n) rest positions in the local frame (m)
 
   [[nodiscard]] std::size_t vertex_count() const { return rows * columns; }
@@ -212,6 +223,7 @@ class Cloth {
   void load_state(detail::StateReader& in);
 
  private:
+  friend struct detail::ClothAccess;
   struct State;
   std::unique_ptr<State> s_;
 };
