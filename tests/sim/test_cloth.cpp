@@ -746,7 +746,9 @@ TEST(Cloth, SelfCollisionFoldsNeverIntersect) {
       w.advance(kFrame);
       const std::size_t n = intersecting_pairs({w.cloth(h)}, true, false);
       worst[on] = std::max(worst[on], n);
-      if (on == 1) ASSERT_EQ(n, 0u) << "frame " << f;
+      if (on == 1) {
+        ASSERT_EQ(n, 0u) << "frame " << f;
+      }
     }
   }
   EXPECT_GT(worst[0], 0u);  // the scene does fold through itself without the pass
@@ -774,7 +776,9 @@ TEST(Cloth, TwoClothsDroppedOnEachOtherNeverIntersect) {
       w.advance(kFrame);
       const std::size_t n = intersecting_pairs({w.cloth(hs[0]), w.cloth(hs[1])}, false, true);
       worst[on] = std::max(worst[on], n);
-      if (on == 1) ASSERT_EQ(n, 0u) << "frame " << f;
+      if (on == 1) {
+        ASSERT_EQ(n, 0u) << "frame " << f;
+      }
     }
   }
   EXPECT_GT(worst[0], 0u);
