@@ -117,7 +117,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"pour", 0x7c754b765345a771ull},
       {"rain", 0xb2c0900519690b5full},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
-      {"ragdolls_stairs", 0x272cde4f2b97f71cull},
+      {"ragdolls_stairs", 0xf4b63f068d814110ull},
       {"rope_bridge", 0xb7fe1f7603937a40ull},
       {"shells", 0x7d0ae63ec5578a8bull},
       {"smoke", 0x40ec5f645362abb2ull},

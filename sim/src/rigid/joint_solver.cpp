@@ -398,6 +398,9 @@ void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> 
   // Limits: each violated one turned back by the rotation that removes its violation, shared by
   // the bodies in proportion to their inverse inertia (a nonlinear Gauss–Seidel step), then the
   // anchors re-projected.
+  // Two rounds: the anchors' projection turns the links again and can reopen a violation
+  // (a ragdoll's knee hitting a stair), and one more pass takes it back within a degree.
+  for (int round = 0; round < 2; ++round) {
   bool any = false;
   for (std::size_t i = 0; i < models.size(); ++i) {
     const JointModel& m = models[i];
@@ -426,9 +429,10 @@ void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> 
       any = true;
     }
   }
-  if (any)
-    for (int it = 0; it < iterations; ++it)
-      if (equality_round(true) <= tolerance) break;
+  if (!any) break;
+  for (int it = 0; it < iterations; ++it)
+    if (equality_round(true) <= tolerance) break;
+  }
   // The projection's displacement becomes velocity (RATTLE / SHAKE: the position constraint's
   // multipliers act as impulses over the step), so the velocities are the chord of the
   // constrained motion. Without this the next step's velocity solve strips the normal part of
