@@ -57,6 +57,17 @@ JointHandle spherical(World& w, BodyHandle a, BodyHandle b, const Vec3& anchor) 
   return w.add_joint(j);
 }
 
+/// A hinge about world y at `anchor`.
+JointHandle hinge_y(World& w, BodyHandle a, BodyHandle b, const Vec3& anchor) {
+  JointDef j;
+  j.type = JointType::hinge;
+  j.body_a = a;
+  j.body_b = b;
+  j.anchor = anchor;
+  j.axis = Vec3::UnitY();
+  return w.add_joint(j);
+}
+
 /// Kinetic + potential energy (J) of dynamic bodies (potential from z of the centre of mass).
 double energy(const World& w, const std::vector<BodyHandle>& bodies) {
   double e = 0.0;
@@ -135,15 +146,8 @@ TEST(Joints, DoublePendulumConservesEnergyWithinOnePercentOverTenSeconds) {
   const Vec3 pivot(0.0, 0.0, 3.0);
   const BodyHandle r1 = w.add_body(box_body(pivot + Vec3(0.5, 0.0, 0.0), {0.02, 0.02, 0.5}, 1.0, q));
   const BodyHandle r2 = w.add_body(box_body(pivot + Vec3(1.5, 0.0, 0.0), {0.02, 0.02, 0.5}, 1.0, q));
-  for (auto [a, b, p] : {std::tuple{BodyHandle{}, r1, pivot}, std::tuple{r1, r2, Vec3(pivot + Vec3(1.0, 0.0, 0.0))}}) {
-    JointDef j;
-    j.type = JointType::hinge;
-    j.body_a = a;
-    j.body_b = b;
-    j.anchor = p;
-    j.axis = Vec3::UnitY();
-    w.add_joint(j);
-  }
+  hinge_y(w, {}, r1, pivot);
+  hinge_y(w, r1, r2, pivot + Vec3(1.0, 0.0, 0.0));
   const double e0 = energy(w, {r1, r2});
   double worst = 0.0, ke_max = 0.0;
   for (int s = 0; s < int(10.0 / h); ++s) {
@@ -440,15 +444,8 @@ TEST(Joints, FourBarLinkageOfHingesClosesItsLoop) {
   const BodyHandle crank = link(p0, p1), coupler = link(p1, p2), rocker = link(p2, p3);
   std::vector<JointHandle> js;
   for (auto [a, b, p] : {std::tuple{BodyHandle{}, crank, p0}, std::tuple{crank, coupler, p1},
-                         std::tuple{coupler, rocker, p2}, std::tuple{rocker, BodyHandle{}, p3}}) {
-    JointDef j;
-    j.type = JointType::hinge;
-    j.body_a = a;
-    j.body_b = b;
-    j.anchor = p;
-    j.axis = Vec3::UnitY();
-    js.push_back(w.add_joint(j));
-  }
+                         std::tuple{coupler, rocker, p2}, std::tuple{rocker, BodyHandle{}, p3}})
+    js.push_back(hinge_y(w, a, b, p));
   const Vec3 c0 = w.motion(coupler).center_of_mass;
   double worst = 0.0;
   for (int s = 0; s < int(3.0 / h); ++s) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "collision/box_box.hpp"
 #include "simreel/sim/types.hpp"
 
 namespace simreel::sim::detail::cg {
@@ -46,37 +47,11 @@ inline Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, con
 }
 
 /// Parameters s, t in [0, 1] of the closest points p1 + s (q1 - p1), p2 + t (q2 - p2) of two
-/// segments (Ericson §5.1.9; parallel segments take s = 0 or the clamped projection).
+/// segments: the narrow phase's (collision/box_box.hpp; Ericson §5.1.9, parallel segments at
+/// the middle of their overlap).
 inline void closest_segments(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2,
                              double& s, double& t) {
-  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  constexpr double eps = 1e-30;
-  if (a <= eps && e <= eps) {
-    s = t = 0.0;
-    return;
-  }
-  if (a <= eps) {
-    s = 0.0;
-    t = std::clamp(f / e, 0.0, 1.0);
-    return;
-  }
-  const double c = d1.dot(r);
-  if (e <= eps) {
-    t = 0.0;
-    s = std::clamp(-c / a, 0.0, 1.0);
-    return;
-  }
-  const double b = d1.dot(d2), den = a * e - b * b;
-  s = den > 1e-14 * a * e ? std::clamp((b * f - c * e) / den, 0.0, 1.0) : 0.0;
-  t = (b * s + f) / e;
-  if (t < 0.0) {
-    t = 0.0;
-    s = std::clamp(-c / a, 0.0, 1.0);
-  } else if (t > 1.0) {
-    t = 1.0;
-    s = std::clamp((b - c) / a, 0.0, 1.0);
-  }
+  closest_parameters_of_segments(p1, q1, p2, q2, s, t);
 }
 
 /// Times in [0, 1] (ascending, at most 3, written to `roots`, count returned) at which the four

@@ -30,8 +30,8 @@ double bias(const ManifoldOptions& o, double separation) {
 
 }  // namespace
 
-void closest_points_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
-                                Vec3& on_p, Vec3& on_q) {
+void closest_parameters_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0,
+                                    const Vec3& q1, double& s_out, double& t_out) {
   const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
   const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
   const double c = d1.dot(r), b = d1.dot(d2);
@@ -61,8 +61,16 @@ void closest_points_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, 
       s = std::clamp((b - c) / a, 0.0, 1.0);
     }
   }
-  on_p = p0 + s * d1;
-  on_q = q0 + t * d2;
+  s_out = s;
+  t_out = t;
+}
+
+void closest_points_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
+                                Vec3& on_p, Vec3& on_q) {
+  double s, t;
+  closest_parameters_of_segments(p0, p1, q0, q1, s, t);
+  on_p = p0 + s * (p1 - p0);
+  on_q = q0 + t * (q1 - q0);
 }
 
 Manifold collide_boxes(const PosedShape& A, const PosedShape& B, const ManifoldOptions& options) {

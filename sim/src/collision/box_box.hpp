@@ -24,6 +24,10 @@ namespace simreel::sim::detail {
 /// Closest points of segments p0-p1 and q0-q1 (world, m): writes them to `on_p`, `on_q`.
 /// Parallel segments get the pair at the middle of their overlap (one well-defined answer).
 /// Ericson 2005, "Real-Time Collision Detection", §5.1.9, with the parallel case made symmetric.
+/// The same as parameters s, t in [0, 1] of on_p = p0 + s (p1 - p0), on_q = q0 + t (q1 - q0)
+/// (the cloth's edge–edge contacts use them as barycentric weights).
+void closest_parameters_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0,
+                                    const Vec3& q1, double& s, double& t);
 void closest_points_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
                                 Vec3& on_p, Vec3& on_q);
 
