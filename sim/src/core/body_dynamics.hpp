@@ -21,6 +21,7 @@
 #include "rigid/contact_solver.hpp"
 #include "rigid/joint_solver.hpp"
 #include "simreel/sim/handle.hpp"
+#include "simreel/sim/body_spring.hpp"
 #include "simreel/sim/joint.hpp"
 
 namespace simreel::sim::detail {
@@ -87,6 +88,15 @@ struct JointEntry {
   JointReading reading;   ///< force, torque, broken (geometry is measured on demand)
 };
 
+/// A damped spring between bodies (World::add_body_spring; §4.3.3): its definition, anchors in
+/// its bodies' rigid frames (world coordinates for the world or a static body) and rest length.
+struct BodySpringEntry {
+  BodySpringDef def;
+  Handle body_a, body_b;  ///< null: the world
+  Vec3 local_a = Vec3::Zero(), local_b = Vec3::Zero();
+  double rest = 0.0;  ///< (m)
+};
+
 struct BodyDynamics {
   RigidBodies rigid;
   ContactSolver solver;
@@ -116,18 +126,25 @@ struct BodyDynamics {
   std::vector<std::uint32_t> joint_entry;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> no_collide;
   std::vector<std::uint8_t> in_contact;  ///< per rigid entry: touched something this step
+  /// The rigid entries each body spring joins this step (sleep.cpp treats them as joints do).
+  std::vector<JointBodies> spring_bodies;
 };
 
 /// Resolves this step's joints (joints.cpp): fills joint_models/joint_bodies/joint_entry from
-/// the unbroken joints and no_collide from those that do not let their bodies collide.
+/// the unbroken joints and no_collide from those that do not let their bodies collide, and
+/// spring_bodies from the body springs.
 void gather_joints(WorldState& w);
 
 /// After the velocity solve of a step of length h: each joint's force and torque from the
 /// solver's impulses; joints whose force exceeded their break_force break.
 void finish_joints(WorldState& w, double h);
 
-/// Removes every joint attached to the body of dense index `body` (a body being removed).
+/// Removes every joint and body spring attached to the body `body` (a body being removed).
 void remove_joints_of(WorldState& w, const Handle& body);
+
+/// Adds the body springs' forces to the accumulators of their dynamic bodies (body_springs.cpp;
+/// spring_bodies from gather_joints).
+void apply_body_springs(WorldState& w);
 
 /// Whether the bodies of dense indices i and j are joined by a joint that keeps them from
 /// colliding.

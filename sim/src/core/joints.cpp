@@ -96,6 +96,9 @@ void gather_joints(WorldState& w) {
     }
   }
   std::sort(d.no_collide.begin(), d.no_collide.end());
+  d.spring_bodies.clear();
+  for (const BodySpringEntry& e : w.body_springs.dense())
+    d.spring_bodies.push_back({rigid_of(w, e.body_a), rigid_of(w, e.body_b)});
 }
 
 bool no_collide(const BodyDynamics& d, std::uint32_t i, std::uint32_t j) {
@@ -127,6 +130,10 @@ void remove_joints_of(WorldState& w, const Handle& body) {
   for (std::size_t i = w.joints.size(); i-- > 0;) {
     const JointEntry& e = w.joints.at(i);
     if (e.body_a == body || e.body_b == body) w.joints.remove(w.joints.handle(i));
+  }
+  for (std::size_t i = w.body_springs.size(); i-- > 0;) {
+    const BodySpringEntry& e = w.body_springs.at(i);
+    if (e.body_a == body || e.body_b == body) w.body_springs.remove(w.body_springs.handle(i));
   }
 }
 

@@ -82,7 +82,8 @@ bool wake_touched(WorldState& w) {
     }
   }
   // A joint pulls: a sleeping body joined to a moving one wakes (joints.cpp gathers them).
-  for (const JointBodies& j : d.joint_bodies) {
+  for (const auto* links : {&d.joint_bodies, &d.spring_bodies})
+  for (const JointBodies& j : *links) {
     if (asleep(d.rigid, j.a) && moving(d.rigid, j.b)) {
       wake_island(w, j.a);
       woke = true;
@@ -109,7 +110,8 @@ void update_sleep(WorldState& w, double h) {
     if (m.rigid_a != kStaticBody) d.parent[m.rigid_a] = 0;
     if (m.rigid_b != kStaticBody) d.parent[m.rigid_b] = 0;
   }
-  for (const JointBodies& j : d.joint_bodies) {  // a joint holds a body as a contact does
+  for (const auto* links : {&d.joint_bodies, &d.spring_bodies})
+  for (const JointBodies& j : *links) {  // a joint or spring holds a body as a contact does
     if (j.a != kStaticBody) d.parent[j.a] = 0;
     if (j.b != kStaticBody) d.parent[j.b] = 0;
   }
@@ -132,7 +134,8 @@ void update_sleep(WorldState& w, double h) {
     if (da && moving(r, m.rigid_b) && !db) d.rest_time[m.rigid_a] = 0.0;
     if (db && moving(r, m.rigid_a) && !da) d.rest_time[m.rigid_b] = 0.0;
   }
-  for (const JointBodies& j : d.joint_bodies) {  // jointed bodies sleep and wake together
+  for (const auto* links : {&d.joint_bodies, &d.spring_bodies})
+  for (const JointBodies& j : *links) {  // joined bodies sleep and wake together
     const bool da = j.a != kStaticBody && r.is_dynamic(j.a);
     const bool db = j.b != kStaticBody && r.is_dynamic(j.b);
     if (da && db) unite(d.parent, j.a, j.b);

@@ -72,6 +72,7 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   if (wake_touched(w)) find_body_contacts(w);
   for (const Body& b : bodies)
     if (b.dynamic() && r.is_dynamic(b.rigid)) apply_force(r, b.rigid, r.mass[b.rigid] * b.gravity);
+  apply_body_springs(w);  // §4.3.3
   // Particles' and cloth's impulses of this step, force fields (§3.7; body_coupling.cpp).
   apply_coupling(w, t0, t1);
   d.solver.prepare(r, d.points, h);

@@ -77,6 +77,7 @@ struct WorldState {
                                                              "attractor-spring"};
   SlotTable<Cloth> cloths{ObjectKind::cloth, "cloth"};
   SlotTable<JointEntry> joints{ObjectKind::joint, "joint"};
+  SlotTable<BodySpringEntry> body_springs{ObjectKind::body_spring, "body spring"};
   std::vector<MovedObject> moved;
   std::vector<Handle> removed;  ///< removals since the last advance(), reported by the next
   ParticleCollider particle_collider;

@@ -19,6 +19,7 @@ enum class ObjectKind : std::uint8_t {
   force_field = 4,
   attractor_spring = 5,
   joint = 6,
+  body_spring = 7,
 };
 
 /// A small value naming one registered object: slot index + generation (Box2D v3's id pool). The
@@ -58,5 +59,6 @@ using ClothHandle = TypedHandle<ObjectKind::cloth>;
 using ForceFieldHandle = TypedHandle<ObjectKind::force_field>;
 using AttractorSpringHandle = TypedHandle<ObjectKind::attractor_spring>;
 using JointHandle = TypedHandle<ObjectKind::joint>;
+using BodySpringHandle = TypedHandle<ObjectKind::body_spring>;
 
 }  // namespace simreel::sim

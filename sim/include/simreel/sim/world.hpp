@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "simreel/sim/body.hpp"
+#include "simreel/sim/body_spring.hpp"
 #include "simreel/sim/cloth.hpp"
 #include "simreel/sim/collider.hpp"
 #include "simreel/sim/forces.hpp"
@@ -147,6 +148,17 @@ class World {
   /// Every joint, in the engine's dense order (registration order until a removal).
   [[nodiscard]] std::vector<JointHandle> joints() const;
 
+  /// Adds a damped spring between two bodies' points or a body's point and the world
+  /// (body_spring.hpp; §4.3.3), acting from the next step. Removing a body removes its springs.
+  /// @throws std::out_of_range on a stale body handle; std::invalid_argument (naming the field,
+  ///         "BodySpringDef.stiffness") when both bodies are null or equal, neither is dynamic,
+  ///         an anchor is not finite, or stiffness, damping or rest_length is NaN/inf or (for
+  ///         stiffness and damping) negative.
+  BodySpringHandle add_body_spring(const BodySpringDef& def);
+  /// (N) The force the spring applies to body a now (towards body b when stretched), world frame.
+  /// @throws std::out_of_range if stale.
+  [[nodiscard]] Vec3 body_spring_force(BodySpringHandle h) const;
+
   // --- Removal -------------------------------------------------------------------------------
   /// Removes a registered object. Its handle (and every copy) is stale at once: every accessor
   /// and remove() reject it with std::out_of_range, also after its slot is reused by a later
@@ -171,6 +183,7 @@ class World {
   /// A joint stops acting from the next step (removing a body removes its joints with it, their
   /// handles going stale; joints are never in the moved list).
   void remove(JointHandle h);
+  void remove(BodySpringHandle h);
 
   /// FNV-1a 64 hash of the complete simulation state, in a fixed order: time and step count;
   /// for every particle system (in the order of particle_systems()) its live particle count, all
