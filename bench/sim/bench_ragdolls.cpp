@@ -37,7 +37,7 @@
 // (tunnelled) and bodies that left the stairs' footprint.
 //
 // Usage: bench_ragdolls [--reps N] [--steps N] [--bullet-steps N] [--frames N] [--no-sleep]
-//                       [--write-scene FILE]  (writes the 20-ragdoll scene JSON and exits)
+//                       [--simreel-only] [--write-scene FILE]  (writes the 20-ragdoll scene JSON and exits)
 // Figures go in bench/README.md and issue notes, never thresholds in tests.
 #include <time.h>
 
@@ -75,6 +75,7 @@ int g_frames = 600;
 int g_steps = 4;          // internal steps per frame, both engines
 int g_bullet_steps = 0;   // 0: g_steps
 bool g_no_sleep = false;
+bool g_simreel_only = false;  // --simreel-only: for profiling
 
 double cpu_seconds() {
   timespec t{};
@@ -385,10 +386,11 @@ int main(int argc, char** argv) {
     else if (std::strcmp(argv[i], "--bullet-steps") == 0 && i + 1 < argc) count(g_bullet_steps);
     else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) count(g_frames);
     else if (std::strcmp(argv[i], "--no-sleep") == 0) g_no_sleep = true;
+    else if (std::strcmp(argv[i], "--simreel-only") == 0) g_simreel_only = true;
     else if (std::strcmp(argv[i], "--write-scene") == 0 && i + 1 < argc) write_scene = argv[++i];
     else {
       std::fprintf(stderr,
-                   "usage: bench_ragdolls [--reps N] [--steps N] [--bullet-steps N] [--frames N] [--no-sleep] "
+                   "usage: bench_ragdolls [--reps N] [--steps N] [--bullet-steps N] [--frames N] [--no-sleep] [--simreel-only] "
                    "[--write-scene FILE]\n");
       return 2;
     }
@@ -404,7 +406,7 @@ int main(int argc, char** argv) {
   for (int k = 0; k < reps; ++k) {
     ours.push_back(run_simreel(scene));
 #ifdef SIMREEL_HAVE_BULLET
-    peer.push_back(run_bullet(scene));
+    if (!g_simreel_only) peer.push_back(run_bullet(scene));
 #endif
   }
   std::printf("20 ragdolls on the stairs, %d frames of 1/60 s, %d rounds (CPU time, median)%s\n", g_frames, reps,
