@@ -121,14 +121,21 @@ struct Result {
   double seconds_per_frame = 0.0;
   double max_anchor_error = 0.0;    // (m) over every frame end
   double final_anchor_error = 0.0;  // (m) at the last frame
+  double mean_anchor_error = 0.0;   // (m) the largest of each frame, averaged over the frames
+  std::size_t worst_joint = 0;      // Scene::joints index of max_anchor_error
   double max_speed = 0.0;           // (m/s) largest body speed at the end
   double max_spin = 0.0;            // (rad/s)
+  int moving = 0;                   // bodies faster than 0.05 m/s or 2 deg/s at the end (not at rest)
   int tunnelled = 0;                // centre below the ground
-  int off_stairs = 0;               // centre beyond the stairs' footprint (x in [-2, 3.2], |y| < 1.6)
+  int off_stairs = 0;               // centre beyond the stairs' footprint (x in [-2, 3.2], |y| < 1.6):
+                                    // hanging over a side edge or on the ground
   int bodies = 0, joints = 0;
 };
 
-void classify(const Vec3& p, Result& r) {
+void classify(const Vec3& p, const Vec3& v, const Vec3& w, Result& r) {
+  r.max_speed = std::max(r.max_speed, v.norm());
+  r.max_spin = std::max(r.max_spin, w.norm());
+  if (v.norm() > 0.05 || w.norm() > 2.0 * 3.141592653589793 / 180.0) ++r.moving;
   if (p.z() < -0.02) ++r.tunnelled;
   if (p.x() < -2.0 || p.x() > 3.2 || std::abs(p.y()) > 1.6) ++r.off_stairs;
 }
@@ -148,8 +155,13 @@ Result run_simreel(const app::Scene& scene) {
     (void)world.advance(kFrame);
     seconds += cpu_seconds() - t0;
     double e = 0.0;
-    for (const sim::JointHandle h : joints) e = std::max(e, world.joint_state(h).anchor_error);
-    r.max_anchor_error = std::max(r.max_anchor_error, e);
+    std::size_t worst = 0;
+    for (std::size_t k = 0; k < joints.size(); ++k) {
+      const double ek = world.joint_state(joints[k]).anchor_error;
+      if (ek > e) e = ek, worst = k;
+    }
+    if (e > r.max_anchor_error) r.max_anchor_error = e, r.worst_joint = worst;
+    r.mean_anchor_error += e / g_frames;
     if (f + 1 == g_frames) r.final_anchor_error = e;
   }
   r.seconds_per_frame = seconds / g_frames;
@@ -157,9 +169,7 @@ Result run_simreel(const app::Scene& scene) {
     if (!scene.colliders[i].dynamic.enabled) continue;
     ++r.bodies;
     const sim::BodyMotion m = world.motion(sw.colliders[i]);
-    r.max_speed = std::max(r.max_speed, m.linear_velocity.norm());
-    r.max_spin = std::max(r.max_spin, m.angular_velocity.norm());
-    classify(m.center_of_mass, r);
+    classify(m.center_of_mass, m.linear_velocity, m.angular_velocity, r);
   }
   return r;
 }
@@ -240,12 +250,15 @@ struct BulletWorld {
     constraints.push_back(c);
     pivots.push_back({a, b, fa.getOrigin(), fb.getOrigin()});
   }
-  double max_anchor_error() const {
+  /// The largest pivot separation (m) and its joint (Scene::joints order).
+  double max_anchor_error(std::size_t& worst) const {
     double e = 0.0;
-    for (const Pivot& p : pivots) {
+    for (std::size_t k = 0; k < pivots.size(); ++k) {
+      const Pivot& p = pivots[k];
       const btVector3 wa = p.a->getCenterOfMassTransform() * p.in_a;
       const btVector3 wb = p.b->getCenterOfMassTransform() * p.in_b;
-      e = std::max(e, double((wa - wb).length()));
+      const double ek = double((wa - wb).length());
+      if (ek > e) e = ek, worst = k;
     }
     return e;
   }
@@ -268,6 +281,9 @@ int bullet_hinge_sign() {
 Result run_bullet(const app::Scene& scene) {
   BulletWorld w;
   w.hinge_sign = bullet_hinge_sign();
+  static bool said = false;
+  if (!said) std::fprintf(stderr, "Bullet's hinge angle has the sign %+d of simreel's\n", w.hinge_sign);
+  said = true;
   const sim::Mat3 none = sim::Mat3::Zero();
   for (const app::ColliderScene& c : scene.colliders) {
     using T = app::ColliderScene::Type;
@@ -338,8 +354,10 @@ Result run_bullet(const app::Scene& scene) {
     const double t0 = cpu_seconds();
     w.world.stepSimulation(btScalar(kFrame), steps, btScalar(kFrame / steps));
     seconds += cpu_seconds() - t0;
-    const double e = w.max_anchor_error();
-    r.max_anchor_error = std::max(r.max_anchor_error, e);
+    std::size_t worst = 0;
+    const double e = w.max_anchor_error(worst);
+    if (e > r.max_anchor_error) r.max_anchor_error = e, r.worst_joint = worst;
+    r.mean_anchor_error += e / g_frames;
     if (f + 1 == g_frames) r.final_anchor_error = e;
   }
   r.seconds_per_frame = seconds / g_frames;
@@ -347,9 +365,8 @@ Result run_bullet(const app::Scene& scene) {
     if (!scene.colliders[i].dynamic.enabled) continue;
     ++r.bodies;
     const btRigidBody* b = w.bodies[i];
-    r.max_speed = std::max(r.max_speed, double(b->getLinearVelocity().length()));
-    r.max_spin = std::max(r.max_spin, double(b->getAngularVelocity().length()));
-    classify(from_bt(b->getCenterOfMassPosition()), r);
+    classify(from_bt(b->getCenterOfMassPosition()), from_bt(b->getLinearVelocity()), from_bt(b->getAngularVelocity()),
+             r);
   }
   return r;
 }
@@ -360,7 +377,7 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-void print(const char* engine, int steps, const std::vector<Result>& rs) {
+void print(const app::Scene& scene, const char* engine, int steps, const std::vector<Result>& rs) {
   std::vector<double> t;
   double worst = 0.0;
   for (const Result& r : rs) {
@@ -368,10 +385,12 @@ void print(const char* engine, int steps, const std::vector<Result>& rs) {
     worst = std::max(worst, r.max_anchor_error);
   }
   const Result& r = rs.back();
-  std::printf("%-8s %d steps/frame %8.3f ms/frame  max anchor error %.2e m (final %.2e m)  end: max speed %.3f m/s "
-              "%.3f rad/s  tunnelled %d  off the stairs %d  (%d bodies, %d joints)\n",
-              engine, steps, 1e3 * median(t), worst, r.final_anchor_error, r.max_speed, r.max_spin, r.tunnelled,
-              r.off_stairs, r.bodies, r.joints);
+  std::printf("%-8s %d steps/frame %8.3f ms/frame\n", engine, steps, 1e3 * median(t));
+  std::printf("%-8s anchor error: max %.2e m (%s), frame mean %.2e m, last frame %.2e m\n", engine, worst,
+              scene.joints[r.worst_joint].def.name.c_str(), r.mean_anchor_error, r.final_anchor_error);
+  std::printf("%-8s end: max speed %.3f m/s %.3f rad/s, %d of %d bodies moving (> 0.05 m/s or 2 deg/s), "
+              "tunnelled %d, beyond the stairs %d (%d joints)\n",
+              engine, r.max_speed, r.max_spin, r.moving, r.bodies, r.tunnelled, r.off_stairs, r.joints);
 }
 
 }  // namespace
@@ -411,12 +430,12 @@ int main(int argc, char** argv) {
   }
   std::printf("20 ragdolls on the stairs, %d frames of 1/60 s, %d rounds (CPU time, median)%s\n", g_frames, reps,
               g_no_sleep ? ", no sleeping" : "");
-  print("simreel", g_steps, ours);
+  print(scene, "simreel", g_steps, ours);
   if (peer.empty()) {
     std::printf("Bullet   not built (libbullet-dev not found)\n");
     return 0;
   }
-  print("Bullet", g_bullet_steps > 0 ? g_bullet_steps : g_steps, peer);
+  print(scene, "Bullet", g_bullet_steps > 0 ? g_bullet_steps : g_steps, peer);
   std::vector<double> a, b;
   for (const Result& r : ours) a.push_back(r.seconds_per_frame);
   for (const Result& r : peer) b.push_back(r.seconds_per_frame);
