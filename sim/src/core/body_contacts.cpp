@@ -136,9 +136,10 @@ class Builder {
         const Proxy& b = d_.proxies[j];
         // A dynamic side, and a side that can move (two sleeping or resting sides: carried).
         if (!(a.dynamic || b.dynamic) || !(a.active || b.active) || a.body == b.body) continue;
-        if (no_collide(d_, a.body, b.body)) continue;  // joined (JointDef::collide_connected)
         if (a.lo.y() > b.hi.y() || b.lo.y() > a.hi.y() || a.lo.z() > b.hi.z() || b.lo.z() > a.hi.z())
           continue;
+        // After the cheap overlap test: a binary search over the joined pairs.
+        if (no_collide(d_, a.body, b.body)) continue;  // joined (JointDef::collide_connected)
         d_.pairs.emplace_back(std::min(a.shape, b.shape), std::max(a.shape, b.shape));
       }
     }
