@@ -133,7 +133,7 @@ class JointSolver {
   void project_positions(RigidBodies& r, std::span<const JointModel> models,
                          std::span<const JointBodies> bodies, double h,
                          std::span<const std::uint8_t> in_contact, int iterations = 4,
-                         double tolerance = 1e-9);
+                         double tolerance = 1e-7);
 
   /// Per joint (indices of prepare()'s spans): the impulses applied to body b this step.
   [[nodiscard]] std::span<const JointImpulse> impulses() const { return impulse_; }
