@@ -38,6 +38,7 @@ const char* kProbe = R"({
   "ragdolls": [{}],
   "joints": [{"type": "hinge", "body_a": "world", "body_b": "x", "limits": {}, "motor": {}},
              {"type": "spherical", "limits": {}}],
+  "springs": [{"body_a": "world", "body_b": "x", "anchor_a": [0, 0, 2], "anchor_b": [0, 0, 1], "stiffness": 1}],
   "emitters": [{"name": "a", "shape": "mesh", "bursts": [{"count": 1}], "size_over_lifetime": [{}],
                 "split": {}, "color_over_lifetime": [{}], "path": {"keys": [{"time": 0}]},
                 "on_hit": "split", "on_hit_split": {}, "pair_forces": {}, "initial_particles": [{}],

@@ -121,6 +121,9 @@ Scene scene_from_json(const json& doc, const std::string& file) {
   read_array("joints", [&](const json& j, const std::string& p, std::size_t i) {
     scene.joints.push_back(joint(j, p, file, errors, i, scene));
   });
+  read_array("springs", [&](const json& j, const std::string& p, std::size_t i) {
+    scene.springs.push_back(body_spring(j, p, file, errors, i, scene));
+  });
   r.finish();
   if (!errors.empty()) throw SceneError(errors);
   return scene;
@@ -212,6 +215,12 @@ SceneWorld build_world(const Scene& scene) {
       if (j.index_a != JointScene::kWorld) d.body_a = out.colliders.at(j.index_a);
       if (j.index_b != JointScene::kWorld) d.body_b = out.colliders.at(j.index_b);
       out.joints.push_back(out.world.add_joint(d));
+    }
+    for (const BodySpringScene& s : scene.springs) {
+      sim::BodySpringDef d = s.def;
+      if (s.index_a != JointScene::kWorld) d.body_a = out.colliders.at(s.index_a);
+      if (s.index_b != JointScene::kWorld) d.body_b = out.colliders.at(s.index_b);
+      out.springs.push_back(out.world.add_body_spring(d));
     }
     for (const auto& e : scene.emitters) out.systems.push_back(out.world.add_particle_system(e.system));
     for (const auto& f : scene.force_fields) {

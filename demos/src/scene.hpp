@@ -100,6 +100,14 @@ struct JointScene {
   std::size_t index_b = kWorld;
 };
 
+/// A damped spring between two scene bodies' points or a body's point and the world (springs[i];
+/// Coutinho §4.3.3). README "springs[i]".
+struct BodySpringScene {
+  sim::BodySpringDef def;  ///< engine units; body handles filled by build_world
+  std::string body_a = "world", body_b = "world";
+  std::size_t index_a = JointScene::kWorld, index_b = JointScene::kWorld;  ///< into colliders
+};
+
 /// What a generator (chains[i], ragdolls[i]) added: colliders [first_collider, +collider_count)
 /// and joints [first_joint, +joint_count) of the Scene, for tests and messages.
 struct GeneratedGroup {
@@ -128,6 +136,7 @@ struct Scene {
   std::vector<ClothScene> cloths;
   /// joints[i] in file order after the joints of the generators (chains, then ragdolls).
   std::vector<JointScene> joints;
+  std::vector<BodySpringScene> springs;  ///< springs[i], file order
   std::vector<GeneratedGroup> generated;  ///< chains, then ragdolls, in file order
 };
 
@@ -147,6 +156,7 @@ struct SceneWorld {
   std::vector<sim::ForceFieldHandle> force_fields;            ///< scene order
   std::vector<sim::AttractorSpringHandle> attractor_springs;  ///< scene order
   std::vector<sim::JointHandle> joints;                       ///< Scene::joints order
+  std::vector<sim::BodySpringHandle> springs;                 ///< Scene::springs order
 };
 
 /// The engine body of a `"motion": "dynamic"` collider (`c.dynamic.enabled`; box, sphere or

@@ -130,4 +130,36 @@ JointScene joint(const json& j, const std::string& ptr, const std::string& file,
   return out;
 }
 
+BodySpringScene body_spring(const json& j, const std::string& ptr, const std::string& file,
+                            std::vector<std::string>& errors, std::size_t index, const Scene& scene) {
+  BodySpringScene out;
+  sim::BodySpringDef& d = out.def;
+  ObjectReader r(j, ptr, file, errors);
+  d.name = r.string("name", "spring" + std::to_string(index));
+  for (const char* key : {"body_a", "body_b"}) {
+    const bool a = key[5] == 'a';
+    const std::string name = r.string(key, "world");
+    (a ? out.body_a : out.body_b) = name;
+    if (auto i = body_index(scene, name, r.pointer(key), errors)) (a ? out.index_a : out.index_b) = *i;
+  }
+  for (const char* key : {"anchor_a", "anchor_b"})
+    if (!r.has(key))
+      r.error_at(ptr, std::string("expected an \"") + key + "\": the spring's end [x, y, z] (m, world frame at t = 0)");
+  d.anchor_a = to_vec(r.vec3("anchor_a", {0, 0, 0}));
+  d.anchor_b = to_vec(r.vec3("anchor_b", {0, 0, 0}));
+  if (!r.has("stiffness")) r.error_at(ptr, "expected a \"stiffness\" (N/m, > 0)");
+  d.stiffness = r.number("stiffness", 0.0, 0.0, kInf, true);
+  d.damping = r.number("damping", 0.0, 0.0, kInf);
+  d.rest_length = r.has("rest_length") ? r.number("rest_length", 0.0, 0.0, kInf) : -1.0;
+  if (out.body_a == out.body_b)
+    r.error_at(r.pointer("body_b"), "expected a body other than body_a, found " + in_quotes(out.body_b) + " twice");
+  auto dynamic = [&](std::size_t i) { return i != JointScene::kWorld && scene.colliders[i].dynamic.enabled; };
+  if (out.body_a != out.body_b && (out.index_a != JointScene::kWorld || out.body_a == "world") &&
+      (out.index_b != JointScene::kWorld || out.body_b == "world") && !dynamic(out.index_a) && !dynamic(out.index_b))
+    r.error_at(r.pointer("body_b"), "expected a \"motion\": \"dynamic\" body on at least one side, found " +
+                                        in_quotes(out.body_a) + " and " + in_quotes(out.body_b));
+  r.finish();
+  return out;
+}
+
 }  // namespace simreel::app::scene_read

@@ -113,6 +113,9 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
 /// anchor, axis, limits (degrees in JSON, radians in the JointDef), damping, motor, breaking.
 JointScene joint(const json& j, const std::string& ptr, const std::string& file,
                  std::vector<std::string>& errors, std::size_t index, const Scene& scene);
+/// springs[i] (scene_joints.cpp): a damped spring between scene bodies (§4.3.3).
+BodySpringScene body_spring(const json& j, const std::string& ptr, const std::string& file,
+                            std::vector<std::string>& errors, std::size_t index, const Scene& scene);
 /// Reports colliders whose names repeat an earlier one (joints name bodies, so names must be unique).
 void check_body_names(const Scene& scene, std::vector<std::string>& errors);
 /// Index of the collider named `name`, JointScene::kWorld for "world", or nullopt with a message

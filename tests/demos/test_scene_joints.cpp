@@ -379,3 +379,45 @@ TEST(SceneJoints, RagdollKneesAndElbowsBendOneWay) {
   EXPECT_GT(elbow_min, -0.03) << "no elbow bends backward (within 2 degrees)";
   EXPECT_LT(drift, 1e-4);
 }
+
+TEST(SceneSprings, KeysReachTheEngineAndABodyHangsAtTheStaticExtension) {
+  // springs[i] (§4.3.3): a 2 kg box on a 200 N/m spring from a world point, released at the
+  // spring's rest length, oscillates down to 2 m g / k below its start (the static extension is
+  // m g / k); the scene reaches the engine in SI units with the rest length defaulting to the
+  // anchors' distance.
+  const Scene s = scene_from_json(json::parse(R"({
+    "colliders": [{"type": "box", "name": "w", "motion": "dynamic", "mass": 2, "position": [0, 0, 1],
+                   "half_extents": [0.1, 0.1, 0.1]}],
+    "springs": [{"name": "coil", "body_a": "world", "body_b": "w", "anchor_a": [0, 0, 2], "anchor_b": [0, 0, 1.1],
+                 "stiffness": 200, "damping": 0}]})"),
+                                  "s.json");
+  ASSERT_EQ(s.springs.size(), 1u);
+  EXPECT_EQ(s.springs[0].def.name, "coil");
+  EXPECT_EQ(s.springs[0].index_a, JointScene::kWorld);
+  EXPECT_EQ(s.springs[0].index_b, 0u);
+  EXPECT_DOUBLE_EQ(s.springs[0].def.stiffness, 200.0);
+  EXPECT_LT(s.springs[0].def.rest_length, 0.0) << "default: the distance at t = 0";
+  simreel::app::SceneWorld sw = simreel::app::build_world(s);
+  ASSERT_EQ(sw.springs.size(), 1u);
+  double lowest = 1.0;
+  for (int f = 0; f < 60; ++f) {
+    sw.world.advance(1.0 / 60.0);
+    lowest = std::min(lowest, sw.world.pose(sw.colliders[0]).translation.z());
+  }
+  EXPECT_NEAR(lowest, 1.0 - 2.0 * 2.0 * 9.81 / 200.0, 0.004);
+}
+
+TEST(SceneSprings, BadSpringsAreRefusedWithTheirPointer) {
+  const std::string base = std::string("{") + kTwoBodies + R"(, "springs": [)";
+  EXPECT_NE(errors_of(base + R"({"body_a": "world", "body_b": "aa", "anchor_a": [0,0,2], "anchor_b": [0,0,1], "stiffness": 1}]})")
+                .find("/springs/0/body_b: expected \"world\" or the name of a collider"),
+            std::string::npos);
+  EXPECT_NE(errors_of(base + R"({"body_b": "a", "anchor_a": [0,0,2], "anchor_b": [0,0,1], "stiffness": -1}]})")
+                .find("/springs/0/stiffness: expected a number > 0"),
+            std::string::npos);
+  EXPECT_NE(errors_of(base + R"({"body_b": "a", "anchor_b": [0,0,1], "stiffness": 1}]})").find("\"anchor_a\""),
+            std::string::npos);
+  EXPECT_NE(errors_of(base + R"({"body_a": "world", "body_b": "post", "anchor_a": [0,0,2], "anchor_b": [0,0,1], "stiffness": 1}]})")
+                .find("\"dynamic\" body on at least one side"),
+            std::string::npos);
+}

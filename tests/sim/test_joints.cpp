@@ -555,8 +555,9 @@ TEST(Joints, ChainDroppedOnTheGroundComesToRestWithoutJitter) {
     for (JointHandle j : c.joints) err = std::max(err, w.joint_state(j).anchor_error);
     EXPECT_LT(v, 1e-3) << "sleeping " << sleeping;
     EXPECT_LT(err, 1e-6);
-    if (sleeping)
+    if (sleeping) {
       for (BodyHandle l : c.links) EXPECT_FALSE(w.is_awake(l));
+    }
   }
 }
 
