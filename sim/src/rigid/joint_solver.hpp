@@ -26,8 +26,10 @@
 //   motor: |impulse| <= max torque × h; damping: an implicit soft row).
 // - Drift (§5.4's fictitious zero-rest-length spring): instead of a spring, whose stiffness must
 //   be tuned per mass and which makes the system stiff, the positions are projected back onto the
-//   joints after the step by Newton iterations on the position errors C (K Δ = -C; two or three
-//   iterations take C to round-off), then limits are projected the same way.
+//   joints after the step by Newton iterations on the position errors C (K Δ = -C to 1e-7 m),
+//   keeping the step's factorisation while each round cuts the error tenfold (ragdolls,
+//   pendulums) and relinearising at the current positions when it does not (a whipping chain);
+//   then limits are projected the same way.
 // - Energy: the velocity solve makes the velocities tangent to the joints at the START of the
 //   step, so the motion drifts off them at second order (a pendulum's bob flies out along the
 //   tangent) and the next solve strips that normal part: an O(h ω²) loss — a double pendulum
@@ -37,8 +39,9 @@
 //   pendulum keeps its energy within 0.5% (tests/sim/test_joints.cpp). An articulation that
 //   touches something takes the projection as a position correction only: the contacts
 //   dissipate anyway, and their split-impulse push must not become joint velocity. (The
-//   book's acceleration-level term ω × (ω × r) of eq. 5.8 as a velocity target does the same
-//   for a free double pendulum with ½ h, but is quadratic in ω and blew up a whipping chain.)
+//   book's acceleration-level term ω × (ω × r) of eq. 5.8, as a velocity target of ½ h J̇ v,
+//   keeps a free double pendulum's energy as well; RATTLE was kept because it needs no explicit
+//   term quadratic in ω, which amplifies any spike of ω a contact gives a light link.)
 // - Determinism: rows in joint order, bodies in index order; no threads, no hashing.
 // - Memory: rows, triplets and vectors are resized, never shrunk; after the first steps of a
 //   fixed set of joints a step allocates only inside Eigen's factorisation.
@@ -123,8 +126,9 @@ class JointSolver {
   /// L = I_w ω for every dynamic body a row touched (like ContactSolver::finish).
   void finish(RigidBodies& r) const;
 
-  /// After the positions moved: Newton iterations K(x) Δ = -C(x) on the equality rows' position
-  /// errors (the first with this step's K, then relinearised at the current positions), then
+  /// After the positions moved: Newton iterations K Δ = -C(x) on the equality rows' position
+  /// errors (with this step's K while each round cuts the error tenfold, else relinearised at
+  /// the current positions), then
   /// limit violations removed one by one, then equality again; stops when every error is below
   /// `tolerance` (m, rad) or after `iterations` rounds. Unless `in_contact` is empty, the
   /// displacement of each body with in_contact[i] == 0 is then added to its velocities as
