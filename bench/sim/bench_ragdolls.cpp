@@ -130,6 +130,13 @@ struct Result {
   int off_stairs = 0;               // centre beyond the stairs' footprint (x in [-2, 3.2], |y| < 1.6):
                                     // hanging over a side edge or on the ground
   int bodies = 0, joints = 0;
+
+  /// Frame f's largest anchor error e (m), at joint `worst`, into the maximum, mean and last.
+  void record_frame(int f, double e, std::size_t worst) {
+    if (e > max_anchor_error) max_anchor_error = e, worst_joint = worst;
+    mean_anchor_error += e / g_frames;
+    if (f + 1 == g_frames) final_anchor_error = e;
+  }
 };
 
 void classify(const Vec3& p, const Vec3& v, const Vec3& w, Result& r) {
@@ -160,9 +167,7 @@ Result run_simreel(const app::Scene& scene) {
       const double ek = world.joint_state(joints[k]).anchor_error;
       if (ek > e) e = ek, worst = k;
     }
-    if (e > r.max_anchor_error) r.max_anchor_error = e, r.worst_joint = worst;
-    r.mean_anchor_error += e / g_frames;
-    if (f + 1 == g_frames) r.final_anchor_error = e;
+    r.record_frame(f, e, worst);
   }
   r.seconds_per_frame = seconds / g_frames;
   for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
@@ -356,9 +361,7 @@ Result run_bullet(const app::Scene& scene) {
     seconds += cpu_seconds() - t0;
     std::size_t worst = 0;
     const double e = w.max_anchor_error(worst);
-    if (e > r.max_anchor_error) r.max_anchor_error = e, r.worst_joint = worst;
-    r.mean_anchor_error += e / g_frames;
-    if (f + 1 == g_frames) r.final_anchor_error = e;
+    r.record_frame(f, e, worst);
   }
   r.seconds_per_frame = seconds / g_frames;
   for (std::size_t i = 0; i < scene.colliders.size(); ++i) {

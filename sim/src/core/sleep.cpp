@@ -7,27 +7,12 @@
 // smallest rigid index of the island.
 #include <algorithm>
 
+#include "core/union_find.hpp"
 #include "core/world_state.hpp"
 #include "rigid/integrate.hpp"
 
 namespace simreel::sim::detail {
 namespace {
-
-std::uint32_t find(std::vector<std::uint32_t>& parent, std::uint32_t i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];  // path halving
-    i = parent[i];
-  }
-  return i;
-}
-
-void unite(std::vector<std::uint32_t>& parent, std::uint32_t a, std::uint32_t b) {
-  a = find(parent, a);
-  b = find(parent, b);
-  if (a == b) return;
-  if (b < a) std::swap(a, b);
-  parent[b] = a;  // the smaller index is the root: island ids independent of manifold order
-}
 
 void fit(BodyDynamics& d) {
   const std::size_t n = d.rigid.size();
@@ -130,7 +115,7 @@ void update_sleep(WorldState& w, double h) {
     if (m.manifold.count == 0 || m.first_point == kCarriedManifold) continue;
     const bool da = m.rigid_a != kStaticBody && r.is_dynamic(m.rigid_a);
     const bool db = m.rigid_b != kStaticBody && r.is_dynamic(m.rigid_b);
-    if (da && db) unite(d.parent, m.rigid_a, m.rigid_b);
+    if (da && db) uf_unite(d.parent, m.rigid_a, m.rigid_b);
     if (da && moving(r, m.rigid_b) && !db) d.rest_time[m.rigid_a] = 0.0;
     if (db && moving(r, m.rigid_a) && !da) d.rest_time[m.rigid_b] = 0.0;
   }
@@ -138,7 +123,7 @@ void update_sleep(WorldState& w, double h) {
   for (const JointBodies& j : *links) {  // joined bodies sleep and wake together
     const bool da = j.a != kStaticBody && r.is_dynamic(j.a);
     const bool db = j.b != kStaticBody && r.is_dynamic(j.b);
-    if (da && db) unite(d.parent, j.a, j.b);
+    if (da && db) uf_unite(d.parent, j.a, j.b);
     if (da && moving(r, j.b) && !db) d.rest_time[j.a] = 0.0;
     if (db && moving(r, j.a) && !da) d.rest_time[j.b] = 0.0;
   }
@@ -146,21 +131,21 @@ void update_sleep(WorldState& w, double h) {
   // An island sleeps when its least-rested body has rested long enough: the root keeps the
   // island's minimum rest time in island[] scratch (as a flag: 1 = some body is not ready).
   for (std::uint32_t i = 0; i < n; ++i)
-    if (r.is_dynamic(i)) d.island[find(d.parent, i)] = 0;
+    if (r.is_dynamic(i)) d.island[uf_find(d.parent, i)] = 0;
   for (std::uint32_t i = 0; i < n; ++i)
-    if (r.is_dynamic(i) && d.rest_time[i] < kTimeToSleep) d.island[find(d.parent, i)] = 1;
+    if (r.is_dynamic(i) && d.rest_time[i] < kTimeToSleep) d.island[uf_find(d.parent, i)] = 1;
   // Non-roots first (island[] of a root is still its flag), then the roots; the island id is
   // the root's index.
   for (std::uint32_t i = 0; i < n; ++i) {
     if (!r.is_dynamic(i)) continue;
-    const std::uint32_t root = find(d.parent, i);
+    const std::uint32_t root = uf_find(d.parent, i);
     if (root != i && d.island[root] == 0) {
       d.island[i] = root;
       sleep(r, i);
     }
   }
   for (std::uint32_t i = 0; i < n; ++i)
-    if (r.is_dynamic(i) && find(d.parent, i) == i && d.island[i] == 0) {
+    if (r.is_dynamic(i) && uf_find(d.parent, i) == i && d.island[i] == 0) {
       d.island[i] = i;
       sleep(r, i);
     }

@@ -10,6 +10,7 @@
 // Nothing runs without a dynamic body, so scenes before Ch. 4 are bit-identical. Serial, in the
 // bodies' dense order: deterministic at any thread count.
 #include "core/stages.hpp"
+#include "core/union_find.hpp"
 #include <sstream>
 
 #include "rigid/integrate.hpp"
@@ -17,11 +18,6 @@
 
 namespace simreel::sim::detail {
 namespace {
-
-std::uint32_t root(std::vector<std::uint32_t>& parent, std::uint32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 /// d.in_contact[i] = 1 for every body of an articulation (bodies joined by joints) of which
 /// some body touches something this step: those take the joint projection as a position
@@ -33,15 +29,14 @@ void mark_articulations_in_contact(BodyDynamics& d) {
   for (std::uint32_t i = 0; i < n; ++i) d.parent[i] = i;
   for (const JointBodies& j : d.joint_bodies)
     if (j.a != kStaticBody && j.b != kStaticBody) {
-      const std::uint32_t a = root(d.parent, j.a), b = root(d.parent, j.b);
-      if (a != b) d.parent[std::max(a, b)] = std::min(a, b);
+      uf_unite(d.parent, j.a, j.b);
     }
   for (const BodyManifold& m : d.manifolds) {
     if (m.manifold.count == 0 || m.first_point == kCarriedManifold) continue;
-    if (m.rigid_a != kStaticBody) d.in_contact[root(d.parent, m.rigid_a)] = 1;
-    if (m.rigid_b != kStaticBody) d.in_contact[root(d.parent, m.rigid_b)] = 1;
+    if (m.rigid_a != kStaticBody) d.in_contact[uf_find(d.parent, m.rigid_a)] = 1;
+    if (m.rigid_b != kStaticBody) d.in_contact[uf_find(d.parent, m.rigid_b)] = 1;
   }
-  for (std::uint32_t i = 0; i < n; ++i) d.in_contact[i] = d.in_contact[root(d.parent, i)];
+  for (std::uint32_t i = 0; i < n; ++i) d.in_contact[i] = d.in_contact[uf_find(d.parent, i)];
 }
 
 }  // namespace
