@@ -28,6 +28,8 @@ namespace {
 /// (m) AABB fattening: pairs a little apart still reach the narrow phase, which decides.
 constexpr double kPad = 0.005;
 
+}  // namespace
+
 ConvexShape convex_of(const Collider& c) {
   switch (c.shape) {
     case Collider::Shape::sphere: return ConvexShape::sphere(c.radius);
@@ -37,6 +39,8 @@ ConvexShape convex_of(const Collider& c) {
     default: return {};
   }
 }
+
+namespace {
 
 PosedShape posed(const Collider& c) { return {convex_of(c), c.R, c.center}; }
 
@@ -74,6 +78,14 @@ class Builder {
     if (b.dynamic()) return !d_.rigid.asleep[b.rigid];
     return b.kinematic() && (!b.velocity.isZero(0.0) || !b.angular_velocity.isZero(0.0));
   }
+  /// A pair with a fast body (begin_continuous) takes the speculative margin.
+  [[nodiscard]] double margin(std::uint32_t a, std::uint32_t b) const {
+    const auto fast = [&](std::uint32_t s) {
+      const Body& o = body_of(s);
+      return o.dynamic() && o.rigid < d_.fast.size() && d_.fast[o.rigid] != 0;
+    };
+    return fast(a) || fast(b) ? kSpeculativeMargin : kBodyContactMargin;
+  }
   [[nodiscard]] bool frozen(std::uint32_t rigid) const {
     return rigid == kStaticBody || d_.rigid.asleep[rigid] ||
            (!d_.rigid.is_dynamic(rigid) && d_.rigid.linear_velocity[rigid].isZero(0.0) &&
@@ -110,7 +122,7 @@ class Builder {
       for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
         if (!dynamic(s) || !active(s) || no_collide(d_, owner_[p].body, owner_[s].body)) continue;
         add(key(p, s, 0), collide_plane(plane.point, plane.normal, posed(w_.shapes[s]),
-                                        kBodyContactMargin),
+                                        margin(p, s)),
             p, s);
       }
     }
@@ -152,7 +164,7 @@ class Builder {
     if (A.shape == Collider::Shape::mesh) return mesh(a, b);
     if (B.shape == Collider::Shape::mesh) return mesh(b, a);
     ManifoldOptions options;
-    options.margin = kBodyContactMargin;
+    options.margin = margin(a, b);
     add(key(a, b, 0), collide_manifold(posed(A), posed(B), options), a, b);
   }
 
@@ -160,6 +172,7 @@ class Builder {
     const Collider& M = w_.shapes[m];
     const Collider& S = w_.shapes[s];
     const PosedShape body = posed(S);
+    const double gap = margin(m, s);
     // The convex's box in the mesh frame (a box around the rotated box).
     const Mat3 Rt = M.R.transpose();
     const Vec3 c = Rt * (S.aabb_center - M.center);
@@ -168,16 +181,20 @@ class Builder {
       const Triangle& tri = M.mesh->triangles[t];
       const std::array<Vec3, 3> local{tri.a, tri.b, tri.c};
       const PosedShape T(ConvexShape::hull(local), M.R, M.center);
-      const ConvexContact cc = collide(T, body, kBodyContactMargin);
+      const ConvexContact cc = collide(T, body, gap);
       if (!cc.touching) return;
       const Vec3 n = M.R * tri.normal;
       const double along = cc.normal.dot(n);
+      // A gap to a triangle's edge or corner is a speculative point only when it faces the
+      // triangle: a fast body sliding over a tessellated floor sees the next triangle's edge a
+      // few mm ahead, and a point with that edge's normal would stop it (a ghost collision).
+      if (cc.depth < 0.0 && std::abs(along) <= 0.9) return;
       Manifold man;
       if (std::abs(along) > 0.9) {
         // A face contact: the triangle's plane, turned towards the body (two-sided mesh).
         std::array<Vec3, 3> wv{T.to_world(tri.a), T.to_world(tri.b), T.to_world(tri.c)};
         if (along < 0.0) std::swap(wv[1], wv[2]);
-        man = collide_plane(wv[0], along > 0.0 ? n : Vec3(-n), body, kBodyContactMargin, wv.data());
+        man = collide_plane(wv[0], along > 0.0 ? n : Vec3(-n), body, gap, wv.data());
       }
       if (man.count == 0) man = manifold_from_contact(cc);
       add(key(m, s, t + 1), man, m, s);

@@ -106,6 +106,13 @@ struct BodyDynamics {
   std::vector<Proxy> proxies;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;  ///< proxy index pairs
   bool allow_sleeping = true;  ///< WorldDef::allow_sleeping
+  bool continuous = true;      ///< WorldDef::continuous_collision
+  /// Continuous collision (body_ccd.cpp), per rigid entry: the centre of mass and orientation at
+  /// the start of the step, and whether the body is fast (its contacts then take the speculative
+  /// margin kSpeculativeMargin). Reused from step to step.
+  std::vector<Vec3> start_position;
+  std::vector<Quat> start_orientation;
+  std::vector<std::uint8_t> fast;
   /// Per rigid entry: rest time (s) of a dynamic body, and the island it fell asleep with (the
   /// bodies that wake together).
   std::vector<double> rest_time;
@@ -170,6 +177,40 @@ void wake_coupled(WorldState& w, double t0, double t1);
 /// (m) Contact margin: pairs closer than this give (speculative) points. Kept at zero-ish so
 /// restitution sees the true impact speed (a speculative point would slow the body first).
 inline constexpr double kBodyContactMargin = 0.0;
+
+/// (m) Contact margin of a pair with a fast body (BodyDynamics::fast): a body stopped at its
+/// time of impact kTimeOfImpactGap short of a surface meets it in the next step's contacts as a
+/// speculative point, which stops the approach, or bounces it when the gap would close within the
+/// step (contact_solver.hpp).
+inline constexpr double kSpeculativeMargin = 0.004;
+/// (m) How far short of the surface a swept body is stopped (conservative advancement's target).
+inline constexpr double kTimeOfImpactGap = 0.001;
+
+struct ConvexShape;  // collision/support.hpp
+struct Collider;     // collision/collider_impl.hpp
+/// The convex of a solid collider (sphere, box, capsule, cylinder) in its shape frame, for GJK
+/// (body_contacts.cpp); an empty sphere for planes and meshes.
+[[nodiscard]] ConvexShape convex_of(const Collider& c);
+
+/// Marks BodyDynamics::fast from the velocities at the start of a step of length h and saves the
+/// start poses (body_ccd.cpp). Call before find_body_contacts.
+void begin_continuous(WorldState& w, double h);
+
+/// Continuous collision after the positions are integrated (body_ccd.cpp): every awake dynamic
+/// body not in a joint whose motion over the step (|Δx| + θ r_max, its bounding radius r_max)
+/// exceeds a quarter of its thinnest shape is swept from its start pose to its end pose (centre
+/// of mass linear, orientation by slerp) against every shape of every body that is not itself
+/// swept (static, kinematic and sleeping ones where they are, awake dynamic ones at their end
+/// pose; planes; mesh triangles through the mesh's AABB tree). The time of impact is found by
+/// conservative advancement (Mirtich 1996, "Impulse-based Dynamic Simulation of Rigid Body
+/// Systems", §2.3.2) on GJK distances (gjk.hpp): advance by (d - gap) / (approach bound), the
+/// bound being the centre's speed towards the other shape plus θ r_max. A pair already
+/// touching at the start, or one the body cannot penetrate by more than a quarter of its
+/// thickness, is left to the discrete contacts. The body is put back at its earliest time of
+/// impact, keeping its velocity; the next step's speculative contact stops or bounces it. The
+/// book's end-of-step test with bisection (§4.4) cannot see a body that is past a thin wall at
+/// the end of the step; this replaces it for fast bodies.
+void continuous_collisions(WorldState& w);
 
 /// Broad and narrow phase (body_contacts.cpp): fills d.manifolds (in a fixed order: planes
 /// first, then pairs by shape index) and d.points, each point warm-started from d.previous.

@@ -61,6 +61,7 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   // Bodies that particles or cloth pushed, or that a force field acts on, wake before their
   // contacts are found.
   wake_coupled(w, t0, t1);
+  begin_continuous(w, h);  // start poses; fast bodies' contacts take a speculative margin
   find_body_contacts(w);
   // A sleeping island touched by something moving wakes; its own contacts were skipped, so
   // they are found again with it awake.
@@ -105,6 +106,7 @@ void stage_bodies(WorldState& w, double t0, double t1) {
     integrate_positions(r, h, Motion::bias);
     js.project_positions(r, d.joint_models, d.joint_bodies, h, {});
   }
+  continuous_collisions(w);  // fast bodies back to their time of impact (body_ccd.cpp)
   clear_forces(r);
   // The solver's impulses go back into the manifolds: next step's warm start (tangent impulses
   // as world vectors, persistent_manifold.hpp).

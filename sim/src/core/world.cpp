@@ -34,6 +34,7 @@ World::World(const WorldDef& def) : impl_(std::make_unique<Impl>()) {
   if (def.threads < 0) throw std::invalid_argument("WorldDef.threads must be >= 0 (0 = hardware)");
   impl_->def = def;
   impl_->dyn.allow_sleeping = def.allow_sleeping;
+  impl_->dyn.continuous = def.continuous_collision;
   impl_->threads = def.threads > 0 ? def.threads
                                    : std::max(1, int(std::thread::hardware_concurrency()));
 }

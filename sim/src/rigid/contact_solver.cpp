@@ -109,7 +109,12 @@ void ContactSolver::prepare(const RigidBodies& bodies, std::span<const ContactPo
     if (c.depth < 0.0) {
       // Speculative contact (a gap of -depth): the bodies may close the gap in this step but no
       // more, so a contact found a little early neither stops them short nor lets them tunnel.
-      r.target_vn = c.depth / h;
+      // An approach that would close it within the step is an impact (a body stopped at its
+      // time of impact meets the surface this way): it bounces as at contact.
+      const double close = c.depth / h;
+      r.target_vn = vn < close && vn < -settings_.restitution_threshold && c.restitution > 0.0
+                        ? std::max(close, -c.restitution * vn)
+                        : close;
     } else {
       // Newton's impact law v_n⁺ = -e v_n⁻ for an impact; 0 (stay in contact) when resting.
       r.target_vn = vn < -settings_.restitution_threshold ? -c.restitution * vn : 0.0;

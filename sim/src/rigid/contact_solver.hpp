@@ -18,7 +18,10 @@
 //   the velocity integration, so a resting contact does not see the step's gravity as an impact;
 //   only above `restitution_threshold` (resting contact, Coutinho §3.6.3).
 // - Speculative contacts: a contact with depth < 0 (a gap g = -depth, from a contact margin)
-//   only limits the approach speed to g/h, so it closes the gap by the end of the step at most.
+//   only limits the approach speed to g/h, so it closes the gap by the end of the step at most;
+//   an approach faster than g/h (and than restitution_threshold) is an impact within the step,
+//   whose target, when e > 0, is the larger of -g/h and -e v_n (a swept body stopped short of a
+//   wall bounces).
 // - Position error: split impulses (Catto 2006; Box2D v2.x's "split impulse"): penetration
 //   beyond the slop is removed by pseudo-velocities that move the positions for one step and are
 //   then forgotten. Baumgarte stabilisation adds the correction to the real velocity, which

@@ -1,0 +1,235 @@
+// Continuous collision of fast dynamic bodies (body_dynamics.hpp continuous_collisions): a sweep
+// of each fast body from its start pose to its end pose against everything that is not itself
+// swept, by conservative advancement (Mirtich 1996, §2.3.2) on GJK distances. Serial, in the
+// rigid entries' order, so the result is the same at any thread count.
+#include <algorithm>
+#include <cmath>
+
+#include "collision/collider_impl.hpp"
+#include "collision/gjk.hpp"
+#include "collision/support.hpp"
+#include "core/world_state.hpp"
+
+namespace simreel::sim::detail {
+namespace {
+
+/// A body counts as fast when it may move more than this fraction of its thinnest shape in a step.
+constexpr double kFastFraction = 0.25;
+/// Conservative advancement stops within this of the target gap (m) or after this many rounds.
+constexpr double kGapTolerance = 0.25 * kTimeOfImpactGap;
+constexpr int kMaxRounds = 32;
+
+/// (m) Half the thickness of a solid: the distance from its centre to its nearest face.
+double inner_radius(const Collider& c) {
+  switch (c.shape) {
+    case Collider::Shape::sphere:
+    case Collider::Shape::capsule: return c.radius;
+    case Collider::Shape::cylinder: return std::min(c.radius, c.half_height);
+    case Collider::Shape::box: return c.half_extents.minCoeff();
+    default: return c.aabb_half.minCoeff();
+  }
+}
+
+/// The extent of body b about its centre of mass x (m): its thinnest shape's inner radius and
+/// the radius of a sphere about x holding all its shapes (from their world AABBs).
+struct Extent {
+  double thinnest = 0.0, reach = 0.0;
+};
+Extent extent_of(const WorldState& w, const Body& b, const Vec3& x) {
+  Extent e{std::numeric_limits<double>::infinity(), 0.0};
+  for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k) {
+    const Collider& c = w.shapes[k];
+    e.thinnest = std::min(e.thinnest, inner_radius(c));
+    e.reach = std::max(e.reach, (c.aabb_center - x).norm() + c.aabb_half.norm());
+  }
+  return e;
+}
+
+/// World pose of shape c of body b when b's centre of mass is at x with orientation q.
+PosedShape shape_at(const Collider& c, const Body& b, const Vec3& x, const Quat& q) {
+  const Transform body{x - q * b.local_com, q};
+  const Transform s = c.offset_identity ? body : Transform{body.translation + body.rotation * c.offset.translation,
+                                                           body.rotation * c.offset.rotation};
+  return {convex_of(c), s.rotation.toRotationMatrix(), s.translation};
+}
+
+/// The swept body: its motion over the step and its extent.
+struct Sweep {
+  const Body* body = nullptr;
+  Vec3 x0, x1;
+  Quat q0, q1;
+  double angle = 0.0;  ///< (rad) of the rotation from q0 to q1
+  Extent extent;
+
+  [[nodiscard]] Vec3 x(double t) const { return x0 + t * (x1 - x0); }
+  [[nodiscard]] Quat q(double t) const { return q0.slerp(t, q1); }
+  /// Upper bound of how far any point of the body moves over the step (m).
+  [[nodiscard]] double bound() const { return (x1 - x0).norm() + angle * extent.reach; }
+};
+
+/// A target: a convex at a fixed pose, or a plane.
+struct Target {
+  bool plane = false;
+  PosedShape convex;
+  Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
+};
+
+/// Distance (m) from the target to shape s (full shapes, negative when they overlap), and the
+/// unit normal from the target towards s. `overlap` when GJK found the cores intersecting.
+struct Gap {
+  double distance = 0.0;
+  Vec3 normal = Vec3::UnitZ();
+  bool overlap = false;
+};
+Gap gap_of(const Target& t, const PosedShape& s) {
+  if (t.plane) {
+    const Vec3 deepest = s.support(-t.normal, ShapePart::full).world;
+    return {t.normal.dot(deepest - t.point), t.normal, false};
+  }
+  const GjkResult g = gjk_distance(t.convex, s, ShapePart::core);
+  if (g.status == GjkStatus::overlap) return {0.0, Vec3::UnitZ(), true};
+  return {g.distance - t.convex.shape.core_radius() - s.shape.core_radius(), g.normal, false};
+}
+
+/// Time of impact in [0, 1) of shape c of the swept body against `target`, or 1 for none.
+/// `face`, for a mesh triangle, is its unit normal (world).
+double time_of_impact(const Sweep& sw, const Collider& c, const Target& target, const Vec3* face = nullptr) {
+  const Body& b = *sw.body;
+  if (face != nullptr) {
+    // A triangle is crossed only by a body whose centre goes towards its plane by a good part of
+    // its thickness; one sliding along a tessellated floor meets each next triangle's edge at
+    // distance zero and would be stopped at every seam (Box2D v3 filters its segments alike).
+    const Vec3 p = target.convex.translation + target.convex.rotation * target.convex.shape.vertices[0];
+    const double s0 = face->dot(sw.x0 - p), s1 = face->dot(sw.x1 - p);
+    if ((s0 >= 0.0 ? s0 - s1 : s1 - s0) < kFastFraction * sw.extent.thinnest) return 1.0;
+  }
+  Gap g = gap_of(target, shape_at(c, b, sw.x0, sw.q0));
+  // Touching at the start: the discrete contacts have it. Cannot get deeper than a quarter of
+  // its thickness: the discrete contacts push it back out.
+  if (g.overlap || !(g.distance > kGapTolerance)) return 1.0;
+  if (sw.bound() <= g.distance + kFastFraction * sw.extent.thinnest) return 1.0;
+  const double goal = std::min(kTimeOfImpactGap, 0.5 * g.distance);
+  const Vec3 dx = sw.x1 - sw.x0;
+  double t = 0.0;
+  for (int round = 0; round < kMaxRounds; ++round) {
+    if (g.overlap) return t;  // rounding past the target: stop here
+    if (g.distance <= goal + kGapTolerance) return t;
+    // No point of the body approaches the target faster than its centre's speed towards it
+    // plus θ r_max (Mirtich's bound), per unit of the step's time.
+    const double approach = -dx.dot(g.normal) + sw.angle * sw.extent.reach;
+    if (!(approach > 0.0)) return 1.0;
+    t += (g.distance - goal) / approach;
+    if (t >= 1.0) return 1.0;
+    g = gap_of(target, shape_at(c, b, sw.x(t), sw.q(t)));
+  }
+  return t;
+}
+
+}  // namespace
+
+void begin_continuous(WorldState& w, double h) {
+  BodyDynamics& d = w.dyn;
+  RigidBodies& r = d.rigid;
+  const std::size_t n = r.size();
+  d.start_position.assign(r.position.begin(), r.position.end());
+  d.start_orientation.assign(r.orientation.begin(), r.orientation.end());
+  d.fast.assign(n, 0);
+  if (!d.continuous) return;
+  for (const Body& b : w.bodies.dense()) {
+    if (!b.dynamic() || !r.is_dynamic(b.rigid)) continue;
+    const std::uint32_t i = b.rigid;
+    const Extent e = extent_of(w, b, r.position[i]);
+    const double reach = h * (r.linear_velocity[i].norm() + r.angular_velocity[i].norm() * e.reach);
+    d.fast[i] = reach > kFastFraction * e.thinnest ? 1 : 0;
+  }
+}
+
+void continuous_collisions(WorldState& w) {
+  BodyDynamics& d = w.dyn;
+  if (!d.continuous) return;
+  RigidBodies& r = d.rigid;
+  std::vector<Body>& bodies = w.bodies.dense();
+  // Which bodies sweep: awake, dynamic, not jointed, moving more than a quarter of their
+  // thickness. Kept in `fast` (its start-of-step meaning is used up by now).
+  std::vector<std::uint8_t>& sweeping = d.fast;
+  std::fill(sweeping.begin(), sweeping.end(), 0);
+  for (const JointBodies& j : d.joint_bodies)
+    for (const std::uint32_t i : {j.a, j.b})
+      if (i != kStaticBody && i < sweeping.size()) sweeping[i] = 2;  // jointed: never swept
+  bool any = false;
+  for (const Body& b : bodies) {
+    if (!b.dynamic() || !r.is_dynamic(b.rigid) || sweeping[b.rigid] == 2) continue;
+    const std::uint32_t i = b.rigid;
+    const Sweep sw{&b, d.start_position[i], r.position[i], d.start_orientation[i], r.orientation[i],
+                   d.start_orientation[i].angularDistance(r.orientation[i]),
+                   extent_of(w, b, d.start_position[i])};
+    if (sw.bound() > kFastFraction * sw.extent.thinnest) {
+      sweeping[i] = 1;
+      any = true;
+    }
+  }
+  if (!any) return;
+  for (std::uint32_t bi = 0; bi < bodies.size(); ++bi) {
+    const Body& b = bodies[bi];
+    if (!b.dynamic() || sweeping[b.rigid] != 1) continue;
+    const std::uint32_t i = b.rigid;
+    const Sweep sw{&b, d.start_position[i], r.position[i], d.start_orientation[i], r.orientation[i],
+                   d.start_orientation[i].angularDistance(r.orientation[i]),
+                   extent_of(w, b, d.start_position[i])};
+    // The swept sphere's box (start and end centres grown by the reach and the gap).
+    const Vec3 grow = Vec3::Constant(sw.extent.reach + kSpeculativeMargin);
+    const Vec3 lo = sw.x0.cwiseMin(sw.x1) - grow, hi = sw.x0.cwiseMax(sw.x1) + grow;
+    double toi = 1.0;
+    for (std::uint32_t bj = 0; bj < bodies.size(); ++bj) {
+      if (bj == bi) continue;
+      const Body& o = bodies[bj];
+      const bool moves = o.dynamic() && r.is_dynamic(o.rigid);
+      if (moves && sweeping[o.rigid] == 1) continue;  // two swept bodies: left to the contacts
+      if (no_collide(d, bi, bj)) continue;
+      for (std::uint32_t k = o.first_shape; k < o.first_shape + o.shape_count; ++k) {
+        const Collider& oc = w.shapes[k];
+        Target target;
+        if (oc.shape == Collider::Shape::plane) {
+          target.plane = true;
+          target.point = oc.point;
+          target.normal = oc.normal;
+        } else {
+          // An awake dynamic body is met at its end pose; the others are where their shapes are.
+          PosedShape at = moves ? shape_at(oc, o, r.position[o.rigid], r.orientation[o.rigid])
+                                : PosedShape(convex_of(oc), oc.R, oc.center);
+          // Its box: where it is, or a sphere about its box's centre carried to the end pose.
+          const Vec3 c = moves ? Vec3(at.to_world(oc.R.transpose() * (oc.aabb_center - oc.center)))
+                               : oc.aabb_center;
+          const Vec3 half = moves ? Vec3::Constant(oc.aabb_half.norm()) : oc.aabb_half;
+          if (((c + half).array() < lo.array()).any() || ((c - half).array() > hi.array()).any()) continue;
+          if (oc.shape == Collider::Shape::mesh) {
+            // Each triangle of the mesh under the swept box, as a 3-point hull.
+            const Mat3 Rt = at.rotation.transpose();
+            const Vec3 mc = Rt * (0.5 * (lo + hi) - at.translation);
+            const Vec3 mh = Rt.cwiseAbs() * (0.5 * (hi - lo));
+            oc.mesh->bvh.query(mc - mh, mc + mh, [&](std::uint32_t tri) {
+              const Triangle& T = oc.mesh->triangles[tri];
+              const std::array<Vec3, 3> local{T.a, T.b, T.c};
+              Target tt;
+              tt.convex = PosedShape(ConvexShape::hull(local), at.rotation, at.translation);
+              const Vec3 face = at.rotation * T.normal;
+              for (std::uint32_t s = b.first_shape; s < b.first_shape + b.shape_count; ++s)
+                toi = std::min(toi, time_of_impact(sw, w.shapes[s], tt, &face));
+            });
+            continue;
+          }
+          target.convex = at;
+        }
+        for (std::uint32_t s = b.first_shape; s < b.first_shape + b.shape_count; ++s)
+          toi = std::min(toi, time_of_impact(sw, w.shapes[s], target));
+      }
+    }
+    if (toi < 1.0) {
+      r.position[i] = sw.x(toi);
+      r.orientation[i] = sw.q(toi).normalized();
+      update_derived(r, i);
+    }
+  }
+}
+
+}  // namespace simreel::sim::detail
