@@ -113,5 +113,26 @@ TEST(SimPlaneRest, FastPathEqualsGeneralPathWithTheStartOfStepStored) {
   expect_same_as_general_path({true, true, true, Vec3(0.1, 0.2, 1.0)});
 }
 
+TEST(SimPlaneRest, LargeSystemIsTheSameAtAnyThreadCount) {
+  const double h = 1.0 / 240;
+  detail::Collider ground;
+  ground.material = Material(0.5, 0.3);
+  detail::ForceParams f{};
+  f.gravity[2] = -9.81f;
+  f.drag = 2e-4f;
+  const std::size_t n = 40000;  // over kParallelMin: the blocks are split over the threads
+  std::vector<detail::ParticleStore> out;
+  for (int threads : {1, 2, 3}) {
+    out.push_back(make_store(n, n / 2, Vec3::Zero(), Vec3::UnitZ(), false, h));
+    detail::CollisionContext ctx;
+    ctx.threads = threads;
+    detail::collide(out.back(), 0, n, h, {ground}, ctx, f);
+  }
+  for (std::size_t t = 1; t < out.size(); ++t) {
+    EXPECT_EQ(std::memcmp(out[t].position.data(), out[0].position.data(), 3 * n * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(out[t].velocity.data(), out[0].velocity.data(), 3 * n * sizeof(float)), 0);
+  }
+}
+
 }  // namespace
 }  // namespace simreel::sim

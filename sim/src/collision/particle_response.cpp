@@ -13,6 +13,7 @@
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
 #include "core/vector_clones.hpp"
+#include "particles/forces.hpp"  // kParallelMin
 
 namespace simreel::sim::detail {
 
@@ -336,6 +337,77 @@ void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x
   }
 }
 
+/// Particles [i0, i0 + len) of s, m of them near the one plane colliders[0] (near: len flags):
+/// the fast path for those resting on it, resolve() for the others.
+void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, const std::uint8_t* near,
+                 std::size_t m, double h, const PlaneRestParams& pp,
+                 const std::vector<Collider>& colliders, CollisionContext& ctx,
+                 const ForceParams& f) {
+  thread_local std::unique_ptr<PlaneRestLanes> lanes;
+  if (!lanes) lanes = std::make_unique<PlaneRestLanes>();  // zeroed: unused lanes stay defined
+  PlaneRestLanes& l = *lanes;
+  const Collider& c0 = colliders.front();
+  const float* x = s.position.data();
+  const float* vel = s.velocity.data();
+  const float* prev = s.track_prev ? s.prev_position.data() : nullptr;
+  if (3 * m >= 2 * len) {
+    // Most of the block lies on the plane: every lane goes through, in place (the lanes not
+    // near the plane come out with ok = 0 and unchanged).
+    gather_block(x + 3 * i0, vel + 3 * i0, prev != nullptr ? prev + 3 * i0 : nullptr,
+                 s.mass.data() + i0, s.radius.data() + i0, s.age.data() + i0, h, len, l);
+    plane_rest(l, len, pp);
+    scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
+    for (std::size_t k = 0; k < len; ++k) {
+      if (l.ok[k] == 0.0) {
+        if (near[k]) resolve(s, i0 + k, l.dt[k], colliders, ctx, f);
+      } else if (!(l.gap[k] >= 0.0)) {
+        keep_stored_out(c0, &s.position[3 * (i0 + k)], l.r[k]);
+      }
+    }
+    return;
+  }
+  // A few: through a compacted list.
+  std::uint32_t idx[kPlaneRestLanes];
+  m = 0;
+  for (std::size_t k = 0; k < len; ++k) {
+    if (!near[k]) continue;
+    const std::size_t i = i0 + k;
+    idx[m] = std::uint32_t(i);
+    l.bx[m] = x[3 * i];
+    l.by[m] = x[3 * i + 1];
+    l.bz[m] = x[3 * i + 2];
+    l.vx[m] = vel[3 * i];
+    l.vy[m] = vel[3 * i + 1];
+    l.vz[m] = vel[3 * i + 2];
+    if (prev != nullptr) {
+      l.ax[m] = prev[3 * i];
+      l.ay[m] = prev[3 * i + 1];
+      l.az[m] = prev[3 * i + 2];
+    }
+    l.m[m] = s.mass[i];
+    l.r[m] = s.radius[i];
+    l.dt[m] = std::min(double(s.age[i]), h);
+    ++m;
+  }
+  plane_rest(l, m, pp);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t i = idx[k];
+    if (l.ok[k] == 0.0) {
+      resolve(s, i, l.dt[k], colliders, ctx, f);
+      continue;
+    }
+    float* pf = &s.position[3 * i];
+    float* vf = &s.velocity[3 * i];
+    pf[0] = l.ox[k];
+    pf[1] = l.oy[k];
+    pf[2] = l.oz[k];
+    vf[0] = l.ovx[k];
+    vf[1] = l.ovy[k];
+    vf[2] = l.ovz[k];
+    if (!(l.gap[k] >= 0.0)) keep_stored_out(c0, pf, l.r[k]);
+  }
+}
+
 }  // namespace
 
 void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
@@ -350,17 +422,16 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     // the slow path for the few near a plane. resolve() changes only its own particle, so
     // testing the block first changes nothing.
     constexpr std::size_t kBlock = kPlaneRestLanes;
-    std::uint8_t near[kBlock];
     // One plane that only bounces (the ground): the particles near it go through the vectorised
     // resting fast path first (plane_rest.hpp, the same results); resolve() takes the rest.
+    // Then nothing is shared between particles (no splash, no body impulse, no removal), so
+    // large systems split their blocks statically over ctx.threads: the same results.
     const Collider& c0 = colliders.front();
     const HitAction act = ctx.on_hit != nullptr ? *ctx.on_hit : c0.material.on_hit;
     const bool fast = colliders.size() == 1 && act == HitAction::bounce &&
                       (ctx.impulses == nullptr || !ctx.impulses->logs(c0));
-    thread_local std::unique_ptr<PlaneRestLanes> lanes;
     PlaneRestParams pp{};
     if (fast) {
-      if (!lanes) lanes = std::make_unique<PlaneRestLanes>();
       for (int a = 0; a < 3; ++a) {
         pp.n[a] = c0.normal[a];
         pp.q[a] = c0.point[a];
@@ -373,74 +444,22 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       pp.contact_speed = ctx.contact_speed;
       pp.start_stored = s.track_prev;
     }
-    std::uint32_t idx[kBlock];
-    for (std::size_t i0 = begin; i0 < end; i0 += kBlock) {
+    const std::ptrdiff_t blocks = std::ptrdiff_t((end - begin + kBlock - 1) / kBlock);
+    const bool par = fast && ctx.threads > 1 && end - begin >= kParallelMin;
+#pragma omp parallel for schedule(static) num_threads(ctx.threads) if (par)
+    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
+      const std::size_t i0 = begin + std::size_t(b) * kBlock;
       const std::size_t len = std::min(kBlock, end - i0);
+      std::uint8_t near[kBlock];
       near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), colliders.size(), near);
       if (!fast) {
         for (std::size_t k = 0; k < len; ++k)
           if (near[k]) resolve(s, i0 + k, std::min(double(s.age[i0 + k]), h), colliders, ctx, f);
         continue;
       }
-      PlaneRestLanes& l = *lanes;
       std::size_t m = 0;
       for (std::size_t k = 0; k < len; ++k) m += near[k];
-      if (m == 0) continue;
-      const float* prev = s.track_prev ? s.prev_position.data() + 3 * i0 : nullptr;
-      if (3 * m >= 2 * len) {
-        // Most of the block lies on the plane: every lane goes through, in place (the lanes not
-        // near the plane come out with ok = 0 and are written back unchanged).
-        gather_block(x + 3 * i0, vel + 3 * i0, prev, s.mass.data() + i0, s.radius.data() + i0,
-                     s.age.data() + i0, h, len, l);
-        plane_rest(l, len, pp);
-        scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
-        for (std::size_t k = 0; k < len; ++k) {
-          if (l.ok[k] == 0.0) {
-            if (near[k]) resolve(s, i0 + k, l.dt[k], colliders, ctx, f);
-          } else if (!(l.gap[k] >= 0.0)) {
-            keep_stored_out(c0, &s.position[3 * (i0 + k)], l.r[k]);
-          }
-        }
-        continue;
-      }
-      m = 0;
-      for (std::size_t k = 0; k < len; ++k) {
-        if (!near[k]) continue;
-        const std::size_t i = i0 + k;
-        idx[m] = std::uint32_t(i);
-        l.bx[m] = x[3 * i];
-        l.by[m] = x[3 * i + 1];
-        l.bz[m] = x[3 * i + 2];
-        l.vx[m] = vel[3 * i];
-        l.vy[m] = vel[3 * i + 1];
-        l.vz[m] = vel[3 * i + 2];
-        if (prev != nullptr) {
-          l.ax[m] = s.prev_position[3 * i];
-          l.ay[m] = s.prev_position[3 * i + 1];
-          l.az[m] = s.prev_position[3 * i + 2];
-        }
-        l.m[m] = s.mass[i];
-        l.r[m] = s.radius[i];
-        l.dt[m] = std::min(double(s.age[i]), h);
-        ++m;
-      }
-      plane_rest(l, m, pp);
-      for (std::size_t k = 0; k < m; ++k) {
-        const std::size_t i = idx[k];
-        if (l.ok[k] == 0.0) {
-          resolve(s, i, l.dt[k], colliders, ctx, f);
-          continue;
-        }
-        float* pf = &s.position[3 * i];
-        float* vf = &s.velocity[3 * i];
-        pf[0] = l.ox[k];
-        pf[1] = l.oy[k];
-        pf[2] = l.oz[k];
-        vf[0] = l.ovx[k];
-        vf[1] = l.ovy[k];
-        vf[2] = l.ovz[k];
-        if (!(l.gap[k] >= 0.0)) keep_stored_out(c0, pf, l.r[k]);
-      }
+      if (m > 0) plane_block(s, i0, len, near, m, h, pp, colliders, ctx, f);
     }
     return;
   }
