@@ -337,12 +337,24 @@ void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x
   }
 }
 
-/// Particles [i0, i0 + len) of s, m of them near the one plane colliders[0] (near: len flags):
-/// the fast path for those resting on it, resolve() for the others.
-void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, const std::uint8_t* near,
-                 std::size_t m, double h, const PlaneRestParams& pp,
-                 const std::vector<Collider>& colliders, CollisionContext& ctx,
-                 const ForceParams& f) {
+/// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of
+/// near_planes(), on the same values).
+SIMREEL_VECTOR_CLONES
+void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams& p,
+                std::uint8_t* __restrict near) {
+  const double n0 = p.n[0], n1 = p.n[1], n2 = p.n[2], q0 = p.q[0], q1 = p.q[1], q2 = p.q[2];
+  for (std::size_t k = 0; k < len; ++k)
+    near[k] = std::uint8_t(n0 * (l.bx[k] - q0) + n1 * (l.by[k] - q1) + n2 * (l.bz[k] - q2) -
+                               l.r[k] < 0.0);
+}
+
+/// Particles [i0, i0 + len) of s against the one plane colliders[0]: the fast path for those
+/// resting on it, resolve() for the others near it. Most of a block on the plane: every lane goes
+/// through in place; a few: a compacted list of them. `dense`: the previous block's case, a guess
+/// that saves the rejection test's separate pass (updated; the results do not depend on it).
+void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
+                 const PlaneRestParams& pp, const std::vector<Collider>& colliders,
+                 CollisionContext& ctx, const ForceParams& f, bool& dense) {
   thread_local std::unique_ptr<PlaneRestLanes> lanes;
   if (!lanes) lanes = std::make_unique<PlaneRestLanes>();  // zeroed: unused lanes stay defined
   PlaneRestLanes& l = *lanes;
@@ -350,11 +362,24 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, const std::u
   const float* x = s.position.data();
   const float* vel = s.velocity.data();
   const float* prev = s.track_prev ? s.prev_position.data() : nullptr;
-  if (3 * m >= 2 * len) {
-    // Most of the block lies on the plane: every lane goes through, in place (the lanes not
-    // near the plane come out with ok = 0 and unchanged).
+  const auto gather = [&] {
     gather_block(x + 3 * i0, vel + 3 * i0, prev != nullptr ? prev + 3 * i0 : nullptr,
                  s.mass.data() + i0, s.radius.data() + i0, s.age.data() + i0, h, len, l);
+  };
+  std::uint8_t near[kPlaneRestLanes];
+  const bool gathered = dense;
+  if (gathered) {
+    gather();
+    near_lanes(l, len, pp, near);
+  } else {
+    near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), 1, near);
+  }
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < len; ++k) m += near[k];
+  dense = 3 * m >= 2 * len;
+  if (m == 0) return;
+  if (dense) {
+    if (!gathered) gather();
     plane_rest(l, len, pp);
     scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
     for (std::size_t k = 0; k < len; ++k) {
@@ -366,27 +391,41 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, const std::u
     }
     return;
   }
-  // A few: through a compacted list.
   std::uint32_t idx[kPlaneRestLanes];
   m = 0;
   for (std::size_t k = 0; k < len; ++k) {
     if (!near[k]) continue;
     const std::size_t i = i0 + k;
     idx[m] = std::uint32_t(i);
-    l.bx[m] = x[3 * i];
-    l.by[m] = x[3 * i + 1];
-    l.bz[m] = x[3 * i + 2];
-    l.vx[m] = vel[3 * i];
-    l.vy[m] = vel[3 * i + 1];
-    l.vz[m] = vel[3 * i + 2];
-    if (prev != nullptr) {
-      l.ax[m] = prev[3 * i];
-      l.ay[m] = prev[3 * i + 1];
-      l.az[m] = prev[3 * i + 2];
+    if (gathered) {  // in place: m <= k
+      l.bx[m] = l.bx[k];
+      l.by[m] = l.by[k];
+      l.bz[m] = l.bz[k];
+      l.vx[m] = l.vx[k];
+      l.vy[m] = l.vy[k];
+      l.vz[m] = l.vz[k];
+      l.ax[m] = l.ax[k];
+      l.ay[m] = l.ay[k];
+      l.az[m] = l.az[k];
+      l.m[m] = l.m[k];
+      l.r[m] = l.r[k];
+      l.dt[m] = l.dt[k];
+    } else {
+      l.bx[m] = x[3 * i];
+      l.by[m] = x[3 * i + 1];
+      l.bz[m] = x[3 * i + 2];
+      l.vx[m] = vel[3 * i];
+      l.vy[m] = vel[3 * i + 1];
+      l.vz[m] = vel[3 * i + 2];
+      if (prev != nullptr) {
+        l.ax[m] = prev[3 * i];
+        l.ay[m] = prev[3 * i + 1];
+        l.az[m] = prev[3 * i + 2];
+      }
+      l.m[m] = s.mass[i];
+      l.r[m] = s.radius[i];
+      l.dt[m] = std::min(double(s.age[i]), h);
     }
-    l.m[m] = s.mass[i];
-    l.r[m] = s.radius[i];
-    l.dt[m] = std::min(double(s.age[i]), h);
     ++m;
   }
   plane_rest(l, m, pp);
@@ -450,16 +489,17 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     for (std::ptrdiff_t b = 0; b < blocks; ++b) {
       const std::size_t i0 = begin + std::size_t(b) * kBlock;
       const std::size_t len = std::min(kBlock, end - i0);
-      std::uint8_t near[kBlock];
-      near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), colliders.size(), near);
-      if (!fast) {
-        for (std::size_t k = 0; k < len; ++k)
-          if (near[k]) resolve(s, i0 + k, std::min(double(s.age[i0 + k]), h), colliders, ctx, f);
+      if (fast) {
+        // Whether the last block of this thread lay on the plane: a guess of how to read this
+        // one (the results do not depend on it).
+        thread_local bool dense = false;
+        plane_block(s, i0, len, h, pp, colliders, ctx, f, dense);
         continue;
       }
-      std::size_t m = 0;
-      for (std::size_t k = 0; k < len; ++k) m += near[k];
-      if (m > 0) plane_block(s, i0, len, near, m, h, pp, colliders, ctx, f);
+      std::uint8_t near[kBlock];
+      near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), colliders.size(), near);
+      for (std::size_t k = 0; k < len; ++k)
+        if (near[k]) resolve(s, i0 + k, std::min(double(s.age[i0 + k]), h), colliders, ctx, f);
     }
     return;
   }

@@ -92,10 +92,11 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     const double f = 1.0 - dvt / tl;
     const double ux = tl > 0.0 ? tx * f : tx, uy = tl > 0.0 ? ty * f : ty,
                  uz = tl > 0.0 ? tz * f : tz;
-    const double en = -0.0 * vn;
-    double v1x = vn >= 0.0 ? wx : (0.0 + en * n0) + ux;
-    double v1y = vn >= 0.0 ? wy : (0.0 + en * n1) + uy;
-    double v1z = vn >= 0.0 ? wz : (0.0 + en * n2) + uz;
+    // vc + (-e vn) n + u with vc = 0 and e = 0: (0 + (+0) n) + u = +0 + u (vn < 0 here; a NaN
+    // vn gives NaN either way), which is u + 0.0 (a -0 component becomes +0).
+    double v1x = vn >= 0.0 ? wx : ux + 0.0;
+    double v1y = vn >= 0.0 ? wy : uy + 0.0;
+    double v1z = vn >= 0.0 ? wz : uz + 0.0;
     // v0: just after the impact, its normal part removed
     const double v0x = vn_hit < 0.0 ? hx - vn_hit * n0 : hx,
                  v0y = vn_hit < 0.0 ? hy - vn_hit * n1 : hy,
