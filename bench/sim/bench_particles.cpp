@@ -78,7 +78,8 @@ BENCHMARK_CAPTURE(particle_steps, no_colliders, Scene::no_colliders)->Apply(size
 BENCHMARK_CAPTURE(particle_steps, ground_airborne, Scene::ground_airborne)
     ->Args({100'000, 1})->Args({1'000'000, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(particle_steps, ground_resting, Scene::ground_resting)
-    ->Args({100'000, 1})->Args({1'000'000, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Args({100'000, 1})->Args({1'000'000, 1})->Args({100'000, 2})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(particle_steps, curl_noise, Scene::curl_noise)->Apply(sizes);
 BENCHMARK_CAPTURE(particle_steps, pair_forces, Scene::pair_forces)
     ->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond)->UseRealTime();

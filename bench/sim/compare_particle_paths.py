@@ -12,6 +12,8 @@ cases = [
  ("plain no_colliders 100k 1T", "bench_particles", "no_colliders/100000/1/", "no_colliders/100000/1/"),
  ("ground airborne 100k", "bench_particles", "ground_airborne/100000/1", "ground_airborne/100000/1"),
  ("ground resting 100k", "bench_particles", "ground_resting/100000/1", "ground_resting/100000/1"),
+ ("ground resting 100k 2T", "bench_particles", None, "ground_resting/100000/2"),
+ ("ground resting 1M", "bench_particles", "ground_resting/1000000/1", "ground_resting/1000000/1"),
  ("curl noise 100k 1T", "bench_particles", "curl_noise/100000/1/", "curl_noise/100000/1/"),
  ("curl noise 100k 2T", "bench_particles", "curl_noise/100000/2/", "curl_noise/100000/2/"),
  ("pair forces 100k 1T", "bench_particles", "pair_forces/100000/1/", "pair_forces/100000/1/"),

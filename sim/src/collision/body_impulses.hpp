@@ -35,6 +35,11 @@ struct BodyImpulses {
   std::vector<std::uint32_t> rigid;
   std::vector<Entry> entries;
 
+  /// Does add() log anything for collider c (a shape of a dynamic body)?
+  [[nodiscard]] bool logs(const Collider& c) const {
+    const std::size_t k = std::size_t(&c - shapes);
+    return k < rigid.size() && rigid[k] != kNone;
+  }
   /// Logs the impulse J (N s, world) on collider c (an element of the `shapes` array) at world
   /// point p, if c belongs to a dynamic body.
   void add(const Collider& c, const Vec3& J, const Vec3& p) {

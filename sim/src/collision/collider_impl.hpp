@@ -114,6 +114,9 @@ struct CollisionContext {
   /// When set (a dynamic body exists): every velocity change of a particle against a dynamic
   /// body's shape logs the equal and opposite impulse m (v_before - v_after) here (Coutinho §3.7).
   BodyImpulses* impulses = nullptr;
+  /// OpenMP threads for a large pass whose particles share nothing (WorldDef::threads; the
+  /// results do not depend on it).
+  int threads = 1;
 };
 
 /// Collides particles [begin, end) of one system with every collider, after integration. Each

@@ -6,11 +6,14 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <utility>
 
 #include "collision/body_impulses.hpp"
+#include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
 #include "core/vector_clones.hpp"
+#include "particles/forces.hpp"  // kParallelMin
 
 namespace simreel::sim::detail {
 
@@ -84,6 +87,19 @@ void push_out(const Collider& c, Vec3& p, Vec3& v, double r) {
 Vec3 load_stored(const float* pf) {
   const volatile float* v = pf;
   return Vec3(v[0], v[1], v[2]);
+}
+
+/// The guarantee holds for the stored floats: rounding a position to float may put the centre
+/// (pf, 3 floats) a hair inside the plane c; step it out by growing amounts until it is not.
+void keep_stored_out(const Collider& c, float* pf, double r) {
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    const Vec3 p = load_stored(pf);
+    const double d = c.normal.dot(p - c.point) - r;
+    if (d >= 0.0) break;
+    const double extra = attempt == 0 ? 0.0 : std::ldexp(1.2e-7, attempt) * (1.0 + p.cwiseAbs().maxCoeff());
+    const Vec3 q = p + (extra - d) * c.normal;
+    for (int k = 0; k < 3; ++k) pf[k] = float(q[k]);
+  }
 }
 
 /// (kg/s) The drag coefficient at speed |v1|: k_d + c_2 |v1| (the square root only when c_2 is
@@ -253,19 +269,8 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
     pf[k] = float(b[k]);
     vf[k] = float(v[k]);
   }
-  // The guarantee holds for the stored floats: rounding b to float may put the centre a hair
-  // inside a plane; step it out by growing amounts until it is not.
-  for (const Collider& c : colliders) {
-    if (c.shape != Collider::Shape::plane) continue;
-    for (int attempt = 0; attempt < 8; ++attempt) {
-      const Vec3 p = load_stored(pf);
-      const double d = c.normal.dot(p - c.point) - r;
-      if (d >= 0.0) break;
-      const double extra = attempt == 0 ? 0.0 : std::ldexp(1.2e-7, attempt) * (1.0 + p.cwiseAbs().maxCoeff());
-      const Vec3 q = p + (extra - d) * c.normal;
-      for (int k = 0; k < 3; ++k) pf[k] = float(q[k]);
-    }
-  }
+  for (const Collider& c : colliders)
+    if (c.shape == Collider::Shape::plane) keep_stored_out(c, pf, r);
 }
 
 }  // namespace
@@ -290,6 +295,158 @@ void near_planes(const float* __restrict x, const float* __restrict r, std::size
   }
 }
 
+/// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
+/// positions or null; mass, radius, age: len), each lane's step min(age, h).
+SIMREEL_VECTOR_CLONES
+void gather_block(const float* __restrict x, const float* __restrict v,
+                  const float* __restrict prev, const float* __restrict mass,
+                  const float* __restrict radius, const float* __restrict age, double h,
+                  std::size_t len, PlaneRestLanes& l) {
+  for (std::size_t k = 0; k < len; ++k) {
+    l.bx[k] = x[3 * k];
+    l.by[k] = x[3 * k + 1];
+    l.bz[k] = x[3 * k + 2];
+    l.vx[k] = v[3 * k];
+    l.vy[k] = v[3 * k + 1];
+    l.vz[k] = v[3 * k + 2];
+    l.m[k] = mass[k];
+    l.r[k] = radius[k];
+    const double a = age[k];
+    l.dt[k] = h < a ? h : a;  // std::min(a, h)
+  }
+  if (prev != nullptr)
+    for (std::size_t k = 0; k < len; ++k) {
+      l.ax[k] = prev[3 * k];
+      l.ay[k] = prev[3 * k + 1];
+      l.az[k] = prev[3 * k + 2];
+    }
+}
+
+/// The lanes' outputs back into the block (x, v: len x 3): the results of the lanes that
+/// plane_rest() resolved, the others' values as they were.
+SIMREEL_VECTOR_CLONES
+void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x,
+                   float* __restrict v) {
+  for (std::size_t k = 0; k < len; ++k) {
+    x[3 * k] = l.ox[k];
+    x[3 * k + 1] = l.oy[k];
+    x[3 * k + 2] = l.oz[k];
+    v[3 * k] = l.ovx[k];
+    v[3 * k + 1] = l.ovy[k];
+    v[3 * k + 2] = l.ovz[k];
+  }
+}
+
+/// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of
+/// near_planes(), on the same values).
+SIMREEL_VECTOR_CLONES
+void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams& p,
+                std::uint8_t* __restrict near) {
+  const double n0 = p.n[0], n1 = p.n[1], n2 = p.n[2], q0 = p.q[0], q1 = p.q[1], q2 = p.q[2];
+  for (std::size_t k = 0; k < len; ++k)
+    near[k] = std::uint8_t(n0 * (l.bx[k] - q0) + n1 * (l.by[k] - q1) + n2 * (l.bz[k] - q2) -
+                               l.r[k] < 0.0);
+}
+
+/// Particles [i0, i0 + len) of s against the one plane colliders[0]: the fast path for those
+/// resting on it, resolve() for the others near it. Most of a block on the plane: every lane goes
+/// through in place; a few: a compacted list of them. `dense`: the previous block's case, a guess
+/// that saves the rejection test's separate pass (updated; the results do not depend on it).
+void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
+                 const PlaneRestParams& pp, const std::vector<Collider>& colliders,
+                 CollisionContext& ctx, const ForceParams& f, bool& dense) {
+  thread_local std::unique_ptr<PlaneRestLanes> lanes;
+  if (!lanes) lanes = std::make_unique<PlaneRestLanes>();  // zeroed: unused lanes stay defined
+  PlaneRestLanes& l = *lanes;
+  const Collider& c0 = colliders.front();
+  const float* x = s.position.data();
+  const float* vel = s.velocity.data();
+  const float* prev = s.track_prev ? s.prev_position.data() : nullptr;
+  const auto gather = [&] {
+    gather_block(x + 3 * i0, vel + 3 * i0, prev != nullptr ? prev + 3 * i0 : nullptr,
+                 s.mass.data() + i0, s.radius.data() + i0, s.age.data() + i0, h, len, l);
+  };
+  std::uint8_t near[kPlaneRestLanes];
+  const bool gathered = dense;
+  if (gathered) {
+    gather();
+    near_lanes(l, len, pp, near);
+  } else {
+    near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), 1, near);
+  }
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < len; ++k) m += near[k];
+  dense = 3 * m >= 2 * len;
+  if (m == 0) return;
+  if (dense) {
+    if (!gathered) gather();
+    plane_rest(l, len, pp);
+    scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
+    for (std::size_t k = 0; k < len; ++k) {
+      if (l.ok[k] == 0.0) {
+        if (near[k]) resolve(s, i0 + k, l.dt[k], colliders, ctx, f);
+      } else if (!(l.gap[k] >= 0.0)) {
+        keep_stored_out(c0, &s.position[3 * (i0 + k)], l.r[k]);
+      }
+    }
+    return;
+  }
+  std::uint32_t idx[kPlaneRestLanes];
+  m = 0;
+  for (std::size_t k = 0; k < len; ++k) {
+    if (!near[k]) continue;
+    const std::size_t i = i0 + k;
+    idx[m] = std::uint32_t(i);
+    if (gathered) {  // in place: m <= k
+      l.bx[m] = l.bx[k];
+      l.by[m] = l.by[k];
+      l.bz[m] = l.bz[k];
+      l.vx[m] = l.vx[k];
+      l.vy[m] = l.vy[k];
+      l.vz[m] = l.vz[k];
+      l.ax[m] = l.ax[k];
+      l.ay[m] = l.ay[k];
+      l.az[m] = l.az[k];
+      l.m[m] = l.m[k];
+      l.r[m] = l.r[k];
+      l.dt[m] = l.dt[k];
+    } else {
+      l.bx[m] = x[3 * i];
+      l.by[m] = x[3 * i + 1];
+      l.bz[m] = x[3 * i + 2];
+      l.vx[m] = vel[3 * i];
+      l.vy[m] = vel[3 * i + 1];
+      l.vz[m] = vel[3 * i + 2];
+      if (prev != nullptr) {
+        l.ax[m] = prev[3 * i];
+        l.ay[m] = prev[3 * i + 1];
+        l.az[m] = prev[3 * i + 2];
+      }
+      l.m[m] = s.mass[i];
+      l.r[m] = s.radius[i];
+      l.dt[m] = std::min(double(s.age[i]), h);
+    }
+    ++m;
+  }
+  plane_rest(l, m, pp);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t i = idx[k];
+    if (l.ok[k] == 0.0) {
+      resolve(s, i, l.dt[k], colliders, ctx, f);
+      continue;
+    }
+    float* pf = &s.position[3 * i];
+    float* vf = &s.velocity[3 * i];
+    pf[0] = l.ox[k];
+    pf[1] = l.oy[k];
+    pf[2] = l.oz[k];
+    vf[0] = l.ovx[k];
+    vf[1] = l.ovy[k];
+    vf[2] = l.ovz[k];
+    if (!(l.gap[k] >= 0.0)) keep_stored_out(c0, pf, l.r[k]);
+  }
+}
+
 }  // namespace
 
 void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
@@ -303,10 +460,43 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     // Only planes (a ground): the rejection test below for a block of particles at a time, then
     // the slow path for the few near a plane. resolve() changes only its own particle, so
     // testing the block first changes nothing.
-    constexpr std::size_t kBlock = 256;
-    std::uint8_t near[kBlock];
-    for (std::size_t i0 = begin; i0 < end; i0 += kBlock) {
+    constexpr std::size_t kBlock = kPlaneRestLanes;
+    // One plane that only bounces (the ground): the particles near it go through the vectorised
+    // resting fast path first (plane_rest.hpp, the same results); resolve() takes the rest.
+    // Then nothing is shared between particles (no splash, no body impulse, no removal), so
+    // large systems split their blocks statically over ctx.threads: the same results.
+    const Collider& c0 = colliders.front();
+    const HitAction act = ctx.on_hit != nullptr ? *ctx.on_hit : c0.material.on_hit;
+    const bool fast = colliders.size() == 1 && act == HitAction::bounce &&
+                      (ctx.impulses == nullptr || !ctx.impulses->logs(c0));
+    PlaneRestParams pp{};
+    if (fast) {
+      for (int a = 0; a < 3; ++a) {
+        pp.n[a] = c0.normal[a];
+        pp.q[a] = c0.point[a];
+        pp.g[a] = f.gravity[a];
+      }
+      pp.drag = f.drag;
+      pp.drag_quadratic = f.drag_quadratic;
+      pp.mu = c0.material.friction;
+      pp.mu_static = c0.material.static_mu();
+      pp.contact_speed = ctx.contact_speed;
+      pp.start_stored = s.track_prev;
+    }
+    const std::ptrdiff_t blocks = std::ptrdiff_t((end - begin + kBlock - 1) / kBlock);
+    const bool par = fast && ctx.threads > 1 && end - begin >= kParallelMin;
+#pragma omp parallel for schedule(static) num_threads(ctx.threads) if (par)
+    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
+      const std::size_t i0 = begin + std::size_t(b) * kBlock;
       const std::size_t len = std::min(kBlock, end - i0);
+      if (fast) {
+        // Whether the last block of this thread lay on the plane: a guess of how to read this
+        // one (the results do not depend on it).
+        thread_local bool dense = false;
+        plane_block(s, i0, len, h, pp, colliders, ctx, f, dense);
+        continue;
+      }
+      std::uint8_t near[kBlock];
       near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), colliders.size(), near);
       for (std::size_t k = 0; k < len; ++k)
         if (near[k]) resolve(s, i0 + k, std::min(double(s.age[i0 + k]), h), colliders, ctx, f);

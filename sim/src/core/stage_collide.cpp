@@ -22,6 +22,7 @@ void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_
   ctx.rng = &ps.splash_rng;
   ctx.spawns = &ps.spawns;
   ctx.impulses = coupling_log(*this);
+  ctx.threads = threads;
   if (ps.def.on_hit) {
     ctx.on_hit = &*ps.def.on_hit;
     ctx.on_hit_split = &ps.def.on_hit_split;

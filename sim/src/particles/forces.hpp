@@ -77,6 +77,8 @@ struct Dynamics {
   std::vector<double> sorted_;              // (n x 5) x, y, z, q, m in that order
   std::vector<std::uint64_t> cell_keys_;    // occupied cells' keys, increasing
   std::vector<std::uint32_t> cell_start_;   // first particle (in order_) of each cell, + n
+  std::vector<std::uint32_t> cell_count_;   // counting-sort scratch (cells of the bounding box)
+  std::vector<std::int64_t> cell_xyz_;      // (n x 3) integer cell coordinates
 };
 
 /// The velocity factor of a step with the drag taken at the new velocity v' = u d,

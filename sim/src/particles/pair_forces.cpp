@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "particles/forces.hpp"
 
@@ -34,19 +35,55 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   // Build: each particle's cell key, sorted with its index (a total order, so the layout is
   // independent of the thread count), then a hash of occupied cells -> run in the sorted array.
   cell_key_.resize(n);
+  cell_xyz_.resize(3 * n);
+  std::int64_t lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = std::numeric_limits<std::int64_t>::max();
+    hi[d] = std::numeric_limits<std::int64_t>::min();
+  }
+  bool finite = true;
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t k = cell_key(std::int64_t(std::floor(x[3 * i] * inv)),
-                                     std::int64_t(std::floor(x[3 * i + 1] * inv)),
-                                     std::int64_t(std::floor(x[3 * i + 2] * inv)));
-    cell_key_[i] = k;
+    std::int64_t c[3];
+    for (int d = 0; d < 3; ++d) {
+      const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
+      finite = finite && std::abs(f) < double(kCellBias);
+      // (a cast of a value beyond +-2^40 would gain nothing: cell_key() clamps it anyway)
+      constexpr double kFar = double(std::int64_t{1} << 40);
+      c[d] = f >= kFar ? std::int64_t{1} << 40 : f <= -kFar ? -(std::int64_t{1} << 40)
+             : f == f ? std::int64_t(f) : 0;
+      cell_xyz_[3 * i + std::size_t(d)] = c[d];
+      lo[d] = std::min(lo[d], c[d]);
+      hi[d] = std::max(hi[d], c[d]);
+    }
+    cell_key_[i] = cell_key(c[0], c[1], c[2]);
   }
   std::vector<std::uint64_t>& keys = cell_key_;
   std::vector<std::uint32_t>& order = order_;
   order.resize(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
-    return keys[p] != keys[q] ? keys[p] < keys[q] : p < q;
-  });
+  // (key, index) order. Within +-kCellBias cells (no clamping) the key orders cells as the
+  // linear index over the particles' bounding box does, so when that box has few cells per
+  // particle a counting sort (stable: indices ascending within a cell) gives the same order in
+  // O(n) instead of a comparison sort's O(n log n) random reads.
+  const std::uint64_t ny = finite ? std::uint64_t(hi[1] - lo[1] + 1) : 0,
+                      nz = finite ? std::uint64_t(hi[2] - lo[2] + 1) : 0,
+                      nx = finite ? std::uint64_t(hi[0] - lo[0] + 1) : 0;
+  if (finite && nx * ny * nz <= 4 * std::uint64_t(n) + 4096) {
+    const std::size_t cells = std::size_t(nx * ny * nz);
+    cell_count_.assign(cells + 1, 0);
+    const auto lin = [&](std::size_t i) {
+      const std::int64_t* c = &cell_xyz_[3 * i];
+      return std::size_t((std::uint64_t(c[0] - lo[0]) * ny + std::uint64_t(c[1] - lo[1])) * nz +
+                         std::uint64_t(c[2] - lo[2]));
+    };
+    for (std::size_t i = 0; i < n; ++i) ++cell_count_[lin(i) + 1];
+    for (std::size_t c = 0; c < cells; ++c) cell_count_[c + 1] += cell_count_[c];
+    for (std::size_t i = 0; i < n; ++i) order[cell_count_[lin(i)]++] = std::uint32_t(i);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+      return keys[p] != keys[q] ? keys[p] < keys[q] : p < q;
+    });
+  }
   // Occupied cells in key order: key and first particle of each run.
   cell_keys_.clear();
   cell_start_.clear();

@@ -1,0 +1,55 @@
+#pragma once
+// The resting-on-a-plane fast path of the particle collision pass (private to collision/):
+// particles lying on the one ground plane of a scene, resolved lane by lane in a loop the
+// compiler vectorises, with the same double arithmetic as the general slow path (resolve() in
+// particle_response.cpp), so the results are bit for bit the same. Coutinho §3.4 (the swept
+// sphere against the plane), §3.6.1 (Coulomb friction with the critical coefficient), §3.6.3
+// (resting contact: the normal velocity and acceleration cancelled, friction on their impulse).
+
+#include <cstddef>
+#include <cstdint>
+
+namespace simreel::sim::detail {
+
+/// Lanes of one batch of PlaneRest.
+inline constexpr std::size_t kPlaneRestLanes = 256;
+
+/// Input and output lanes (structure of arrays) of plane_rest(): one particle per lane.
+struct PlaneRestLanes {
+  // in: end-of-step position (m) and velocity (m/s) as integrated, mass (kg), radius (m), the
+  // particle's step dt = min(age, h) (s), and, for integrators that store it, the start-of-step
+  // position (m)
+  double bx[kPlaneRestLanes], by[kPlaneRestLanes], bz[kPlaneRestLanes];
+  double vx[kPlaneRestLanes], vy[kPlaneRestLanes], vz[kPlaneRestLanes];
+  double ax[kPlaneRestLanes], ay[kPlaneRestLanes], az[kPlaneRestLanes];
+  double m[kPlaneRestLanes], r[kPlaneRestLanes], dt[kPlaneRestLanes];
+  // out: position and velocity after the contact, rounded to float as they are stored (the
+  // input, exactly, where ok is 0)
+  float ox[kPlaneRestLanes], oy[kPlaneRestLanes], oz[kPlaneRestLanes];
+  float ovx[kPlaneRestLanes], ovy[kPlaneRestLanes], ovz[kPlaneRestLanes];
+  /// 1.0: the lane's particle touched the plane this step in a resting contact (§3.6.3) and the
+  /// outputs hold its result; 0.0: anything else (no contact, an impact that bounces, a second
+  /// contact within the step, a non-finite value): the caller runs the general path instead.
+  double ok[kPlaneRestLanes];
+  /// (m) the gap between the plane and the sphere at the output position as stored (floats):
+  /// when it is not >= 0, rounding put the centre a hair inside, and the caller steps it out as
+  /// the general path does.
+  double gap[kPlaneRestLanes];
+};
+
+/// The plane, its material and the system's forces, as plane_rest() needs them.
+struct PlaneRestParams {
+  double n[3];          ///< unit normal
+  double q[3];          ///< a point of the plane (m)
+  double g[3];          ///< gravity (m/s²)
+  double drag;          ///< k_d (kg/s)
+  double drag_quadratic;  ///< c_2 (kg/m)
+  double mu, mu_static;   ///< dynamic and static Coulomb coefficients
+  double contact_speed;   ///< (m/s) the §3.6.3 threshold
+  bool start_stored;      ///< the ax/ay/az lanes hold the start of the step (else recovered)
+};
+
+/// Resolves lanes [0, count) of `l` (count <= kPlaneRestLanes) against the plane `p`.
+void plane_rest(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p);
+
+}  // namespace simreel::sim::detail

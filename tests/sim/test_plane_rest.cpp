@@ -1,0 +1,138 @@
+// The resting-on-a-plane fast path of the particle collision pass (collision/plane_rest.hpp) gives
+// the general path's results bit for bit (Coutinho §3.4 swept sphere against the plane, §3.6.1
+// friction, §3.6.3 resting contact). The general path is reached with the same plane plus a
+// second, far one that nothing comes near (the fast path takes one plane only; the far plane
+// changes no value of the general path: its sweep finds nothing and its projections do nothing).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "collision/collider_impl.hpp"
+#include "simreel/sim/random.hpp"
+
+namespace simreel::sim {
+namespace {
+
+struct Case {
+  bool quadratic = false;   // quadratic drag
+  bool two_mu = false;      // a static coefficient other than the dynamic one
+  bool stored = false;      // the start of the step stored (RK4 systems)
+  Vec3 normal = Vec3::UnitZ();
+};
+
+/// A system of n particles around the plane through `q` with normal `nrm`, integrated one step
+/// of h by the caller's rule: the first `dense` lie on the plane (blocks resolved in place), the
+/// rest alternate between on it and well above it (blocks resolved through a compacted list);
+/// velocities cover resting, sliding, slow and fast impacts and separation, and a few newborns.
+detail::ParticleStore make_store(std::size_t n, std::size_t dense, const Vec3& q, const Vec3& nrm,
+                                 bool stored, double h) {
+  detail::ParticleStore s;
+  s.track_prev = stored;
+  s.reserve(n);
+  s.append(n);
+  Rng rng(7);
+  const Vec3 t1 = nrm.unitOrthogonal(), t2 = nrm.cross(t1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = rng.uniform(0.005, 0.05);
+    const bool on = i < dense || i % 2 == 0;
+    // Height of the centre above the plane after the step: around r (resting particles have
+    // sunk by about g h²), or far above.
+    const double z = on ? r + rng.uniform(-4e-4, 2e-5) : r + rng.uniform(0.5, 2.0);
+    const double kind = rng.uniform();
+    const double vn = kind < 0.7 ? -rng.uniform(0.0, 0.06)   // resting: about g h or less
+                      : kind < 0.8 ? -rng.uniform(0.5, 5.0)  // an impact that bounces
+                      : kind < 0.9 ? rng.uniform(0.0, 1.0)   // leaving
+                                   : 0.0;
+    const double slide = kind < 0.35 ? 0.0 : rng.uniform(0.0, 5.0);
+    const double phi = rng.uniform(0.0, 6.283185307179586);
+    const Vec3 p = q + (rng.uniform(-10, 10)) * t1 + (rng.uniform(-10, 10)) * t2 + z * nrm;
+    const Vec3 v = vn * nrm + slide * (std::cos(phi) * t1 + std::sin(phi) * t2);
+    for (int a = 0; a < 3; ++a) {
+      s.position[3 * i + std::size_t(a)] = float(p[a]);
+      s.velocity[3 * i + std::size_t(a)] = float(v[a]);
+      if (stored)  // where it was a step before: a little higher and behind
+        s.prev_position[3 * i + std::size_t(a)] = float(p[a] - h * v[a] + 1e-4 * nrm[a]);
+    }
+    s.radius[i] = float(r);
+    s.mass[i] = float(rng.uniform(1e-4, 1e-2));
+    s.age[i] = float(i % 17 == 0 ? rng.uniform(0.0, h) : 10.0);  // some born this step
+    s.lifetime[i] = 100.0f;
+  }
+  return s;
+}
+
+void expect_same_as_general_path(const Case& c) {
+  const double h = 1.0 / 240;
+  const Vec3 q(0.3, -0.2, 0.1);
+  detail::Collider ground;
+  ground.normal = c.normal.normalized();
+  ground.point = q;
+  ground.material = Material(0.5, 0.3);
+  if (c.two_mu) ground.material.static_friction = 0.6;
+  detail::Collider far = ground;
+  far.point = q - 1e5 * ground.normal;
+  detail::ForceParams f{};
+  const Vec3 g = -9.81 * Vec3::UnitZ();
+  for (int a = 0; a < 3; ++a) f.gravity[a] = float(g[a]);
+  f.drag = 2e-4f;
+  f.drag_quadratic = c.quadratic ? 3e-5f : 0.0f;
+  const std::size_t n = 4000, dense = 2048;
+  detail::ParticleStore fast = make_store(n, dense, q, ground.normal, c.stored, h);
+  detail::ParticleStore general = make_store(n, dense, q, ground.normal, c.stored, h);
+  const std::vector<detail::Collider> one{ground}, two{ground, far};
+  detail::CollisionContext ctx_fast, ctx_general;
+  detail::collide(fast, 0, n, h, one, ctx_fast, f);
+  detail::collide(general, 0, n, h, two, ctx_general, f);
+  // Bit for bit, and the pass did something: most particles near the plane moved.
+  std::size_t differ = 0, moved = 0;
+  const detail::ParticleStore before = make_store(n, dense, q, ground.normal, c.stored, h);
+  for (std::size_t i = 0; i < 3 * n; ++i) {
+    differ += std::memcmp(&fast.position[i], &general.position[i], sizeof(float)) != 0 ||
+              std::memcmp(&fast.velocity[i], &general.velocity[i], sizeof(float)) != 0;
+    moved += fast.velocity[i] != before.velocity[i];
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(moved, n);
+}
+
+TEST(SimPlaneRest, FastPathEqualsGeneralPathBitForBit) {
+  expect_same_as_general_path({});
+}
+
+TEST(SimPlaneRest, FastPathEqualsGeneralPathWithQuadraticDragStaticFrictionAndTilt) {
+  expect_same_as_general_path({true, false, false, Vec3::UnitZ()});
+  expect_same_as_general_path({false, true, false, Vec3::UnitZ()});
+  expect_same_as_general_path({false, false, false, Vec3(0.2, -0.1, 1.0)});
+  expect_same_as_general_path({true, true, false, Vec3(-0.3, 0.1, 1.0)});
+}
+
+TEST(SimPlaneRest, FastPathEqualsGeneralPathWithTheStartOfStepStored) {
+  expect_same_as_general_path({false, false, true, Vec3::UnitZ()});
+  expect_same_as_general_path({true, true, true, Vec3(0.1, 0.2, 1.0)});
+}
+
+TEST(SimPlaneRest, LargeSystemIsTheSameAtAnyThreadCount) {
+  const double h = 1.0 / 240;
+  detail::Collider ground;
+  ground.material = Material(0.5, 0.3);
+  detail::ForceParams f{};
+  f.gravity[2] = -9.81f;
+  f.drag = 2e-4f;
+  const std::size_t n = 40000;  // over kParallelMin: the blocks are split over the threads
+  std::vector<detail::ParticleStore> out;
+  for (int threads : {1, 2, 3}) {
+    out.push_back(make_store(n, n / 2, Vec3::Zero(), Vec3::UnitZ(), false, h));
+    detail::CollisionContext ctx;
+    ctx.threads = threads;
+    detail::collide(out.back(), 0, n, h, {ground}, ctx, f);
+  }
+  for (std::size_t t = 1; t < out.size(); ++t) {
+    EXPECT_EQ(std::memcmp(out[t].position.data(), out[0].position.data(), 3 * n * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(out[t].velocity.data(), out[0].velocity.data(), 3 * n * sizeof(float)), 0);
+  }
+}
+
+}  // namespace
+}  // namespace simreel::sim
