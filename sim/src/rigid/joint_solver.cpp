@@ -243,11 +243,20 @@ void JointSolver::assemble(const RigidBodies& r) {
   // solve's round-off keeps LDLᵀ defined without changing a well-posed answer.
   const double eps = 1e-10 * diag / double(n);
   for (std::size_t i = 0; i < n; ++i) triplets_.emplace_back(int(i), int(i), eps);
-  K_.resize(int(n), int(n));
-  K_.setFromTriplets(triplets_.begin(), triplets_.end());
-  if (pattern_ != last_pattern_) {
+  if (pattern_ != last_pattern_ || K_.rows() != int(n)) {
+    K_.resize(int(n), int(n));
+    K_.setFromTriplets(triplets_.begin(), triplets_.end());
     ldlt_.analyzePattern(K_);
     last_pattern_ = pattern_;
+    // The value slot of every triplet (the eps diagonal last): found once per pattern.
+    slot_.resize(triplets_.size());
+    const double* base = K_.valuePtr();
+    for (std::size_t k = 0; k < triplets_.size(); ++k)
+      slot_[k] = int(&K_.coeffRef(triplets_[k].row(), triplets_[k].col()) - base);
+  } else {
+    double* values = K_.valuePtr();
+    std::fill(values, values + K_.nonZeros(), 0.0);
+    for (std::size_t k = 0; k < triplets_.size(); ++k) values[slot_[k]] += triplets_[k].value();
   }
   ldlt_.factorize(K_);
   factor_ok_ = ldlt_.info() == Eigen::Success;

@@ -170,6 +170,9 @@ class JointSolver {
   std::vector<JointImpulse> impulse_;
   std::vector<Eigen::Triplet<double>> triplets_;
   std::vector<std::uint64_t> pattern_, last_pattern_;
+  /// Where each triplet's value goes in K_'s value array, while the pattern holds: K is then
+  /// refilled in place (the same sums in the same order as setFromTriplets) and re-factorised.
+  std::vector<int> slot_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> touch_;  ///< (body, row*2+side) scratch
   Eigen::SparseMatrix<double> K_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
