@@ -7,6 +7,10 @@ namespace simreel::app {
 
 namespace {
 
+/// (s) The camera's exposure that motion-blurs additive particle trails: shutter_deg / 360 /
+/// fps once the scene carries render.shutter_deg (issue 14, part A adds the key); 0 until then.
+float particle_shutter_s(const Scene& /*scene*/) { return 0.f; }
+
 /// Renderer material of a collider drawn in its scene colour.
 render::Material collider_material(const ColliderScene& c) {
   render::Material m;
@@ -150,6 +154,14 @@ void append_frame(const Scene& scene, const SceneWorld& sw, double t, render::Sc
     p.batch.radius = v.radius;
     p.batch.style = scene.emitters[i].style;
     p.batch.streak_s = scene.emitters[i].streak_s;
+    p.batch.age = v.age;
+    p.batch.lifetime = v.lifetime;
+    p.batch.id = v.id;
+    // The particle part of the camera's shutter (render.shutter_deg) lengthens the trail by the
+    // exposure, shutter_deg / 360 / fps; see particle_shutter_s.
+    p.batch.trail_s = scene.emitters[i].trail_s > 0.f ? scene.emitters[i].trail_s + particle_shutter_s(scene) : 0.f;
+    p.batch.emissive = scene.emitters[i].emissive;
+    p.batch.texture = scene.emitters[i].texture;
   }
   for (const sim::ClothHandle& h : sw.cloths) {
     const sim::ClothView v = sw.world.cloth(h);

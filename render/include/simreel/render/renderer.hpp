@@ -103,6 +103,21 @@ enum class ParticleStyle {
   droplet,
 };
 
+/// What a sprite is textured with. Both textures come from one seeded, tileable 3-D noise made
+/// once when the renderer starts (no image files): each particle reads its own slice, turned by
+/// its own angle, so no two puffs look alike and none pops as it ages.
+enum class ParticleTexture {
+  none,   ///< plain sphere (the styles as documented above)
+  /// Soft: a smoke puff. The noise modulates the opacity, the puff turns slowly and dissolves
+  /// from its thin parts as it ages (age / lifetime), and dense parts on the side away from
+  /// the sun are darker (a cheap self-shadow).
+  smoke,
+  /// Additive: a flame. The colour is a blackbody-like ramp of the particle's temperature,
+  /// falling with age (white-yellow core -> orange -> red -> dark), flickering per particle;
+  /// the noise breaks the glow into tongues. The particle's own RGB is ignored, its alpha kept.
+  flame,
+};
+
 /// A batch of particles, structure-of-arrays; copied during set_particles().
 struct ParticleBatch {
   std::size_t count = 0;
@@ -113,6 +128,21 @@ struct ParticleBatch {
   /// (count x 3) world frame (m/s); optional, read by `streak` only (null: round sprites).
   const float* velocity = nullptr;
   float streak_s = 0.02f;  ///< (s) streak length per unit speed: a streak covers velocity x streak_s
+  /// (count) age (s) and lifetime (s); optional (null: age 0), read by the textures.
+  const float* age = nullptr;
+  const float* lifetime = nullptr;
+  /// (count) stable particle ids; optional (null: the index): each particle's own noise slice,
+  /// angle and flicker follow it for its whole life.
+  const std::uint64_t* id = nullptr;
+  /// (s) additive only, with `velocity`: the sprite is drawn as a glowing streak from the
+  /// particle back along velocity x trail_s (a fading trail, or the camera's exposure time for
+  /// motion blur: the program adds shutter_deg / 360 / fps). The streak carries the energy of
+  /// the sprite it replaces (its summed brightness does not change with its length). 0: a dot.
+  float trail_s = 0.f;
+  /// Additive only: multiplies the colour; above 1 the frame holds values over 1 (HDR) where
+  /// the particle glows, which the bloom post-pass spreads.
+  float emissive = 1.f;
+  ParticleTexture texture = ParticleTexture::none;
 };
 
 struct SceneList;  // scene_list.hpp
@@ -153,8 +183,8 @@ class Renderer {
   void set_transform(ObjectKey key, const Vec3f& translation, const Mat3f& rotation);
   /// Replaces the particles drawn under `key` (creates the drawable on first use). The arrays
   /// are copied. Soft particles of all keys are sorted back to front together every frame.
-  /// @throws std::invalid_argument if count > 0 and an array is null, streak_s < 0, or the key
-  ///         holds a mesh.
+  /// @throws std::invalid_argument if count > 0 and an array is null, streak_s or trail_s < 0,
+  ///         emissive < 0, age is given without lifetime, or the key holds a mesh.
   void set_particles(ObjectKey key, const ParticleBatch& batch);
   void remove(ObjectKey key);  ///< unknown keys are ignored
   /// Applies one frame's SceneList (scene_list.hpp) in its order: added (add_* and
