@@ -223,8 +223,15 @@ void main() {
   vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
   vec3 head = (u_view * vec4(a_center_radius.xyz, 1.0)).xyz;
   vec3 tail = head + mat3(u_view) * a_trail;
+  // Clip the segment to the near plane at either end; wholly behind it, nothing is drawn (all
+  // four corners outside the clip volume).
   float limit = -1.001 * u_near;
-  if (tail.z > limit && head.z < limit) tail = mix(head, tail, (limit - head.z) / (tail.z - head.z));
+  if (head.z >= limit && tail.z >= limit) {
+    gl_Position = vec4(0.0, 0.0, -2.0, 1.0);
+    return;
+  }
+  if (tail.z > limit) tail = mix(head, tail, (limit - head.z) / (tail.z - head.z));
+  if (head.z > limit) head = mix(tail, head, (limit - tail.z) / (head.z - tail.z));
   vec4 ch = u_proj * vec4(head, 1.0);
   vec4 ct = u_proj * vec4(tail, 1.0);
   vec2 half_vp = 0.5 * u_viewport;
