@@ -7,9 +7,11 @@ namespace simreel::app {
 
 namespace {
 
-/// (s) The camera's exposure that motion-blurs additive particle trails: shutter_deg / 360 /
-/// fps once the scene carries render.shutter_deg (issue 14, part A adds the key); 0 until then.
-float particle_shutter_s(const Scene& /*scene*/) { return 0.f; }
+/// (s) The camera's exposure (render.shutter_deg / 360 / fps) that motion-blurs additive
+/// particles: their trails grow by it, and with a shutter every additive particle streaks.
+float particle_shutter_s(const Scene& scene) {
+  return scene.fps > 0.0 ? float(double(scene.render.shutter_deg) / 360.0 / scene.fps) : 0.f;
+}
 
 /// Renderer material of a collider drawn in its scene colour.
 render::Material collider_material(const ColliderScene& c) {
@@ -159,7 +161,7 @@ void append_frame(const Scene& scene, const SceneWorld& sw, double t, render::Sc
     p.batch.id = v.id;
     // The particle part of the camera's shutter (render.shutter_deg) lengthens the trail by the
     // exposure, shutter_deg / 360 / fps; see particle_shutter_s.
-    p.batch.trail_s = scene.emitters[i].trail_s > 0.f ? scene.emitters[i].trail_s + particle_shutter_s(scene) : 0.f;
+    p.batch.trail_s = scene.emitters[i].trail_s + particle_shutter_s(scene);
     p.batch.emissive = scene.emitters[i].emissive;
     p.batch.texture = scene.emitters[i].texture;
   }

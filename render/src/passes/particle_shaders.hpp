@@ -29,7 +29,8 @@ out vec4 v_color;
 out float v_sun;
 flat out vec4 v_center_view;  // sprite centre, view frame (m), and drawn radius (m)
 #if defined(SPARK) && SPARK
-flat out float v_tent;        // > 0: a sub-pixel spark splatted with a pixel tent; corner -> pixels
+// Small sparks: (corner -> pixels, corner -> glow radii, weight of the pixel-tent splat, its light)
+flat out vec4 v_spark;
 #endif
 void main() {
   // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
@@ -46,15 +47,17 @@ void main() {
   // A spark under a pixel is splatted with the bilinear tent of one pixel, whose weights at the
   // pixel centres always sum to 1 wherever the spark falls: its light is exactly the glow's
   // integral over its true disc (0.6123 r_px^2), with no twinkling as it moves. The quad spans
-  // +-1.5 px so every pixel the tent reaches is wholly covered (MSAA keeps its full weight).
-  v_tent = 0.0;
-  float light = 1.0;
-  if (px < 1.0) {
-    grow = 1.5 / max(px, 1e-4);
-    v_tent = 1.5;
-    light = 0.6123 * px * px;
+  // at least +-1.5 px so every pixel the tent reaches is wholly covered (MSAA keeps its full
+  // weight). Between 1 and 2 px the splat cross-fades into the glow disc (sampled at pixel
+  // centres, whose sum wanders with the position at that size), so nothing pops as a spark
+  // grows or shrinks through a pixel.
+  v_spark = vec4(0.0, 1.0, 0.0, 0.0);
+  if (px < 2.0) {
+    float half_px = max(px, 1.5);
+    grow = half_px / max(px, 1e-4);
+    v_spark = vec4(half_px, grow, 1.0 - smoothstep(1.0, 2.0, px), 0.6123 * px * px);
   }
-  v_color = vec4(a_color.rgb, a_color.a * light);
+  v_color = a_color;
 #else
   v_color = vec4(a_color.rgb, (u_opaque != 0 ? 1.0 : a_color.a) / (grow * grow));
 #endif
@@ -314,7 +317,7 @@ void main() {
 
 inline constexpr char kParticleAddFs[] = R"(
 out vec4 o_color;
-flat in float v_tent;
+flat in vec4 v_spark;
 #if defined(TEXTURED) && TEXTURED
 uniform sampler2D u_noise;
 in vec2 v_uv;
@@ -327,11 +330,12 @@ void main() {
   write_sphere_depth(h);
   // Bright core with a long falloff; exactly zero at the rim so quads leave no edges. Its
   // integral over the disc is 0.6123 (in radii squared), which the trails match.
-  float falloff = (1.0 - r2) * (1.0 - r2);
-  float glow = falloff * (0.35 + 0.65 * exp(-6.0 * r2));
-  if (v_tent > 0.0) {
-    vec2 t = max(1.0 - abs(v_corner * v_tent), 0.0);
-    glow = t.x * t.y;
+  vec2 q = v_corner * v_spark.y;  // in radii of the glow disc
+  float g2 = min(dot(q, q), 1.0);
+  float glow = (1.0 - g2) * (1.0 - g2) * (0.35 + 0.65 * exp(-6.0 * g2));
+  if (v_spark.z > 0.0) {
+    vec2 t = max(1.0 - abs(v_corner * v_spark.x), 0.0);
+    glow = mix(glow, t.x * t.y * v_spark.w, v_spark.z);
   }
   glow *= visible_fraction(h);
 #if defined(TEXTURED) && TEXTURED
