@@ -239,7 +239,7 @@ void main() {
   vec4 ct = u_proj * vec4(tail, 1.0);
   vec2 half_vp = 0.5 * u_viewport;
   vec2 d = (ct.xy / ct.w - ch.xy / ch.w) * half_vp;
-  float len = length(d);
+  float len = min(length(d), 1e5);  // finite however close to the camera plane an end lies
   vec2 u = len > 1e-3 ? d / len : vec2(1.0, 0.0);
   vec2 w = vec2(-u.y, u.x);
   float r = a_center_radius.w;
@@ -307,11 +307,11 @@ out vec4 o_color;
 void main() {
   vec2 q = vec2(v_local.x - clamp(v_local.x, 0.0, v_length), v_local.y);
   float d2 = dot(q, q);
-  if (d2 >= 1.0) discard;
+  if (!(d2 < 1.0)) discard;  // also drops a non-finite fragment
   float fade = clamp((scene_distance() - v_distance) / (2.0 * v_radius), 0.0, 1.0);
   float taper = 1.0 - 0.7 * clamp(v_local.x, 0.0, v_length) / max(v_length, 1.0);
   float glow = (1.0 - d2) * (1.0 - d2) * (0.35 + 0.65 * exp(-6.0 * d2));
-  o_color = vec4(v_color.rgb * (v_color.a * glow * taper * fade), 0.0);
+  o_color = vec4(min(v_color.rgb * (v_color.a * glow * taper * fade), vec3(1e3)), 0.0);
 }
 )";
 
