@@ -49,6 +49,7 @@ struct Case {
   ParticleStyle style;
   std::size_t particles;
   bool particle_shadows;
+  ParticleTexture texture = ParticleTexture::none;
 };
 
 }  // namespace
@@ -65,6 +66,8 @@ int main(int argc, char** argv) {
                         Case{"additive (no sort), msaa 4", 4, ParticleStyle::additive, n, false},
                         Case{"droplet (opaque), msaa 4", 4, ParticleStyle::droplet, n, false},
                         Case{"soft + particle shadows, msaa 4", 4, ParticleStyle::soft, n, true},
+                        Case{"soft, smoke texture, msaa 4", 4, ParticleStyle::soft, n, false, ParticleTexture::smoke},
+                        Case{"additive, flame texture, msaa 4", 4, ParticleStyle::additive, n, false, ParticleTexture::flame},
                         Case{"empty frame (sky, tone map, read back), msaa 4", 4, ParticleStyle::soft, 0, false}}) {
     RenderSettings s;
     s.width = 1280;
@@ -72,7 +75,8 @@ int main(int argc, char** argv) {
     s.msaa_samples = c.msaa;
     s.particle_shadows = c.particle_shadows;
     Renderer r(*context, s);
-    const ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
+    ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
+    batch.texture = c.texture;
     double wall = 0.0;
     const double ms = median_ms(frames, [&] {
       r.set_particles(1, batch);  // new data every frame, as from a simulation

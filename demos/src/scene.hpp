@@ -66,6 +66,9 @@ struct EmitterScene {
   sim::ParticleSystemDef system;
   render::ParticleStyle style = render::ParticleStyle::soft;
   float streak_s = 0.02f;  ///< (s) streak length per unit speed (render_style "streak")
+  float trail_s = 0.f;     ///< (s) additive: glowing trail behind each particle, velocity x trail_s
+  float emissive = 1.f;    ///< additive: colour multiplier (> 1 glows through the bloom pass)
+  render::ParticleTexture texture = render::ParticleTexture::none;
 };
 
 /// A force field with the names of the systems (emitters) it acts on (empty = all).

@@ -198,6 +198,16 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
             : style == "droplet" ? render::ParticleStyle::droplet
                                  : render::ParticleStyle::soft;
   e.streak_s = float(r.number("streak_s", 0.02, 0.0, 10.0));
+  e.trail_s = float(r.number("trail_s", 0.0, 0.0, 10.0));
+  e.emissive = float(r.number("emissive", 1.0, 0.0, 100.0));
+  const std::string texture = r.choice("texture", "none", {"none", "smoke", "flame"});
+  e.texture = texture == "smoke"   ? render::ParticleTexture::smoke
+              : texture == "flame" ? render::ParticleTexture::flame
+                                   : render::ParticleTexture::none;
+  if (e.texture == render::ParticleTexture::smoke && e.style != render::ParticleStyle::soft)
+    r.error_at(r.pointer("texture"), "expected \"smoke\" only with \"render_style\": \"soft\"");
+  if (e.texture == render::ParticleTexture::flame && e.style != render::ParticleStyle::additive)
+    r.error_at(r.pointer("texture"), "expected \"flame\" only with \"render_style\": \"additive\"");
   r.finish();
   return e;
 }

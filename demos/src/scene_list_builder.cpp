@@ -7,6 +7,12 @@ namespace simreel::app {
 
 namespace {
 
+/// (s) The camera's exposure (render.shutter_deg / 360 / fps) that motion-blurs additive
+/// particles: their trails grow by it, and with a shutter every additive particle streaks.
+float particle_shutter_s(const Scene& scene) {
+  return scene.fps > 0.0 ? float(double(scene.render.shutter_deg) / 360.0 / scene.fps) : 0.f;
+}
+
 /// Renderer material of a collider drawn in its scene colour.
 render::Material collider_material(const ColliderScene& c) {
   render::Material m;
@@ -150,6 +156,14 @@ void append_frame(const Scene& scene, const SceneWorld& sw, double t, render::Sc
     p.batch.radius = v.radius;
     p.batch.style = scene.emitters[i].style;
     p.batch.streak_s = scene.emitters[i].streak_s;
+    p.batch.age = v.age;
+    p.batch.lifetime = v.lifetime;
+    p.batch.id = v.id;
+    // The particle part of the camera's shutter (render.shutter_deg) lengthens the trail by the
+    // exposure, shutter_deg / 360 / fps; see particle_shutter_s.
+    p.batch.trail_s = scene.emitters[i].trail_s + particle_shutter_s(scene);
+    p.batch.emissive = scene.emitters[i].emissive;
+    p.batch.texture = scene.emitters[i].texture;
   }
   for (const sim::ClothHandle& h : sw.cloths) {
     const sim::ClothView v = sw.world.cloth(h);

@@ -109,6 +109,8 @@ json smoke_emitter(const json& k, const std::string& name, double rise, double l
                  {"size_fraction", 0.85},
                  {"lifetime_deviation", 0.15 * lifetime}}},
       {"render_style", "soft"},
+      // Noise-textured puffs that turn and dissolve as they age, self-shadowed (issue 14).
+      {"texture", "smoke"},
       {"max_particles", 60000}};
   return e;
 }
@@ -156,7 +158,8 @@ Derived fire_smoke(const json& k, const std::string& name) {
                                    key(st[0], rgba(1.4, 0.95, 0.2, a)), key(st[1], rgba(1.1, 0.45, 0.08, a)),
                                    key(0.5 * (st[1] + st[2]), rgba(0.28, 0.25, 0.23, 0.9 * a)),
                                    key(st[2], rgba(0.16, 0.15, 0.145, 0.85 * a)),
-                                   key(1.0, rgba(0.03, 0.03, 0.03, 0.0))});
+                                   // Wood smoke thins out dark grey, not black.
+                                   key(1.0, rgba(0.12, 0.115, 0.11, 0.0))});
   const double drag = 2e-4 / 1.0;
   json smoke_e = smoke_emitter(k, name + "/smoke", rise, life, density, radius, colors, drag);
   smoke_e["role"] = "smoke";
@@ -184,6 +187,10 @@ Derived fire_smoke(const json& k, const std::string& name) {
                                                      key(1.0, rgba(0.6, 0.12, 0.02, 0.0))})},
                {"size_over_lifetime", json::array({{{"t", 0.0}, {"size", 1.0}}, {{"t", 1.0}, {"size", 0.35}}})},
                {"render_style", "additive"},
+               // Colour from the temperature ramp (white-yellow -> orange -> red), flickering,
+               // in noise tongues; brighter than 1 so the bloom pass makes it glow.
+               {"texture", "flame"},
+               {"emissive", 1.3},
                {"max_particles", 20000}};
   d.emitters.push_back(core);
   const auto w = vec3(k, "wind_m_s");
@@ -367,6 +374,8 @@ Derived explosion(const json& k, const std::string& name) {
   sparks["color_over_lifetime"] = json::array({key(0.0, rgba(2.0, 1.6, 0.7, 1.0)), key(0.4, rgba(1.6, 0.7, 0.15, 0.9)),
                                                key(1.0, rgba(0.6, 0.1, 0.02, 0.0))});
   sparks["render_style"] = "additive";
+  sparks["trail_s"] = 0.05;  // fast sparks streak
+  sparks["emissive"] = 1.5;
   sparks["max_particles"] = n + 10;
   d.emitters.push_back(sparks);
 
@@ -394,8 +403,55 @@ Derived explosion(const json& k, const std::string& name) {
                       {"size_fraction", 0.8},
                       {"lifetime_deviation", 0.2 * life}};
   smoke["render_style"] = "soft";
+  smoke["texture"] = "smoke";
   smoke["max_particles"] = 200000;
   d.emitters.push_back(smoke);
+
+  // The fireball: a few large flame sprites that swell over ~0.7 s while their temperature ramp
+  // cools them from white-yellow through orange to red embers, rising a little (buoyancy), as
+  // the smoke above takes over.
+  const long long balls = std::clamp<long long>(n / 25, 8, 120);
+  json fireball = base("fireball", balls);
+  fireball["lifetime"] = dist(0.75, 0.15, 0.35, 1.2);
+  fireball["start_speed"] = dist(0.25 * speed, 0.08 * speed, 0.0, 0.5 * speed);
+  fireball["spread_deg"] = dist(0.0, sphere ? 90.0 : 45.0);
+  fireball["mass"] = dist(2e-4, 0.0);
+  fireball["particle_radius"] = dist(2.2 * radius, 0.5 * radius, 1.0 * radius, 4.0 * radius);
+  fireball["gravity"] = json::array({0, 0, 1.5});
+  fireball["drag"] = 2e-4 / 0.12;
+  fireball["collide"] = false;
+  fireball["color_over_lifetime"] = json::array({key(0.0, rgba(1, 1, 1, 0.9)), key(0.5, rgba(1, 1, 1, 0.6)),
+                                                 key(1.0, rgba(1, 1, 1, 0.0))});
+  fireball["size_over_lifetime"] = json::array({{{"t", 0.0}, {"size", 0.6}}, {{"t", 1.0}, {"size", 2.6}}});
+  fireball["render_style"] = "additive";
+  fireball["texture"] = "flame";
+  fireball["emissive"] = 2.0;
+  fireball["max_particles"] = balls + 4;
+  d.emitters.push_back(fireball);
+
+  // The dust ring: the blast's wave raises dust from the ground under it, rolling outwards.
+  if (flag(k, "dust_ring")) {
+    json dust = base("dust", std::max<long long>(40, n / 5));
+    dust["shape"] = "disk";
+    dust["disk_radius"] = std::max(0.3, 2.0 * radius);
+    dust["position"] = json::array({pos[0], pos[1], num(k, "ground_z_m") + 0.05});
+    dust["bursts"] = json::array({{{"time", t + 0.05}, {"count", std::max<long long>(40, n / 5)}}});
+    dust["lifetime"] = dist(0.9 * life, 0.2 * life, 0.3 * life, 2.0 * life);
+    dust["start_speed"] = dist(0.6 * speed, 0.15 * speed, 0.1 * speed, 1.2 * speed);
+    dust["spread_deg"] = dist(84.0, 3.0, 75.0, 89.0);  // nearly flat: outwards along the ground
+    dust["mass"] = dist(2e-4, 2e-5, 1e-4, 4e-4);
+    dust["particle_radius"] = dist(0.35, 0.08, 0.15, 0.6);
+    dust["gravity"] = json::array({0, 0, 0});
+    dust["drag"] = 2e-4 / 0.35;  // stops within ~2 m: a ring, not a spray
+    dust["collide"] = false;
+    dust["color_over_lifetime"] = json::array({key(0.0, rgba(0.5, 0.43, 0.34, 0.0)), key(0.08, rgba(0.5, 0.43, 0.34, 0.4)),
+                                               key(1.0, rgba(0.46, 0.41, 0.35, 0.0))});
+    dust["size_over_lifetime"] = json::array({{{"t", 0.0}, {"size", 0.6}}, {{"t", 1.0}, {"size", 2.4}}});
+    dust["render_style"] = "soft";
+    dust["texture"] = "smoke";
+    dust["max_particles"] = std::max<long long>(40, n / 5) + 4;
+    d.emitters.push_back(dust);
+  }
   return d;
 }
 
@@ -444,6 +500,9 @@ Derived fireworks(const json& k, const std::string& name, double g) {
                           {"particle_radius", dist(0.14, 0.0)},
                           {"color", rgba(1.8, 1.3, 0.6, 1.0)},
                           {"render_style", "additive"},
+                          // Visible while it rises: a glowing trail of its last 0.25 s.
+                          {"trail_s", 0.25},
+                          {"emissive", 2.0},
                           {"collide", false},
                           {"max_particles", 4}});
     const auto c = palette_color(str(k, "palette"), s);
@@ -468,6 +527,8 @@ Derived fireworks(const json& k, const std::string& name, double g) {
                                                     key(0.75, rgba(0.6 * c[0], 0.6 * c[1], 0.6 * c[2], 0.7)),
                                                     key(1.0, rgba(0.2 * c[0], 0.2 * c[1], 0.2 * c[2], 0.0))})},
               {"render_style", "additive"},
+              {"trail_s", 0.12},  // stars streak as they fly out, then shorten as drag slows them
+              {"emissive", 1.5},
               {"max_particles", stars * 33 + 10}};
     // Trails: each star sheds a slow spark every 0.1 s (split, §3.9.1); the sparks inherit the
     // star's age (± a little) so they fade with it, and split again: 2^5 = 32 points per star.

@@ -18,8 +18,10 @@
 namespace simreel::render::detail {
 
 // Particle instances as the particle shaders read them.
-inline constexpr std::size_t kInstanceFloats = 8;   // centre xyz, radius, colour rgba
-inline constexpr std::size_t kStreakFloats = 12;    // the same, then head-to-tail offset xyz, padding
+// The texture parameter packs a textured particle's age / lifetime (integer part, 0..1023) and
+// its own random number (fraction, in 1/4096); -1 marks an untextured particle.
+inline constexpr std::size_t kInstanceFloats = 9;   // centre xyz, radius, colour rgba, texture parameter
+inline constexpr std::size_t kStreakFloats = 12;    // centre xyz, radius, colour rgba, head-to-tail offset xyz, texture parameter
 
 enum class DrawableKind { plane, box, mesh, particles };
 
@@ -40,6 +42,8 @@ struct Drawable {
   bool dynamic = false;
   std::vector<float> instances;  // particles, kInstanceFloats (kStreakFloats for streaks) each
   ParticleStyle style = ParticleStyle::soft;
+  ParticleTexture particle_texture = ParticleTexture::none;
+  bool trail = false;  // additive streaks (kStreakFloats per particle)
 };
 
 struct DrawableTable {

@@ -21,6 +21,7 @@
 #include "gl/targets.hpp"
 #include "passes/frame.hpp"
 #include "passes/mesh_pass.hpp"
+#include "passes/particle_look.hpp"
 #include "passes/particle_pass.hpp"
 #include "passes/post_pass.hpp"
 #include "passes/shadow_pass.hpp"
@@ -361,6 +362,12 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
   if (!(batch.streak_s >= 0.f)) {
     throw std::invalid_argument("renderer: particle batch streak_s must be >= 0 s");
   }
+  if (!(batch.trail_s >= 0.f) || !(batch.emissive >= 0.f)) {
+    throw std::invalid_argument("renderer: particle batch trail_s and emissive must be >= 0");
+  }
+  if (batch.count > 0 && batch.age != nullptr && batch.lifetime == nullptr) {
+    throw std::invalid_argument("renderer: particle batch has ages but no lifetimes");
+  }
   auto it = impl_->table.by_key.find(key);
   Drawable* d = nullptr;
   if (it == impl_->table.by_key.end()) {
@@ -371,7 +378,13 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
     d = &it->second;
   }
   d->style = batch.style;
-  const bool streak = batch.style == ParticleStyle::streak;
+  d->particle_texture = batch.texture;
+  const bool additive = batch.style == ParticleStyle::additive;
+  d->trail = additive && batch.trail_s > 0.f && batch.velocity != nullptr;
+  const bool streak = batch.style == ParticleStyle::streak || d->trail;
+  const float streak_s = d->trail ? batch.trail_s : batch.streak_s;
+  const bool flame = additive && batch.texture == ParticleTexture::flame;
+  const bool textured = batch.texture != ParticleTexture::none;
   const std::size_t floats = streak ? detail::kStreakFloats : detail::kInstanceFloats;
   d->instances.resize(batch.count * floats);  // keeps its capacity when shrinking
   float* out = d->instances.data();
@@ -379,12 +392,26 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
     std::memcpy(out, batch.position + 3 * i, 3 * sizeof(float));
     out[3] = batch.radius[i];
     std::memcpy(out + 4, batch.color + 4 * i, 4 * sizeof(float));
+    float param = -1.f;
+    if (textured || flame) {
+      const float age = batch.age != nullptr ? batch.age[i] : 0.f;
+      const float life = batch.lifetime != nullptr ? batch.lifetime[i] : 0.f;
+      const float age01 = life > 0.f ? std::clamp(age / life, 0.f, 1.f) : 0.f;
+      const float rnd = detail::particle_random(batch.id != nullptr ? batch.id[i] : std::uint64_t(i));
+      param = std::floor(age01 * 1023.f) + std::floor(rnd * 4096.f) / 4096.f;
+      if (flame) detail::flame_color(age01, age, rnd, out + 4);
+    }
+    if (additive) {
+      for (int k = 4; k < 7; ++k) out[k] *= batch.emissive;
+    }
     if (streak) {
       // The tail trails behind the head, against the velocity.
       for (int k = 0; k < 3; ++k) {
-        out[8 + k] = batch.velocity != nullptr ? -batch.velocity[3 * i + k] * batch.streak_s : 0.f;
+        out[8 + k] = batch.velocity != nullptr ? -batch.velocity[3 * i + k] * streak_s : 0.f;
       }
-      out[11] = 0.f;
+      out[11] = param;
+    } else {
+      out[8] = param;
     }
   }
 }

@@ -161,7 +161,7 @@ TEST(SceneCamera, BadPathAndOrbitValuesNamePointers) {
   EXPECT_NE(e.find("not both"), std::string::npos) << e;
   EXPECT_NE(e.find("/camera/path/0: expected a \"time\""), std::string::npos) << e;
   e = errors_of(json::parse(R"({"render":{"background":"night"}})"));
-  EXPECT_NE(e.find("s.json: /render/background: expected \"sky\" or a colour"), std::string::npos) << e;
+  EXPECT_NE(e.find("s.json: /render/background: expected \"sky\", \"transparent\" or a colour"), std::string::npos) << e;
 }
 
 TEST(SceneCloth, ParticleContactKeysAreReadAndChecked) {

@@ -181,6 +181,35 @@ TEST(SceneList, FrameListViewsTheWorldsParticlesAndClothsAndFollowsTheCamera) {
   EXPECT_TRUE(list.moved.empty());
 }
 
+TEST(SceneList, ParticleLookKeysAndTheShutterReachTheBatch) {
+  // 180 degrees at 30 fps: an exposure of 1/60 s added to every additive particle's trail.
+  const Scene scene = scene_of(R"({
+    "fps": 30,
+    "render": {"shutter_deg": 180},
+    "emitters": [
+      {"name": "a", "rate": 600, "render_style": "additive", "trail_s": 0.1, "emissive": 2.5, "texture": "flame"},
+      {"name": "b", "rate": 300, "render_style": "soft", "texture": "smoke"}
+    ]
+  })");
+  SceneWorld sw = build_world(scene);
+  for (int frame = 0; frame < 5; ++frame) sw.world.advance(1.0 / 30.0);
+  render::SceneList list;
+  append_frame(scene, sw, 5.0 / 30.0, list);
+  ASSERT_EQ(list.particles.size(), 2u);
+  const render::ParticleBatch& a = list.particles[0].batch;
+  const render::ParticleBatch& b = list.particles[1].batch;
+  EXPECT_FLOAT_EQ(a.trail_s, 0.1f + 1.f / 60.f);
+  EXPECT_FLOAT_EQ(a.emissive, 2.5f);
+  EXPECT_EQ(a.texture, render::ParticleTexture::flame);
+  EXPECT_EQ(b.texture, render::ParticleTexture::smoke);
+  const sim::ParticleView v = sw.world.particles(sw.systems[0]);
+  EXPECT_EQ(a.age, v.age);
+  EXPECT_EQ(a.lifetime, v.lifetime);
+  EXPECT_EQ(a.id, v.id);
+  // A flame texture needs an additive style.
+  EXPECT_THROW(scene_of(R"({"emitters": [{"render_style": "soft", "texture": "flame"}]})"), std::exception);
+}
+
 TEST(SceneList, RemovalsReachTheListOnceAndOnlyForDrawnKinds) {
   Scene scene = scene_of(R"({
     "colliders": [

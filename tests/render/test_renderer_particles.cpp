@@ -257,6 +257,29 @@ Image feature_frame(Backend backend) {
   const float dpos[] = {-0.5f, -1.f, 1.f};
   const float drad[] = {0.08f};
   r.set_particles(21, ParticleBatch{1, dpos, col, drad, ParticleStyle::droplet});
+  // The particles' look (issue 14): a glowing trail, a textured flame, a textured smoke puff and
+  // a sub-pixel spark.
+  const float fpos[] = {0.8f, -1.f, 1.8f, -0.8f, -0.5f, 1.6f, 0.2f, -2.f, 1.4f};
+  const float fvel[] = {3.f, 0.f, 2.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f};
+  const float frad[] = {0.05f, 0.35f, 0.004f};
+  const float fage[] = {0.1f, 0.4f, 0.2f};
+  const float flife[] = {1.f, 1.f, 1.f};
+  ParticleBatch trail{1, fpos, col, frad, ParticleStyle::additive};
+  trail.velocity = fvel;
+  trail.trail_s = 0.2f;
+  trail.emissive = 2.f;
+  r.set_particles(22, trail);
+  ParticleBatch flame{1, fpos + 3, col, frad + 1, ParticleStyle::additive};
+  flame.age = fage + 1;
+  flame.lifetime = flife;
+  flame.texture = ParticleTexture::flame;
+  r.set_particles(23, flame);
+  ParticleBatch smoke{1, fpos + 3, col, frad + 1, ParticleStyle::soft};
+  smoke.age = fage + 1;
+  smoke.lifetime = flife;
+  smoke.texture = ParticleTexture::smoke;
+  r.set_particles(24, smoke);
+  r.set_particles(25, ParticleBatch{1, fpos + 6, col, frad + 2, ParticleStyle::additive});
   return r.render();
 }
 

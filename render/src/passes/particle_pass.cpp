@@ -11,6 +11,53 @@
 #include "shadow_shaders.hpp"
 
 namespace simreel::render::detail {
+namespace {
+
+constexpr int kNoiseSize = 128;      // texels along each side of the tileable noise
+constexpr std::uint32_t kNoiseSeed = 0x5eed5eedu;
+
+// Lattice value in [0, 1) at integer (x, y) of octave `o`, wrapped to `period` cells so the
+// texture tiles (a 32-bit integer hash: the same bytes on every machine).
+float lattice(int x, int y, int period, int o) {
+  std::uint32_t h = kNoiseSeed ^ std::uint32_t(o) * 0x27d4eb2du;
+  h ^= std::uint32_t((x % period + period) % period) * 0x85ebca6bu;
+  h = (h ^ (h >> 15)) * 0x2c1b3c6du;
+  h ^= std::uint32_t((y % period + period) % period) * 0xc2b2ae35u;
+  h = (h ^ (h >> 13)) * 0x297a2d39u;
+  h ^= h >> 16;
+  return float(h >> 8) * (1.f / 16777216.f);
+}
+
+// Tileable fractal value noise (five octaves, periods 4..64 cells over the tile), stretched to
+// [0, 255]: the puffs' and flames' texture. Made once, from a fixed seed, with integer hashes
+// and float arithmetic in a fixed order, so every run and machine uploads the same bytes.
+std::vector<std::uint8_t> make_noise() {
+  std::vector<float> v(std::size_t(kNoiseSize) * kNoiseSize, 0.f);
+  float amplitude = 1.f;
+  for (int o = 0; o < 5; ++o, amplitude *= 0.55f) {
+    const int period = 4 << o;
+    const float cell = float(kNoiseSize) / float(period);
+    for (int y = 0; y < kNoiseSize; ++y) {
+      for (int x = 0; x < kNoiseSize; ++x) {
+        const float fx = float(x) / cell, fy = float(y) / cell;
+        const int ix = int(fx), iy = int(fy);
+        float tx = fx - float(ix), ty = fy - float(iy);
+        tx = tx * tx * (3.f - 2.f * tx);
+        ty = ty * ty * (3.f - 2.f * ty);
+        const float a = lattice(ix, iy, period, o), b = lattice(ix + 1, iy, period, o);
+        const float c = lattice(ix, iy + 1, period, o), d = lattice(ix + 1, iy + 1, period, o);
+        v[std::size_t(y) * kNoiseSize + x] += amplitude * ((a + tx * (b - a)) + ty * ((c + tx * (d - c)) - (a + tx * (b - a))));
+      }
+    }
+  }
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  const float low = *lo, scale = 255.f / std::max(*hi - *lo, 1e-6f);
+  std::vector<std::uint8_t> bytes(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) bytes[i] = std::uint8_t(std::lround((v[i] - low) * scale));
+  return bytes;
+}
+
+}  // namespace
 
 void ParticlePass::create(const GlTable& gl) {
   gl_ = &gl;
@@ -19,7 +66,8 @@ void ParticlePass::create(const GlTable& gl) {
   // instance, several times slower for 100k sprites. The index buffer is shared.
   gl.GenBuffers(1, &quad_ebo_);
   streaks_.floats = kStreakFloats;
-  for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_}) {
+  trails_.floats = kStreakFloats;
+  for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_, &trails_}) {
     gl.GenVertexArrays(1, &stream->vao);
     gl.BindVertexArray(stream->vao);
     gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, quad_ebo_);
@@ -27,19 +75,37 @@ void ParticlePass::create(const GlTable& gl) {
     gl.BindBuffer(GL_ARRAY_BUFFER, stream->instances);
     const GLsizei stride = GLsizei(stream->floats * sizeof(float));
     for (GLuint attribute = 1; 4 * (attribute - 1) < stream->floats; ++attribute) {
+      const std::size_t first = 4 * (attribute - 1);
       gl.EnableVertexAttribArray(attribute);
-      gl.VertexAttribPointer(attribute, 4, GL_FLOAT, GL_FALSE, stride,
-                             reinterpret_cast<const void*>(4 * (attribute - 1) * sizeof(float)));
+      gl.VertexAttribPointer(attribute, GLint(std::min<std::size_t>(4, stream->floats - first)), GL_FLOAT,
+                             GL_FALSE, stride, reinterpret_cast<const void*>(first * sizeof(float)));
     }
   }
   gl.BindVertexArray(0);
   gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+
+  const std::vector<std::uint8_t> noise = make_noise();
+  gl.GenTextures(1, &noise_);
+  gl.ActiveTexture(GL_TEXTURE5);
+  gl.BindTexture(GL_TEXTURE_2D, noise_);
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_R8, kNoiseSize, kNoiseSize, 0, GL_RED, GL_UNSIGNED_BYTE, noise.data());
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  gl.GenerateMipmap(GL_TEXTURE_2D);  // small puffs read a blurred level: no sparkle
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  gl.BindTexture(GL_TEXTURE_2D, 0);
+  gl.ActiveTexture(GL_TEXTURE0);
 }
 
 void ParticlePass::destroy() noexcept {
   if (gl_ == nullptr) return;
   const GlTable& gl = *gl_;
-  for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_}) {
+  if (noise_ != 0) gl.DeleteTextures(1, &noise_);
+  noise_ = 0;
+  for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_, &trails_}) {
     if (stream->vao != 0) gl.DeleteVertexArrays(1, &stream->vao);
     if (stream->instances != 0) gl.DeleteBuffers(1, &stream->instances);
     *stream = Stream{};
@@ -59,12 +125,17 @@ void ParticlePass::gather(const DrawableTable& table, const Camera& camera) {
   additive_.staging.clear();
   droplets_.staging.clear();
   streaks_.staging.clear();
+  trails_.staging.clear();
+  smoke_ = flame_ = false;
   table.for_each([&](const Drawable& d) {
     if (d.kind != DrawableKind::particles) return;
     std::vector<float>* dst = &soft_.staging;
-    if (d.style == ParticleStyle::additive) dst = &additive_.staging;
+    if (d.style == ParticleStyle::additive) dst = d.trail ? &trails_.staging : &additive_.staging;
     if (d.style == ParticleStyle::droplet) dst = &droplets_.staging;
     if (d.style == ParticleStyle::streak) dst = &streaks_.staging;
+    if (d.instances.empty()) return;
+    smoke_ |= d.style == ParticleStyle::soft && d.particle_texture == ParticleTexture::smoke;
+    flame_ |= d.style == ParticleStyle::additive && !d.trail && d.particle_texture == ParticleTexture::flame;
     dst->insert(dst->end(), d.instances.begin(), d.instances.end());
   });
 
@@ -80,7 +151,7 @@ void ParticlePass::gather(const DrawableTable& table, const Camera& camera) {
     order = sort_.sort(sort_depth_).data();
   }
   upload(soft_, order);
-  for (Stream* stream : {&additive_, &droplets_, &streaks_}) upload(*stream);
+  for (Stream* stream : {&additive_, &droplets_, &streaks_, &trails_}) upload(*stream);
 }
 
 void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
@@ -146,6 +217,7 @@ void ParticlePass::set_uniforms(const Program& p, const FrameView& frame,
   p.set("u_opaque", 0);
   p.set("u_shadow_map", 1);
   p.set("u_scene_depth", 3);
+  p.set("u_noise", 5);
   p.set("u_depth_params", proj(2, 2), proj(2, 3));
   p.set("u_shadow_enabled", shadow.enabled ? 1 : 0);
   p.set("u_light_view_proj", shadow.light_view_proj);
@@ -163,15 +235,22 @@ const Program& ParticlePass::program(Style style, const RenderSettings& settings
     // The fragment stages see SUN_TAPS too: without a shadow map v_sun is the constant 1.
     const char* taps = variant == 0 ? "#define SUN_TAPS 0\n" : variant == 1 ? "#define SUN_TAPS 1\n"
                                                                          : "#define SUN_TAPS 4\n";
-    static constexpr const char* kNames[] = {"soft particle", "additive particle",
-                                             "droplet particle", "streak particle"};
-    static constexpr const char* kSphereFs[] = {kParticleSoftFs, kParticleAddFs, kParticleDropletFs};
-    const bool streak = style == streak_style;
-    const std::string vs = glsl_source({taps, kShadowGlsl, streak ? kStreakVs : kParticleVs});
+    static constexpr const char* kNames[] = {"soft particle",  "additive particle", "droplet particle",
+                                             "streak particle", "trail particle",   "smoke particle",
+                                             "flame particle"};
+    static constexpr const char* kSphereFs[] = {kParticleSoftFs, kParticleAddFs, kParticleDropletFs, "", "",
+                                                kParticleSoftFs, kParticleAddFs};
+    const bool streak = style == streak_style || style == trail_style;
+    const char* textured =
+        style == smoke_style || style == flame_style ? "#define TEXTURED 1\n" : "#define TEXTURED 0\n";
+    const char* additive = style == trail_style ? "#define ADDITIVE 1\n" : "#define ADDITIVE 0\n";
+    const char* spark = style == additive_style || style == flame_style ? "#define SPARK 1\n" : "#define SPARK 0\n";
+    const std::string vs =
+        glsl_source({taps, textured, additive, spark, kShadowGlsl, streak ? kStreakVs : kParticleVs});
     // Sprites stand for spheres and take their depth; a streak is a flat capsule.
     const std::string fs =
-        streak ? glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, kStreakFs})
-               : glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kSphereFs[style]});
+        streak ? glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, style == trail_style ? kTrailFs : kStreakFs})
+               : glsl_source({taps, textured, kAmbientGlsl, kSceneDepthGlsl, kSphereDepthGlsl, kSphereFs[style]});
     p = Program(gl, kNames[style], vs, fs);
   }
   return p;
@@ -192,9 +271,12 @@ void ParticlePass::draw_droplets(const FrameView& frame, const ShadowView& shado
 
 void ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow,
                                 SceneTarget& target, bool opaque_drawables) {
-  if (soft_.count == 0 && additive_.count == 0 && streaks_.count == 0) return;
+  if (soft_.count == 0 && additive_.count == 0 && streaks_.count == 0 && trails_.count == 0) return;
   const GlTable& gl = *gl_;
   target.copy_depth(opaque_drawables || droplets_.count > 0);
+  gl.ActiveTexture(GL_TEXTURE5);
+  gl.BindTexture(GL_TEXTURE_2D, noise_);
+  gl.ActiveTexture(GL_TEXTURE0);
   gl.Enable(GL_BLEND);
   gl.DepthMask(GL_FALSE);
   struct Layer {
@@ -203,9 +285,10 @@ void ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow
     bool premultiplied;
   };
   const RenderSettings& s = frame.settings;
-  for (const Layer& layer : {Layer{&soft_, &program(soft_style, s, shadow), true},
+  for (const Layer& layer : {Layer{&soft_, &program(smoke_ ? smoke_style : soft_style, s, shadow), true},
                              Layer{&streaks_, &program(streak_style, s, shadow), true},
-                             Layer{&additive_, &program(additive_style, s, shadow), false}}) {
+                             Layer{&trails_, &program(trail_style, s, shadow), false},
+                             Layer{&additive_, &program(flame_ ? flame_style : additive_style, s, shadow), false}}) {
     if (layer.stream->count == 0) continue;
     set_uniforms(*layer.program, frame, shadow);
     if (layer.premultiplied) {

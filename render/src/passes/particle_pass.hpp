@@ -2,7 +2,8 @@
 // Private: the particle passes. Every batch's particles are merged by style into one stream
 // each (soft ones sorted back to front across batches, so overlapping batches blend correctly)
 // and drawn as indexed quads: droplets with the opaque geometry, then soft, streak and additive
-// sprites blended over it, faded against a copy of the opaque depth.
+// sprites (dots and trails) blended over it, faded against a copy of the opaque depth. Smoke and
+// flame textures read one seeded, tileable noise texture made in create().
 
 #include <cstddef>
 #include <cstdint>
@@ -23,7 +24,7 @@ class ParticlePass {
   void destroy() noexcept;
 
   /// Merges the particle drawables of `table` by style (in key order), sorts the soft ones back
-  /// to front as seen from `camera` and uploads all four streams.
+  /// to front as seen from `camera` and uploads all five streams.
   void gather(const DrawableTable& table, const Camera& camera);
   /// The uploaded soft and droplet particles (the shadow pass draws them as casters).
   [[nodiscard]] QuadBatch soft() const { return {soft_.vao, soft_.count}; }
@@ -51,7 +52,13 @@ class ParticlePass {
   // Particle programs by style and by sun taps per vertex (0: no shadow map this frame, 1, or
   // 4 with particle casters), compiled on first use: llvmpipe runs a vertex shader's texture
   // lookups even when a uniform branch skips them, so each variant samples only what it needs.
-  enum Style { soft_style, additive_style, droplet_style, streak_style };
+  // The textured variants are used for a whole stream in frames where one of its batches is
+  // textured (untextured particles in it carry parameter -1): frames without textures pay
+  // nothing for them.
+  enum Style {
+    soft_style, additive_style, droplet_style, streak_style, trail_style, smoke_style, flame_style,
+    style_count
+  };
 
   void upload(Stream& stream, const std::uint32_t* order = nullptr);
   const Program& program(Style style, const RenderSettings& settings, const ShadowView& shadow);
@@ -60,8 +67,10 @@ class ParticlePass {
   const GlTable* gl_ = nullptr;
   GLuint quad_ebo_ = 0;
   std::size_t quad_capacity_ = 0;  // particles quad_ebo_ indexes
-  Stream soft_, additive_, droplets_, streaks_;
-  Program programs_[4][3];
+  Stream soft_, additive_, droplets_, streaks_, trails_;
+  bool smoke_ = false, flame_ = false;  // this frame's soft / additive stream holds a textured batch
+  GLuint noise_ = 0;                    // the noise texture (texture unit 5)
+  Program programs_[style_count][3];
   std::vector<float> sort_depth_;
   BackToFrontSort sort_;
 };
