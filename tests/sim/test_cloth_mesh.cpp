@@ -58,8 +58,9 @@ TEST(ClothMesh, SpringFamiliesFromEdgesAndTrianglePairs) {
   EXPECT_TRUE(t.from_mesh);
   EXPECT_EQ(t.vertex_count(), k * k);
   EXPECT_EQ(t.edges.size() / 2, stretch);  // every edge is a stretch spring and a contact edge
-  for (std::size_t s = 0; s < t.spring_count(); ++s)
+  for (std::size_t s = 0; s < t.spring_count(); ++s) {
     if (t.kind[s] == SpringKind::bend) EXPECT_NEAR(t.rest_length[s], std::sqrt(5.0) * 0.25, 1e-12);
+  }
 }
 
 TEST(ClothMesh, BadMeshesAreRefusedNamingTheTriangle) {
@@ -143,8 +144,9 @@ TEST(ClothMesh, SquareMeshHangsAndDrapesLikeTheGridCloth) {
     // Hanging, the lowest point is where the strain limit holds the far corners; draped, it is
     // a corner's droop, which is set by the bend springs that differ: not compared there
     // (measured 0.86 m grid, 0.97 m mesh, the mesh's one bend spring per edge being softer).
-    if (!draped)
+    if (!draped) {
       EXPECT_NEAR(low_m, low_g, 0.03 * low_g) << "grid " << low_g << " m, mesh " << low_m << " m";
+    }
     std::printf("%s: mean drop grid %.4f mesh %.4f, lowest grid %.4f mesh %.4f, strain %.4f %.4f\n",
                 draped ? "draped" : "hanging", drop_g, drop_m, low_g, low_m, g.max_strain, m.max_strain);
   }
