@@ -138,7 +138,8 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   if (r.has("mass") && r.has("areal_density"))
     r.error_at(r.pointer("areal_density"), "expected either \"mass\" or \"areal_density\", not both");
   if (r.has("areal_density"))
-    d.mass = r.number("areal_density", 0.2, 0.0, kInf, true) * (r.has("mesh") ? mesh_area : d.width * d.height);
+    d.mass = r.has("mesh") ? r.number("areal_density", 0.2, 0.0, kInf, true) * mesh_area
+                           : r.number("areal_density", 0.2, 0.0, kInf, true) * d.width * d.height;
   else
     d.mass = r.number("mass", 0.2, ranges::kClothMass);
   d.transform.translation = to_vec(r.vec3("position", {0, 0, 1}));
