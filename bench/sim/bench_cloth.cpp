@@ -50,7 +50,9 @@
 //   size     simreel 1 thr   simreel 2 thr   Bullet 3.24    ratio (1 thr)  strain simreel / Bullet
 //   64x64    1.49 s          1.48 s          1.57 s         0.95           0.100 / max 11.8, p99 0.47
 //   128x128  8.30 s          7.97 s          9.10 s         0.91           0.100 / max 105, p99 2.2
-//   256x256  21.4 s          20.0 s          (Bullet crashed: n² bending table; now run without)
+//   256x256  21.4 s          20.0 s          29.2 s (*)     0.73           0.100 / max 2372, p99 86
+// (*) without bending links: with them Bullet crashed at 256 x 256 (its generator's n² table);
+//     it ran alone, after the others, in the same build.
 // Bullet's stretch gathers in the links at the pinned corners (max link strain 11.8 = a link
 // 12.8 times its rest length at 64x64); 99 % of its links are within 47 %. With 2 threads
 // simreel's process CPU stays the same (the loops split, nothing is computed twice) and the wall
