@@ -35,20 +35,71 @@
 //   128 x 128: CPU 7.1-7.3 s at 1 and 2 threads, CG 35.3, passes 27.7, strain 0.100
 //   64 x 64 with CLOTH_SELF=1 (self-collision): CPU 7.2 s (5x), CG 35.3, passes 36.9, max
 //              strain 0.105 (the self contacts have the last word over the strain limit)
-// Bullet 3.24's btSoftBody is not run beside it here (no peer program for cloth yet).
-// Env CLOTH_THREADS sets WorldDef::threads (default 1); CLOTH_SELF=1 turns self-collision on
-// (issue 16), to measure its cost apart.
+//
+// Since issue 16 the run holds both engines: simreel at 1 and 2 threads (cloth_peer_scene/N/T)
+// and, when Debian's libbullet-dev is found, Bullet 3.24's btSoftBody on the same scene
+// (bullet_peer_scene/N): CreatePatch with diagonals (shear links), bending links at distance 2
+// (up to 128 x 128),
+// total mass 1 kg, piterations 10, stepSimulation(1/60, 1, 1/60): one step per frame. At the end
+// a table gives each size's CPU seconds, max strain (stretch and shear links / springs, largest
+// after any frame) and the simreel / Bullet time ratio. CPU time of the process (all threads).
+// Env CLOTH_SELF=1 turns self-collision on (issue 16), to measure its cost apart.
+//
+// Measured 2026-11-22 (wt-16, one run of both engines, machine shared: load average ~12 on 2
+// cores, wall ~9x CPU; OMP_WAIT_POLICY=passive; CPU s of the process, all threads):
+//   size     simreel 1 thr   simreel 2 thr   Bullet 3.24    ratio (1 thr)  strain simreel / Bullet
+//   64x64    1.49 s          1.48 s          1.57 s         0.95           0.100 / max 11.8, p99 0.47
+//   128x128  8.30 s          7.97 s          9.10 s         0.91           0.100 / max 105, p99 2.2
+//   256x256  21.4 s          20.0 s          29.2 s (*)     0.73           0.100 / max 2372, p99 86
+// (*) without bending links: with them Bullet crashed at 256 x 256 (its generator's n² table);
+//     it ran alone, after the others, in the same build.
+// Bullet's stretch gathers in the links at the pinned corners (max link strain 11.8 = a link
+// 12.8 times its rest length at 64x64); 99 % of its links are within 47 %. With 2 threads
+// simreel's process CPU stays the same (the loops split, nothing is computed twice) and the wall
+// time fell 13.9 -> 9.2 s (64x64), 53 -> 40 s (128x128), 127 -> 114 s (256x256), but on this
+// machine's load wall times move by tens of percent from run to run: measure the 2-thread gain
+// on an idle machine. The default OMP_WAIT_POLICY (spinning) made the 2-thread run cost 47 s
+// of CPU on this loaded machine (the spinning thread is counted); passive waits cost nothing.
+// The CG's spring-then-gather product (parallel form) costs the same on one thread as the
+// former scatter (1.69 s old vs 1.72 s new in the same minute, identical counters).
 #include <benchmark/benchmark.h>
+#include <time.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <map>
+#include <tuple>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "simreel/sim/world.hpp"
+
+#ifdef SIMREEL_HAVE_BULLET
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+#endif
 
 namespace {
 
 using namespace simreel::sim;
+
+constexpr int kFrames = 240;
+
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+struct Row {
+  double cpu = 0.0, p99 = 0.0, strain = 0.0;  // p99: 99th-percentile link strain (Bullet)
+};
+// (engine, nodes, threads) -> last run; engine 0 simreel, 1 Bullet.
+std::map<std::tuple<int, int, int>, Row> g_rows;
 
 ClothDef peer_cloth(std::size_t nodes) {
   ClothDef d;
@@ -65,17 +116,18 @@ ClothDef peer_cloth(std::size_t nodes) {
 
 void cloth_peer_scene(benchmark::State& state) {
   const auto nodes = std::size_t(state.range(0));
-  constexpr int kFrames = 240;
-  double max_strain = 0.0, cg = 0.0, passes = 0.0;
+  const int threads = int(state.range(1));
+  double max_strain = 0.0, cg = 0.0, passes = 0.0, cpu = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
-    const char* threads = std::getenv("CLOTH_THREADS");
-    World world(WorldDef{1.0 / 60, 1, 0.05, threads != nullptr ? std::atoi(threads) : 1});
+    World world(WorldDef{1.0 / 60, 1, 0.05, threads});
     const ClothHandle h = world.add_cloth(peer_cloth(nodes));
-    max_strain = cg = passes = 0.0;
+    max_strain = cg = passes = cpu = 0.0;
     state.ResumeTiming();
     for (int f = 0; f < kFrames; ++f) {
+      const double c0 = cpu_seconds();
       world.advance(1.0 / 60);
+      cpu += cpu_seconds() - c0;
       state.PauseTiming();  // the statistics pass is not part of the simulation
       const ClothStats s = world.cloth_stats(h);
       max_strain = std::max(max_strain, s.max_strain);
@@ -86,12 +138,122 @@ void cloth_peer_scene(benchmark::State& state) {
   }
   state.counters["node_frames"] = benchmark::Counter(
       double(nodes * nodes) * kFrames * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["cpu_s"] = cpu;
   state.counters["max_strain"] = max_strain;
   state.counters["cg_iterations"] = cg / kFrames;
   state.counters["strain_passes"] = passes / kFrames;
+  g_rows[{0, int(nodes), threads}] = {cpu, 0.0, max_strain};
+}
+
+#ifdef SIMREEL_HAVE_BULLET
+/// Largest l / L - 1 over the soft body's structural and shear links (bending links left out, as
+/// simreel's max_strain leaves out its bend springs).
+/// Also the 99th percentile (Bullet's stretch gathers in the links next to the pinned corners).
+std::pair<double, double> bullet_strain(const btSoftBody& sb, std::vector<double>& work) {
+  work.clear();
+  for (int i = 0; i < sb.m_links.size(); ++i) {
+    const btSoftBody::Link& l = sb.m_links[i];
+    if (l.m_bbending) continue;
+    const double len = double((l.m_n[0]->m_x - l.m_n[1]->m_x).length());
+    work.push_back(len / double(l.m_rl) - 1.0);
+  }
+  const auto p99 = work.begin() + std::ptrdiff_t(0.99 * double(work.size()));
+  std::nth_element(work.begin(), p99, work.end());
+  return {*std::max_element(p99, work.end()), *p99};
+}
+
+void bullet_peer_scene(benchmark::State& state) {
+  const int nodes = int(state.range(0));
+  double max_strain = 0.0, p99_strain = 0.0, cpu = 0.0;
+  std::vector<double> work;
+  for (auto _ : state) {
+    state.PauseTiming();
+    btSoftBodyRigidBodyCollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase broadphase;
+    btSequentialImpulseConstraintSolver solver;
+    btSoftRigidDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
+    world.setGravity(btVector3(0, 0, btScalar(-9.81)));
+    btSoftBodyWorldInfo& info = world.getWorldInfo();
+    info.m_gravity = btVector3(0, 0, btScalar(-9.81));
+    info.m_sparsesdf.Initialize();
+    // Row 0 at y = +0.5 as simreel's grid; corners (0,0) and (N-1,0) fixed (flags 1 + 2).
+    btSoftBody* sb = btSoftBodyHelpers::CreatePatch(
+        info, btVector3(-0.5, 0.5, 2), btVector3(0.5, 0.5, 2), btVector3(-0.5, -0.5, 2),
+        btVector3(0.5, -0.5, 2), nodes, nodes, 1 + 2, true);
+    sb->m_cfg.piterations = 10;
+    // Bullet's generator builds an n² table of node adjacency (17 GB at 256 x 256: it crashed
+    // there), so the largest size runs without bending links.
+    if (nodes <= 128) sb->generateBendingConstraints(2, sb->appendMaterial());
+    sb->setTotalMass(1.0);
+    world.addSoftBody(sb);
+    max_strain = cpu = 0.0;
+    state.ResumeTiming();
+    for (int f = 0; f < kFrames; ++f) {
+      const double c0 = cpu_seconds();
+      world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+      cpu += cpu_seconds() - c0;
+      state.PauseTiming();
+      const auto [mx, p99] = bullet_strain(*sb, work);
+      max_strain = std::max(max_strain, mx);
+      p99_strain = std::max(p99_strain, p99);
+      state.ResumeTiming();
+    }
+    state.PauseTiming();
+    world.removeSoftBody(sb);
+    delete sb;
+    state.ResumeTiming();
+  }
+  state.counters["cpu_s"] = cpu;
+  state.counters["max_strain"] = max_strain;
+  state.counters["p99_strain"] = p99_strain;
+  g_rows[{1, nodes, 1}] = {cpu, p99_strain, max_strain};
+}
+#endif
+
+void print_summary() {
+  std::printf("\nsize     engine        threads  CPU s     max strain  simreel/Bullet\n");
+  for (const auto& [key, row] : g_rows) {
+    const auto [engine, nodes, threads] = key;
+    if (engine != 0) continue;
+    const auto peer = g_rows.find({1, nodes, 1});
+    if (peer != g_rows.end())
+      std::printf("%3dx%-3d  simreel       %d        %-8.3f  %-10.4f  %.2f\n", nodes, nodes,
+                  threads, row.cpu, row.strain, row.cpu / peer->second.cpu);
+    else
+      std::printf("%3dx%-3d  simreel       %d        %-8.3f  %-10.4f  -\n", nodes, nodes, threads,
+                  row.cpu, row.strain);
+  }
+  for (const auto& [key, row] : g_rows) {
+    const auto [engine, nodes, threads] = key;
+    if (engine == 1)
+      std::printf("%3dx%-3d  Bullet 3.24   1        %-8.3f  %-10.4f  1  (99th percentile "
+                  "link strain %.3f)\n", nodes, nodes, row.cpu, row.strain, row.p99);
+  }
 }
 
 }  // namespace
 
-BENCHMARK(cloth_peer_scene)->Arg(64)->Arg(128)->Arg(256)->Iterations(1)->Unit(benchmark::kSecond)
+BENCHMARK(cloth_peer_scene)
+    ->ArgNames({"nodes", "threads"})
+    ->ArgsProduct({{64, 128, 256}, {1, 2}})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
     ->UseRealTime();
+#ifdef SIMREEL_HAVE_BULLET
+BENCHMARK(bullet_peer_scene)
+    ->ArgNames({"nodes"})
+    ->Arg(64)->Arg(128)->Arg(256)
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+#endif
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  print_summary();
+  return 0;
+}

@@ -1,6 +1,10 @@
 // cloths[i] (Coutinho §3.9.2; README "cloths[i]").
 #include <algorithm>
+#include <array>
+#include <filesystem>
+#include <map>
 
+#include "simreel/assets/mesh.hpp"
 #include "scene_read.hpp"
 
 namespace simreel::app::scene_read {
@@ -17,6 +21,95 @@ sim::SpringParams spring_params(ObjectReader& r, const std::string& key, sim::Sp
   return fallback;
 }
 
+/// "mesh": a triangle mesh file (relative to the scene file) as the cloth (issue 16). Vertices at
+/// the same place are welded (a file's UV or normal seams would otherwise cut the cloth); "scale"
+/// (one number or [sx, sy, sz]) multiplies them. Returns the mesh area (m²) for "areal_density".
+double cloth_mesh(ObjectReader& r, sim::ClothMesh& mesh) {
+  std::array<double, 3> scale{1, 1, 1};
+  if (const json* sj = r.get("scale"); sj && sj->is_number()) {
+    const double k = r.number("scale", 1.0, 0.0, kInf, true);
+    scale = {k, k, k};
+  } else if (sj) {
+    const auto k = r.numbers("scale", {1, 1, 1}, 3, 0.0, kInf, true);
+    scale = {k[0], k[1], k[2]};
+  }
+  const std::string name = r.string("mesh", "");
+  if (name.empty()) {
+    r.error_at(r.pointer("mesh"), "expected a mesh file name (OBJ, PLY, glTF, ...)");
+    return 0.0;
+  }
+  const std::filesystem::path path = std::filesystem::path(r.file()).parent_path() / name;
+  assets::TriangleMesh m;
+  try {
+    m = assets::load_mesh(path);
+  } catch (const assets::AssetError& e) {
+    r.error_at(r.pointer("mesh"), e.what());
+    return 0.0;
+  }
+  std::map<std::array<float, 3>, std::uint32_t> weld;
+  std::vector<std::uint32_t> index(m.positions.size());
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    const auto& p = m.positions[i];
+    const auto [it, fresh] = weld.try_emplace({p.x(), p.y(), p.z()}, std::uint32_t(mesh.vertices.size()));
+    index[i] = it->second;
+    if (!fresh) continue;
+    mesh.vertices.emplace_back(double(p.x()) * scale[0], double(p.y()) * scale[1], double(p.z()) * scale[2]);
+    mesh.uvs.insert(mesh.uvs.end(), {m.uvs[i].x(), 1.0f - m.uvs[i].y()});
+  }
+  bool any_uv = false;
+  for (const auto& uv : m.uvs) any_uv = any_uv || uv.x() != 0.0f || uv.y() != 0.0f;
+  if (!any_uv) mesh.uvs.clear();  // planar from the local x, y (ClothTopology)
+  double area = 0.0;
+  for (const auto& t : m.triangles) {
+    mesh.triangles.insert(mesh.triangles.end(), {index[t[0]], index[t[1]], index[t[2]]});
+    const sim::Vec3 &a = mesh.vertices[index[t[0]]], &b = mesh.vertices[index[t[1]]],
+                    &c = mesh.vertices[index[t[2]]];
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  // The engine's own checks (ClothTopology), reported here with the file and the pointer.
+  try {
+    (void)sim::ClothTopology(mesh);
+  } catch (const std::invalid_argument& e) {
+    r.error_at(r.pointer("mesh"), path.string() + ": " + e.what());
+    mesh = {};
+  }
+  return area;
+}
+
+/// Pins of a mesh cloth: {"vertex": i} or {"box_min": [x, y, z], "box_max": [x, y, z]} (every
+/// vertex inside the box, mesh coordinates after "scale"), each with an optional "path".
+void mesh_pins(ObjectReader& r, const json& pins, sim::ClothDef& d) {
+  const std::size_t n = d.mesh.vertices.size();
+  for (std::size_t i = 0; i < pins.size(); ++i) {
+    const std::string pp = r.pointer("pins") + "/" + std::to_string(i);
+    if (!pins[i].is_object()) {
+      r.error_at(pp, "expected an object {\"vertex\"} or {\"box_min\", \"box_max\"}, found " + describe(pins[i]));
+      continue;
+    }
+    ObjectReader pr(pins[i], pp, r.file(), r.errors());
+    sim::KeyframePath path = keyframe_path(pr, "path");
+    if (pr.has("vertex")) {
+      pr.record("vertex", {{"type", "integer"}, {"minimum", 0}});
+      const auto v = std::size_t(pr.integer("vertex", 0, 0, std::max<long long>(0, (long long)n - 1)));
+      d.pins.push_back({0, v, path});
+    } else if (pr.has("box_min") && pr.has("box_max")) {
+      const auto lo = pr.vec3("box_min", {0, 0, 0}), hi = pr.vec3("box_max", {0, 0, 0});
+      std::size_t found = 0;
+      for (std::size_t v = 0; v < n; ++v) {
+        const sim::Vec3& p = d.mesh.vertices[v];
+        if (p.x() < lo[0] || p.y() < lo[1] || p.z() < lo[2] || p.x() > hi[0] || p.y() > hi[1] || p.z() > hi[2])
+          continue;
+        d.pins.push_back({0, v, path});
+        ++found;
+      }
+      if (found == 0 && n > 0) pr.error_at(pp, "expected the box to hold some vertex of the mesh, found none");
+    } else {
+      pr.error_at(pp, "expected \"vertex\" or both \"box_min\" and \"box_max\"");
+    }
+    pr.finish();
+  }
+}
+
 }  // namespace
 
 ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
@@ -25,21 +118,37 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   sim::ClothDef& d = c.def;
   ObjectReader r(j, ptr, file, errors);
   d.name = r.string("name", "cloth" + std::to_string(index));
-  d.rows = std::size_t(r.integer("rows", 16, ranges::kClothGrid));
-  d.columns = std::size_t(r.integer("columns", 16, ranges::kClothGrid));
-  if (d.rows * d.columns < 2) r.error_at(r.pointer("rows"), "expected rows * columns >= 2");
-  const auto size = r.numbers("size_m", {1.0, 1.0}, 2, ranges::kClothSize);
-  d.width = size[0];
-  d.height = size[1];
+  double mesh_area = 0.0;
+  if (r.has("mesh")) {
+    for (const char* key : {"rows", "columns", "size_m"})
+      if (r.has(key)) r.error_at(r.pointer(key), std::string("expected either \"mesh\" or \"") + key + "\", not both");
+    mesh_area = cloth_mesh(r, d.mesh);
+  }
+  if (r.has("mesh")) {  // one row of vertices (sim::ClothDef::mesh)
+    d.rows = 1;
+    d.columns = std::max<std::size_t>(d.mesh.vertices.size(), 1);
+  } else {
+    d.rows = std::size_t(r.integer("rows", 16, ranges::kClothGrid));
+    d.columns = std::size_t(r.integer("columns", 16, ranges::kClothGrid));
+    if (d.rows * d.columns < 2) r.error_at(r.pointer("rows"), "expected rows * columns >= 2");
+    const auto size = r.numbers("size_m", {1.0, 1.0}, 2, ranges::kClothSize);
+    d.width = size[0];
+    d.height = size[1];
+  }
   if (r.has("mass") && r.has("areal_density"))
     r.error_at(r.pointer("areal_density"), "expected either \"mass\" or \"areal_density\", not both");
   if (r.has("areal_density"))
-    d.mass = r.number("areal_density", 0.2, 0.0, kInf, true) * d.width * d.height;
+    d.mass = r.has("mesh") ? r.number("areal_density", 0.2, 0.0, kInf, true) * mesh_area
+                           : r.number("areal_density", 0.2, 0.0, kInf, true) * d.width * d.height;
   else
     d.mass = r.number("mass", 0.2, ranges::kClothMass);
   d.transform.translation = to_vec(r.vec3("position", {0, 0, 1}));
   d.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
-  if (const json* pins = r.get("pins")) {
+  if (const json* pins = r.get("pins"); pins && r.has("mesh")) {
+    if (pins->is_array()) mesh_pins(r, *pins, d);
+    else if (!(pins->is_string() && pins->get<std::string>() == "none"))
+      r.error("pins", "for a mesh cloth an array of {\"vertex\"} or {\"box_min\", \"box_max\"} or \"none\"", *pins);
+  } else if (pins) {
     if (pins->is_string()) {
       const std::string preset = r.choice("pins", "", {"top_edge", "two_corners", "left_edge", "none"});
       if (preset == "top_edge")

@@ -114,6 +114,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"fire_smoke", 0x83be94637b123da8ull},
       {"fireworks", 0xa843a276bd6be29eull},
       {"flag", 0x806e318803a6c5f0ull},
+      {"flag_gale", 0x86c447d23f1e3a59ull},  // issue 16; 1, 2 and 4 threads agreed
       {"forces", 0xd6d70a5dc62686a0ull},
       {"fountain", 0x6fd21b514d981ab8ull},
       {"jet", 0x32e133308e45664full},

@@ -29,11 +29,13 @@ namespace {
 }
 
 void validate(const ClothDef& d) {
-  require_in((long long)d.rows, ranges::kClothGrid, "ClothDef.rows");
-  require_in((long long)d.columns, ranges::kClothGrid, "ClothDef.columns");
-  if (d.rows * d.columns < 2) bad("rows * columns", ">= 2", double(d.rows * d.columns));
-  require_in(d.width, ranges::kClothSize, "ClothDef.width");
-  require_in(d.height, ranges::kClothSize, "ClothDef.height");
+  if (d.mesh.empty()) {
+    require_in((long long)d.rows, ranges::kClothGrid, "ClothDef.rows");
+    require_in((long long)d.columns, ranges::kClothGrid, "ClothDef.columns");
+    if (d.rows * d.columns < 2) bad("rows * columns", ">= 2", double(d.rows * d.columns));
+    require_in(d.width, ranges::kClothSize, "ClothDef.width");
+    require_in(d.height, ranges::kClothSize, "ClothDef.height");
+  }
   require_in(d.mass, ranges::kClothMass, "ClothDef.mass");
   if (!d.transform.translation.allFinite() || !d.transform.rotation.coeffs().allFinite() ||
       d.transform.rotation.norm() == 0.0)
@@ -42,8 +44,12 @@ void validate(const ClothDef& d) {
     const ClothPin& p = d.pins[i];
     if (p.row >= d.rows || p.column >= d.columns) {
       std::ostringstream m;
-      m << "ClothDef.pins[" << i << "] (row " << p.row << ", column " << p.column
-        << ") is outside the " << d.rows << " x " << d.columns << " grid";
+      if (!d.mesh.empty())
+        m << "ClothDef.pins[" << i << "] names vertex " << p.column << " (row " << p.row
+          << ") of a mesh cloth with " << d.columns << " vertices";
+      else
+        m << "ClothDef.pins[" << i << "] (row " << p.row << ", column " << p.column
+          << ") is outside the " << d.rows << " x " << d.columns << " grid";
       throw std::invalid_argument(m.str());
     }
     detail::validate(p.path, "ClothDef.pins[" + std::to_string(i) + "].path");
@@ -104,18 +110,25 @@ Cloth::Cloth(const ClothDef& def, std::uint64_t seed, std::uint64_t index)
 Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
              std::uint64_t seed, std::uint64_t index)
     : s_(std::make_unique<State>()) {
-  validate(def);
   State& S = *s_;
   S.def = def;
+  if (!def.mesh.empty()) {  // a mesh cloth: one row of vertices (see ClothDef::mesh)
+    S.def.rows = 1;
+    S.def.columns = def.mesh.vertices.size();
+  }
+  validate(S.def);
   S.def.transform.rotation.normalize();
   if (!topology)
-    topology = std::make_shared<const ClothTopology>(def.rows, def.columns, def.width, def.height);
-  if (topology->rows != def.rows || topology->columns != def.columns ||
-      topology->width != def.width || topology->height != def.height)
+    topology = def.mesh.empty() ? std::make_shared<const ClothTopology>(def.rows, def.columns,
+                                                                         def.width, def.height)
+                                : std::make_shared<const ClothTopology>(def.mesh);
+  if (def.mesh.empty() != !topology->from_mesh || topology->rows != S.def.rows ||
+      topology->columns != S.def.columns ||
+      (def.mesh.empty() && (topology->width != def.width || topology->height != def.height)))
     throw std::invalid_argument("Cloth: the shared topology does not match the ClothDef grid");
   S.topo = std::move(topology);
   S.noise_key = mix(seed ^ mix(index + 0x636c6f7468ULL));  // "cloth"
-  S.n = def.rows * def.columns;
+  S.n = S.def.rows * S.def.columns;
   const std::size_t n = S.n, ns = S.topo->spring_count();
   S.vertex_mass = def.mass / double(n);
   S.x.resize(n);
@@ -128,7 +141,7 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
   S.pin_of.assign(n, -1);
   S.pin_rest.assign(n, Vec3::Zero());
   for (std::size_t k = 0; k < def.pins.size(); ++k) {
-    const std::size_t i = def.pins[k].row * def.columns + def.pins[k].column;
+    const std::size_t i = def.pins[k].row * S.def.columns + def.pins[k].column;
     S.free[i] = 0;
     S.pin_of[i] = int(k);
     S.pin_rest[i] = S.x[i];
@@ -142,6 +155,9 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     S.kds[s] = S.kd_of(s);
   }
   S.spring_length.assign(ns, 0.0);
+  S.spring_work.assign(ns, Vec3::Zero());
+  S.vertex_work.assign(n, 0.0);
+  S.vertex_work2.assign(n, 0.0);
   S.spring_dir.assign(ns, Vec3::Zero());
   S.precond.assign(n, Sym3{});
   for (std::size_t i = 0; i < n; ++i)
@@ -166,8 +182,9 @@ Cloth::Cloth(Cloth&&) noexcept = default;
 Cloth& Cloth::operator=(Cloth&&) noexcept = default;
 
 bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* colliders,
-                 detail::BodyImpulses* impulses) {
+                 detail::BodyImpulses* impulses, int threads) {
   State& S = *s_;
+  S.threads = std::max(1, threads);
   const double h = t1 - t0;
   S.x_start = S.x;
   S.forces(t0);

@@ -24,18 +24,39 @@ Vec3 Cloth::State::wind(const Vec3& p, double t) const {
 
 void Cloth::State::forces(double t) {
   const ClothTopology& T = *topo;
-  for (std::size_t i = 0; i < n; ++i) f[i] = vertex_mass * (def.gravity - def.damping * v[i]);
-  for (std::size_t s = 0; s < T.spring_count(); ++s) {
-    const std::uint32_t a = T.spring_a[s], b = T.spring_b[s];
+  const std::size_t ns = T.spring_count();
+  const std::uint32_t* __restrict sa = T.spring_a.data();
+  const std::uint32_t* __restrict sb = T.spring_b.data();
+  double* __restrict len = spring_length.data();
+  Vec3* __restrict F = spring_work.data();
+  const int th = threads;
+  const bool par = parallel();
+  // Each spring's force on its end a, then each vertex gathers its springs in spring order: the
+  // additions of a scatter over the springs in the same order, so the same bits at any thread
+  // count.
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
+  for (std::size_t s = 0; s < ns; ++s) {
+    const std::uint32_t a = sa[s], b = sb[s];
     const Vec3 d = x[b] - x[a];
     const double l = d.norm();
-    spring_length[s] = l;  // reused by the implicit step's Jacobian (x has not moved since)
+    len[s] = l;  // reused by the implicit step's Jacobian (x has not moved since)
     if (!(l > 0.0)) continue;
     const Vec3 u = d / l;
     spring_dir[s] = u;
-    const Vec3 fa = (ks[s] * (l - T.rest_length[s]) + kds[s] * (v[b] - v[a]).dot(u)) * u;
-    f[a] += fa;
-    f[b] -= fa;
+    F[s] = (ks[s] * (l - T.rest_length[s]) + kds[s] * (v[b] - v[a]).dot(u)) * u;
+  }
+  const std::uint32_t* __restrict adj_start = T.adj_start.data();
+  const std::uint32_t* __restrict adj_spring = T.adj_spring.data();
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 fi = vertex_mass * (def.gravity - def.damping * v[i]);
+    for (std::uint32_t k = adj_start[i]; k < adj_start[i + 1]; ++k) {
+      const std::uint32_t s = adj_spring[k];
+      if (!(len[s] > 0.0)) continue;
+      if (sa[s] == i) fi += F[s];
+      else fi -= F[s];
+    }
+    f[i] = fi;
   }
   const AeroDef& ae = def.aero;
   const bool jac = def.integrator == ClothIntegrator::implicit_euler;

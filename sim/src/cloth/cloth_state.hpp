@@ -37,6 +37,13 @@ struct Cloth::State {
   std::vector<std::uint32_t> pinned;  // pinned vertex indices
   bool aero_active = false;
   std::vector<Vec3> dv, b, r, z, p, Ap;
+  std::vector<Vec3> spring_work;     // per spring: force (forces()), h² K Δv0 or S y (implicit)
+  std::vector<double> vertex_work, vertex_work2;  // per vertex: terms of the CG sums
+  /// OpenMP threads for the spring and vertex loops (WorldDef::threads); every loop writes only
+  /// its own element and every sum runs in index order, so any count gives the same bits.
+  int threads = 1;
+  [[nodiscard]] bool parallel() const { return threads > 1 && n >= kParallelVertices; }
+  static constexpr std::size_t kParallelVertices = 2048;
   // Maximum-deformation pass workspace.
   std::vector<double> t, t_next;
   std::vector<std::int32_t> changed_in;  // per vertex: last pass that changed its t (-1: none)

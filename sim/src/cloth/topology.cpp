@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 
 #include "simreel/sim/cloth.hpp"
 
@@ -59,6 +61,11 @@ ClothTopology::ClothTopology(std::size_t rows_, std::size_t columns_, double wid
       const std::uint32_t a = id(r, c), b = id(r, c + 1), cc = id(r + 1, c), d = id(r + 1, c + 1);
       triangles.insert(triangles.end(), {a, cc, d, a, d, b});
     }
+  finish();
+}
+
+/// Unique edges and the vertex → spring adjacency, from the springs and triangles.
+void ClothTopology::finish() {
   // Unique edges of the triangles, each with the first triangle holding it.
   {
     std::vector<std::array<std::uint32_t, 3>> e;  // (a, b, triangle * 3 + k)
@@ -79,6 +86,7 @@ ClothTopology::ClothTopology(std::size_t rows_, std::size_t columns_, double wid
     }
   }
   // Adjacency in CSR form, springs of each vertex in spring order (a fixed summation order).
+  const std::size_t n = local_rest.size();
   adj_start.assign(n + 1, 0);
   for (std::size_t s = 0; s < spring_a.size(); ++s) {
     ++adj_start[spring_a[s] + 1];
@@ -95,6 +103,99 @@ ClothTopology::ClothTopology(std::size_t rows_, std::size_t columns_, double wid
     adj_spring[fill[b]] = std::uint32_t(s);
     adj_other[fill[b]++] = a;
   }
+}
+
+ClothTopology::ClothTopology(const ClothMesh& mesh)
+    : rows(1), columns(mesh.vertices.size()), from_mesh(true) {
+  const std::size_t n = mesh.vertices.size();
+  if (n < 3 || mesh.triangles.empty() || mesh.triangles.size() % 3 != 0)
+    throw std::invalid_argument("ClothTopology: a mesh needs >= 3 vertices and whole triangles");
+  if (!mesh.uvs.empty() && mesh.uvs.size() != 2 * n)
+    throw std::invalid_argument("ClothTopology: mesh uvs must hold 2 floats per vertex or none");
+  for (const Vec3& p : mesh.vertices)
+    if (!p.allFinite()) throw std::invalid_argument("ClothTopology: non-finite mesh vertex");
+  for (std::size_t t = 0; 3 * t < mesh.triangles.size(); ++t) {
+    const std::uint32_t a = mesh.triangles[3 * t], b = mesh.triangles[3 * t + 1],
+                        c = mesh.triangles[3 * t + 2];
+    if (a >= n || b >= n || c >= n)
+      throw std::invalid_argument("ClothTopology: mesh triangle " + std::to_string(t) +
+                                  " names a vertex beyond the " + std::to_string(n) + " given");
+    if (a == b || b == c || a == c ||
+        !((mesh.vertices[b] - mesh.vertices[a]).cross(mesh.vertices[c] - mesh.vertices[a]).norm() > 0.0))
+      throw std::invalid_argument("ClothTopology: mesh triangle " + std::to_string(t) +
+                                  " is degenerate (zero area)");
+  }
+  local_rest = mesh.vertices;
+  triangles = mesh.triangles;
+  if (!mesh.uvs.empty()) {
+    uvs = mesh.uvs;
+  } else {  // planar from the local x, y extent
+    Vec3 lo = local_rest[0], hi = local_rest[0];
+    for (const Vec3& p : local_rest) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Vec3 ext = (hi - lo).cwiseMax(Vec3::Constant(1e-12));
+    uvs.resize(2 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      uvs[2 * i] = float((local_rest[i].x() - lo.x()) / ext.x());
+      uvs[2 * i + 1] = float((hi.y() - local_rest[i].y()) / ext.y());
+    }
+  }
+  // Stretch springs on the edges; across each edge shared by two triangles a spring between the
+  // two opposite vertices: shear when it is about as long as the edge (the other diagonal of a
+  // quad split in two, as the grid's second shear spring), bend when longer (it resists folding
+  // about the edge, the role of the grid's bend springs).
+  std::vector<std::array<std::uint32_t, 3>> e;  // (a, b, opposite vertex)
+  for (std::size_t t = 0; 3 * t < triangles.size(); ++t)
+    for (std::uint32_t k = 0; k < 3; ++k) {
+      const std::uint32_t i = triangles[3 * t + k], j = triangles[3 * t + (k + 1) % 3],
+                          o = triangles[3 * t + (k + 2) % 3];
+      e.push_back({std::min(i, j), std::max(i, j), o});
+    }
+  std::sort(e.begin(), e.end());
+  std::vector<std::array<std::uint32_t, 2>> stretch, shear, bend;
+  for (std::size_t k = 0; k < e.size(); ++k) {
+    if (k > 0 && e[k][0] == e[k - 1][0] && e[k][1] == e[k - 1][1]) {
+      const std::uint32_t o1 = e[k - 1][2], o2 = e[k][2];
+      if (o1 == o2) continue;
+      const double edge = (local_rest[e[k][0]] - local_rest[e[k][1]]).norm();
+      const double across = (local_rest[o1] - local_rest[o2]).norm();
+      (across < 1.5 * edge ? shear : bend).push_back({std::min(o1, o2), std::max(o1, o2)});
+      continue;
+    }
+    stretch.push_back({e[k][0], e[k][1]});
+  }
+  // One spring per vertex pair, the first family wins (an edge is never also a shear spring).
+  std::vector<std::array<std::uint32_t, 2>> seen(stretch);
+  std::sort(seen.begin(), seen.end());
+  auto add_family = [&](std::vector<std::array<std::uint32_t, 2>>& fam, SpringKind kd) {
+    std::sort(fam.begin(), fam.end());
+    fam.erase(std::unique(fam.begin(), fam.end()), fam.end());
+    std::vector<std::array<std::uint32_t, 2>> kept;
+    for (const auto& pr : fam) {
+      if (kd != SpringKind::stretch && std::binary_search(seen.begin(), seen.end(), pr)) continue;
+      kept.push_back(pr);
+      spring_a.push_back(pr[0]);
+      spring_b.push_back(pr[1]);
+      const double L = (local_rest[pr[0]] - local_rest[pr[1]]).norm();
+      if (!(L > 0.0))
+        throw std::invalid_argument("ClothTopology: mesh vertices " + std::to_string(pr[0]) +
+                                    " and " + std::to_string(pr[1]) +
+                                    " are joined but at the same place (zero rest length)");
+      rest_length.push_back(L);
+      kind.push_back(kd);
+    }
+    if (kd != SpringKind::stretch) {
+      seen.insert(seen.end(), kept.begin(), kept.end());
+      std::sort(seen.begin(), seen.end());
+    }
+  };
+  add_family(stretch, SpringKind::stretch);
+  add_family(shear, SpringKind::shear);
+  limited_count = spring_a.size();
+  add_family(bend, SpringKind::bend);
+  finish();
 }
 
 }  // namespace simreel::sim

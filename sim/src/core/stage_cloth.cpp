@@ -11,7 +11,7 @@ namespace simreel::sim::detail {
 void stage_cloth(WorldState& w, double t0, double t1) {
   std::vector<Cloth>& cloths = w.cloths.dense();
   for (std::size_t c = 0; c < cloths.size(); ++c) {
-    if (cloths[c].step(t0, t1, &w.shapes, coupling_log(w))) continue;
+    if (cloths[c].step(t0, t1, &w.shapes, coupling_log(w), w.threads)) continue;
     std::ostringstream m;
     m.precision(9);
     m << "cloth '" << cloths[c].definition().name << "' (index " << c

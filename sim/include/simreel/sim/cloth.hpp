@@ -77,9 +77,22 @@ struct AeroDef {
   double air_density = 1.225;     ///< ρ (kg/m³), >= 0; 0 disables aerodynamics
 };
 
+/// A cloth made from any triangle mesh (issue 16) instead of the grid: stretch springs on its
+/// edges, shear and bend springs between the opposite vertices of each pair of triangles that
+/// share an edge (ClothTopology(const ClothMesh&)).
+struct ClothMesh {
+  std::vector<Vec3> vertices;            ///< (n) rest positions in the cloth's local frame (m)
+  std::vector<std::uint32_t> triangles;  ///< (t x 3) vertex indices, counter-clockwise from +normal
+  std::vector<float> uvs;                ///< (n x 2) or empty (then planar from local x, y)
+  [[nodiscard]] bool empty() const { return vertices.empty(); }
+};
+
 /// Everything that defines a cloth. Validated by the Cloth constructor.
 struct ClothDef {
   std::string name = "cloth";
+  /// Non-empty: the cloth is this mesh, not the grid. The Cloth then sets rows = 1 and columns =
+  /// the vertex count (width and height unused), and a pin's `column` is its vertex index.
+  ClothMesh mesh;
   std::size_t rows = 16;     ///< vertices along the local y axis, >= 1 (rows * columns >= 2)
   std::size_t columns = 16;  ///< vertices along the local x axis, >= 1
   double width = 1.0;        ///< (m) local x extent, > 0 (ignored when columns == 1)
@@ -128,9 +141,16 @@ class ClothTopology {
   /// @throws std::invalid_argument unless rows, columns >= 1, rows * columns >= 2, and the
   ///         used extents are > 0 and finite.
   ClothTopology(std::size_t rows, std::size_t columns, double width, double height);
+  /// The topology of a mesh cloth: rows = 1, columns = vertex count. Stretch springs on the
+  /// edges, then (across every edge two triangles share) a spring between the opposite vertices:
+  /// shear if shorter than 1.5 edge lengths, bend otherwise; one spring per vertex pair.
+  /// @throws std::invalid_argument naming the triangle or vertices on bad input (index out of
+  ///         range, zero-area triangle, joined vertices at one place, fewer than 3 vertices).
+  explicit ClothTopology(const ClothMesh& mesh);
 
   std::size_t rows = 0, columns = 0;
   double width = 0.0, height = 0.0;
+  bool from_mesh = false;  ///< built from a ClothMesh (rows = 1, columns = vertex count)
   // Springs (s = 0 .. spring_count-1), ordered stretch, then shear, then bend.
   std::vector<std::uint32_t> spring_a, spring_b;  ///< vertex indices, a < b
   std::vector<double> rest_length;                ///< (m)
@@ -147,6 +167,9 @@ class ClothTopology {
 
   [[nodiscard]] std::size_t vertex_count() const { return rows * columns; }
   [[nodiscard]] std::size_t spring_count() const { return spring_a.size(); }
+
+ private:
+  void finish();  // unique edges and the adjacency, from the springs and triangles
 };
 
 /// Read-only state for the renderer and exports; valid until the cloth next changes.
@@ -190,9 +213,10 @@ class Cloth {
   /// positions. `impulses` (the World's, when it has dynamic bodies): each vertex's momentum
   /// change against a dynamic body's shape is logged there, equal and opposite, for the body
   /// (two-way coupling, Coutinho §3.7). @returns false if the state became non-finite (the World
-  /// then reports it).
+  /// then reports it). `threads`: OpenMP threads for the spring and vertex loops of the
+  /// implicit step (WorldDef::threads); the result is the same bits at any count.
   bool step(double t0, double t1, const std::vector<detail::Collider>* colliders = nullptr,
-            detail::BodyImpulses* impulses = nullptr);
+            detail::BodyImpulses* impulses = nullptr, int threads = 1);
 
   [[nodiscard]] ClothView view() const;
   [[nodiscard]] ClothStats stats() const;
