@@ -40,7 +40,9 @@ const char* kProbe = R"({
                 {"type": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]},
                 {"type": "convex_hull", "mesh": "m.obj", "scale": 1},
                 {"type": "mesh", "mesh": "m.obj", "scale": [1, 1, 1]}]},
-    {"type": "kinematic", "shape": "cylinder", "path": {"keys": [{"time": 0}]}}
+    {"type": "kinematic", "shape": "cylinder", "path": {"keys": [{"time": 0}]}},
+    {"shape": "box"}, {"shape": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]},
+    {"shape": "mesh", "mesh": "m.obj", "scale": 1}
   ],
   "chains": [{"from": [0, 0, 1], "to": [1, 0, 1]}],
   "ragdolls": [{}],

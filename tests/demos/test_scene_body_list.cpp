@@ -103,7 +103,7 @@ TEST(SceneBodyList, KeysReachTheBodyDefInEngineUnits) {
   EXPECT_EQ(s.colliders[1].body.shapes[0].type, sim::ShapeType::convex_hull);
   EXPECT_EQ(s.colliders[1].body.shapes[0].points.size(), 5u);
   EXPECT_EQ(s.colliders[2].body.type, sim::BodyType::kinematic);
-  EXPECT_EQ(s.colliders[2].body.path.size(), 2u);
+  EXPECT_EQ(s.colliders[2].body.path.keys.size(), 2u);
 
   // The engine gets them: the dumbbell's mass is its spheres' (500 and 1000 kg/m³) + the bar.
   SceneWorld sw = build_world(s);
