@@ -34,10 +34,11 @@ enum class BodyType : std::uint8_t {
   /// (or BodyDef::mass), state x, q, v, L integrated by semi-implicit Euler, contacts with every
   /// other body's solid and plane shapes solved by sequential impulses with friction and
   /// restitution (§4.8). Shapes: sphere, box, capsule, cylinder, convex_hull (a dynamic mesh or
-  /// plane is rejected; several shapes at offsets make a compound). It appears in the moved list after every advance() in which it moved. Particles and cloth
-  /// vertices that hit it push it back (their momentum change, summed over a step, enters the
-  /// bodies' step: Coutinho §3.7), and force fields push it (ForceFieldDef::bodies). Not yet:
-  /// sleeping, continuous collision, joints.
+  /// plane is rejected; several shapes at offsets make a compound). It appears in the moved
+  /// list after every advance() in which it moved. Particles and cloth vertices that hit it
+  /// push it back (their momentum change, summed over a step, enters the bodies' step:
+  /// Coutinho §3.7), and force fields push it (ForceFieldDef::bodies). Not yet: continuous
+  /// collision.
   dynamic,
 };
 
