@@ -34,6 +34,16 @@ const char* kProbe = R"({
     {"type": "mesh", "scale": [1, 1, 1]},
     {"type": "capsule", "motion": "dynamic"}
   ],
+  "bodies": [
+    {"shape": "sphere", "mass": 1, "material": {"texture": "t.png", "static_friction": 1}},
+    {"shapes": [{"type": "sphere"}, {"type": "box"}, {"type": "capsule"}, {"type": "cylinder"},
+                {"type": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]},
+                {"type": "convex_hull", "mesh": "m.obj", "scale": 1},
+                {"type": "mesh", "mesh": "m.obj", "scale": [1, 1, 1]}]},
+    {"type": "kinematic", "shape": "cylinder", "path": {"keys": [{"time": 0}]}},
+    {"shape": "box"}, {"shape": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]},
+    {"shape": "mesh", "mesh": "m.obj", "scale": 1}
+  ],
   "chains": [{"from": [0, 0, 1], "to": [1, 0, 1]}],
   "ragdolls": [{}],
   "joints": [{"type": "hinge", "body_a": "world", "body_b": "x", "limits": {}, "motor": {}},

@@ -68,6 +68,10 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     scene.colliders.push_back(collider(j, p, file, errors, i));
     scene.colliders.back().dynamic.gravity = gravity;  // dynamic bodies fall with the scene's gravity
   });
+  // bodies[i] join the colliders (one list of named bodies for joints, springs and drawing).
+  read_array("bodies", [&](const json& j, const std::string& p, std::size_t i) {
+    scene.colliders.push_back(body(j, p, file, errors, i, gravity));
+  });
   // Emitters, directly or as an effect preset (effects/presets/*.json) expanded into emitters and
   // force fields; names must be unique because fields and springs select systems by name.
   std::vector<std::string> emitter_pointers;
@@ -161,6 +165,7 @@ sim::BodyDef dynamic_body_def(const ColliderScene& c) {
       s = sim::ShapeDef::capsule(c.capsule.radius, c.capsule.half_height);
       s.material = c.capsule.material;
       break;
+    case ColliderScene::Type::body: return c.body;
     case ColliderScene::Type::plane:
     case ColliderScene::Type::mesh:
       // The reader rejects "dynamic" on these; the engine would reject the shape too.
@@ -185,6 +190,10 @@ SceneWorld build_world(const Scene& scene) {
   SceneWorld out{sim::World(def), {}, {}, {}, {}, {}, {}};
   try {
     for (const auto& c : scene.colliders) {
+      if (c.type == ColliderScene::Type::body) {
+        out.colliders.push_back(out.world.add_body(c.body));
+        continue;
+      }
       if (c.dynamic.enabled) {
         out.colliders.push_back(out.world.add_body(dynamic_body_def(c)));
         continue;
@@ -208,6 +217,7 @@ SceneWorld build_world(const Scene& scene) {
           out.colliders.push_back(out.world.add_body(b));
           break;
         }
+        case ColliderScene::Type::body: break;  // added above
       }
     }
     for (const JointScene& j : scene.joints) {

@@ -43,9 +43,25 @@ struct CapsuleScene {
   sim::KeyframePath path;     ///< kinematic capsules
 };
 
+/// How one shape of a bodies[i] body is drawn: from its imported file (a "mesh" shape, or a
+/// dynamic mesh's parts), else from its ShapeDef (primitives; a hull's own triangles).
+struct BodyShapeDraw {
+  std::shared_ptr<const assets::TriangleMesh> asset;  ///< the file, unscaled; null: from the ShapeDef
+  std::array<double, 3> scale{1, 1, 1};               ///< applied to the asset's positions
+  /// Draws nothing: the later parts of a dynamic mesh (its file is drawn once, with the first
+  /// part's shape; all parts share the shape frame).
+  bool skip = false;
+};
+
 struct ColliderScene {
   std::string name;
-  enum class Type { plane, box, sphere, cylinder, mesh, capsule } type = Type::plane;
+  /// `body`: an entry of bodies[i] (README "bodies[i]"), read into `body` (any body type, any
+  /// number of shapes); the others: colliders[i].
+  enum class Type { plane, box, sphere, cylinder, mesh, capsule, body } type = Type::plane;
+  sim::BodyDef body;                    ///< Type::body: ready for World::add_body
+  std::vector<BodyShapeDraw> body_draw;  ///< Type::body: one per body.shapes
+  std::string texture;                  ///< Type::body: material.texture, a path (drawing only)
+  std::string pointer;                  ///< Type::body: its JSON pointer ("/bodies/3"), for messages
   sim::PlaneDef plane;
   sim::BoxDef box;
   sim::SphereDef sphere;
@@ -59,7 +75,9 @@ struct ColliderScene {
   render::Vec4f color{0.6f, 0.6f, 0.62f, 1.f};
   float checker_m = 0.f;        ///< (m) plane checker cell; 0 = plain
   float draw_half_size = 20.f;  ///< (m) drawn extent of an infinite plane
-  DynamicScene dynamic;         ///< "motion": "dynamic" (box, sphere, cylinder)
+  /// "motion": "dynamic" (box, sphere, cylinder, capsule); for Type::body only `enabled` (a
+  /// dynamic body) is set, the rest is in `body`.
+  DynamicScene dynamic;
 };
 
 struct EmitterScene {

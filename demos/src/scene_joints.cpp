@@ -19,14 +19,17 @@ std::string in_quotes(const std::string& s) { return "\"" + s + "\""; }
 
 void check_body_names(const Scene& scene, std::vector<std::string>& errors) {
   for (std::size_t a = 0; a < scene.colliders.size(); ++a) {
+    const std::string where =
+        scene.colliders[a].pointer.empty() ? "/colliders/" + std::to_string(a) : scene.colliders[a].pointer;
     if (scene.colliders[a].name == "world")
-      errors.push_back(scene.file + ": /colliders/" + std::to_string(a) +
+      errors.push_back(scene.file + ": " + where +
                        "/name: expected a name other than \"world\" (joints use it for the static world), found "
                        "\"world\"");
     for (std::size_t b = 0; b < a; ++b)
       if (scene.colliders[a].name == scene.colliders[b].name) {
         errors.push_back(scene.file + ": body " + std::to_string(a) + " (" + in_quotes(scene.colliders[a].name) +
-                         "): expected a name not used by another collider, chain link or ragdoll segment (body " +
+                         (scene.colliders[a].pointer.empty() ? "" : ", " + where) +
+                         "): expected a name not used by another collider, body, chain link or ragdoll segment (body " +
                          std::to_string(b) + "), found " + in_quotes(scene.colliders[a].name));
         break;
       }

@@ -2,6 +2,7 @@
 
 #include "simreel/render/camera_path.hpp"
 #include "simreel/render/mesh.hpp"
+#include "simreel/sim/hull_mesh.hpp"
 
 namespace simreel::app {
 
@@ -20,6 +21,8 @@ render::Material collider_material(const ColliderScene& c) {
   m.checker_m = c.checker_m;
   return m;
 }
+
+render::MeshDesc body_desc(const ColliderScene& c);
 
 /// A collider's drawable description (plane, box or mesh).
 std::variant<render::PlaneDesc, render::BoxDesc, render::MeshDesc> collider_desc(const ColliderScene& c) {
@@ -55,8 +58,94 @@ std::variant<render::PlaneDesc, render::BoxDesc, render::MeshDesc> collider_desc
       return d;
     }
     case ColliderScene::Type::mesh: break;
+    case ColliderScene::Type::body: return body_desc(c);
   }
   return mesh_desc(c);
+}
+
+/// A polyhedron drawn flat: each planar face gets its own vertices with the face normal and
+/// UVs in metres in the face's plane (u along its first edge).
+void add_flat_faces(const std::vector<sim::Vec3>& v, const std::vector<std::vector<std::uint32_t>>& faces,
+                    render::MeshDesc& d) {
+  for (const auto& f : faces) {
+    if (f.size() < 3) continue;
+    const sim::Vec3 n = (v[f[1]] - v[f[0]]).cross(v[f[2]] - v[f[0]]).normalized();
+    const sim::Vec3 u = (v[f[1]] - v[f[0]]).normalized(), w = n.cross(u);
+    const auto base = std::uint32_t(d.positions.size() / 3);
+    for (std::uint32_t k : f) {
+      const sim::Vec3& p = v[k];
+      d.positions.insert(d.positions.end(), {float(p.x()), float(p.y()), float(p.z())});
+      d.normals.insert(d.normals.end(), {float(n.x()), float(n.y()), float(n.z())});
+      d.uvs.insert(d.uvs.end(), {float((p - v[f[0]]).dot(u)), float((p - v[f[0]]).dot(w))});
+    }
+    for (std::uint32_t k = 1; k + 1 < f.size(); ++k)
+      d.indices.insert(d.indices.end(), {base, base + k, base + k + 1});
+  }
+}
+
+/// The box of half extents e as six flat faces.
+void add_box(const sim::Vec3& e, render::MeshDesc& d) {
+  std::vector<sim::Vec3> v;
+  for (int i = 0; i < 8; ++i)
+    v.emplace_back((i & 1) ? e.x() : -e.x(), (i & 2) ? e.y() : -e.y(), (i & 4) ? e.z() : -e.z());
+  // Counter-clockwise seen from outside.
+  add_flat_faces(v, {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}, d);
+}
+
+/// Appends `m` to `d`, its vertices mapped by the shape's offset.
+void append_at(const render::MeshDesc& m, const sim::Transform& offset, render::MeshDesc& d) {
+  const Eigen::Matrix3f R = offset.rotation.normalized().toRotationMatrix().cast<float>();
+  const Eigen::Vector3f t = offset.translation.cast<float>();
+  const auto base = std::uint32_t(d.positions.size() / 3);
+  const std::size_t n = m.positions.size() / 3;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f p = R * Eigen::Vector3f(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]) + t;
+    d.positions.insert(d.positions.end(), {p.x(), p.y(), p.z()});
+    Eigen::Vector3f nn(0.f, 0.f, 1.f);
+    if (m.normals.size() == m.positions.size())
+      nn = R * Eigen::Vector3f(m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2]);
+    d.normals.insert(d.normals.end(), {nn.x(), nn.y(), nn.z()});
+    if (m.uvs.size() == 2 * n) d.uvs.insert(d.uvs.end(), {m.uvs[2 * i], m.uvs[2 * i + 1]});
+    else d.uvs.insert(d.uvs.end(), {0.f, 0.f});
+  }
+  for (std::uint32_t k : m.indices) d.indices.push_back(base + k);
+}
+
+/// A bodies[i] body as one mesh in its body frame: every shape's mesh at its offset (primitives
+/// tessellated, hulls as their flat faces, mesh files as imported).
+render::MeshDesc body_desc(const ColliderScene& c) {
+  render::MeshDesc d;
+  for (std::size_t i = 0; i < c.body.shapes.size(); ++i) {
+    const sim::ShapeDef& s = c.body.shapes[i];
+    const BodyShapeDraw& draw = c.body_draw[i];
+    if (draw.skip) continue;
+    render::MeshDesc m;
+    if (draw.asset) {
+      ColliderScene as_mesh;
+      as_mesh.mesh_asset = draw.asset;
+      as_mesh.mesh_scale = draw.scale;
+      m = mesh_desc(as_mesh);
+      if (c.texture.empty() && !m.material.texture_path.empty()) d.material.texture_path = m.material.texture_path;
+    } else {
+      switch (s.type) {
+        case sim::ShapeType::sphere: m = render::make_sphere_mesh(float(s.radius), 48); break;
+        case sim::ShapeType::cylinder: m = render::make_cylinder_mesh(float(s.radius), float(s.half_height), 48); break;
+        case sim::ShapeType::capsule: m = render::make_capsule_mesh(float(s.radius), float(s.half_height), 32); break;
+        case sim::ShapeType::box: add_box(s.half_extents, m); break;
+        case sim::ShapeType::convex_hull: {
+          const sim::HullMesh h = sim::hull_mesh(s.points);
+          add_flat_faces(h.vertices, h.faces, m);
+          break;
+        }
+        default: break;
+      }
+    }
+    append_at(m, s.offset, d);
+  }
+  const std::string file_texture = d.material.texture_path;
+  d.material = collider_material(c);
+  d.material.texture_path = c.texture.empty() ? file_texture : c.texture;
+  return d;
 }
 
 /// A cloth as a dynamic two-sided mesh in the world frame; its vertices are replaced every frame.

@@ -7,6 +7,7 @@
 ///   scene_camera.cpp     "render", "camera" (path / orbit), "light"
 ///   scene_colliders.cpp  "colliders" and their response materials (§3.6.1, §3.6.3)
 ///   scene_bodies.cpp     colliders' "motion" and the keys of a dynamic collider (Ch. 4)
+///   scene_body_list.cpp  "bodies": bodies with shapes (compounds, convex hulls, meshes; Ch. 4)
 ///   scene_emitters.cpp   "emitters" (§3.8-3.9.1): shape, rate, distributions, colours, split
 ///   scene_forces.cpp     per-system forces and integrators, "force_fields", "attractor_springs"
 ///                        (§3.3, App. B)
@@ -88,6 +89,12 @@ void collider_motion(ObjectReader& r, const std::string& type, bool has_path, Co
 
 ColliderScene collider(const json& j, const std::string& ptr, const std::string& file,
                        std::vector<std::string>& errors, std::size_t index);
+// scene_body_list.cpp
+/// bodies[i] (Coutinho Ch. 4): a body of any type with one or more shapes; `gravity` (m/s²) is the
+/// scene's, a dynamic body's.
+ColliderScene body(const json& j, const std::string& ptr, const std::string& file, std::vector<std::string>& errors,
+                   std::size_t index, const sim::Vec3& gravity);
+
 /// An emitter's own "on_hit" and its droplets "on_hit_split" (the emitter's "split" key is the
 /// §3.9.1 particle split).
 sim::Material material_hit(ObjectReader& r);

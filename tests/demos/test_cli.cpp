@@ -472,6 +472,28 @@ TEST(Golden, EveryDemoSceneHasAGolden) {
   }
 }
 
+// The dominoes golden (bodies[i], issue 12) must be able to fail with its bodies frozen: every
+// body made static (its dynamic keys dropped) through one "set" of /bodies.
+TEST(Golden, DominoesGoldenCatchesFrozenBodies) {
+  const fs::path src(SIMREEL_SOURCE_DIR);
+  auto golden = nlohmann::json::parse(slurp(src / "tests/golden/dominoes.json"));
+  auto bodies = nlohmann::json::parse(slurp(src / "demos/scenes/dominoes.json"))["bodies"];
+  for (auto& b : bodies) {
+    b.erase("density");
+    b.erase("angular_velocity_deg");
+    b["type"] = "static";
+  }
+  TempDir d;
+  golden["scene"] = (src / "demos/scenes/dominoes.json").string();
+  write_file(d / "g.json", golden.dump(2));
+  const auto same = run_simreel("check --allow-outside " + (d / "g.json").string());
+  EXPECT_EQ(same.code, 0) << same.out << same.err;
+  golden["set"].push_back("/bodies=" + bodies.dump());
+  write_file(d / "g.json", golden.dump(2));
+  const auto frozen = run_simreel("check --allow-outside " + (d / "g.json").string());
+  EXPECT_EQ(frozen.code, 1) << frozen.out << frozen.err;
+}
+
 // The project's fountain golden must be able to fail: without the jet (luminance hashes), and
 // with the jet's colour ramp turned from blue to red at about the same brightness, which only
 // the colour hash sees.

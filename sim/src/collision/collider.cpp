@@ -13,6 +13,7 @@
 #include "collision/collider_impl.hpp"
 #include "collision/narrow_phase.hpp"
 #include "core/validate.hpp"
+#include "rigid/convex_hull.hpp"
 
 namespace simreel::sim::detail {
 
@@ -274,6 +275,37 @@ Collider make_collider(const ShapeDef& def, const std::string& what) {
       c.mesh = make_mesh(def, what);
       c.shape = Collider::Shape::mesh;
       break;
+    case ShapeType::convex_hull: {
+      for (std::size_t i = 0; i < def.points.size(); ++i)
+        if (!def.points[i].allFinite())
+          throw std::invalid_argument(what + ".points[" + std::to_string(i) + "] must be finite");
+      ConvexHull h;
+      try {
+        h = convex_hull(def.points);
+      } catch (const std::exception& e) {
+        // "convex_hull: all points are coplanar ..." -> "<what>.points: all points are coplanar ..."
+        std::string m = e.what();
+        if (m.rfind("convex_hull: ", 0) == 0) m = m.substr(13);
+        throw std::invalid_argument(what + ".points: " + m + " (a convex hull needs at least 4 "
+                                           "points that are not all in one plane)");
+      }
+      auto hull = std::make_shared<HullShape>();
+      hull->faces = make_hull_faces(h.vertices, h.faces);
+      for (const auto& t : h.triangles)
+        hull->area += 0.5 * (h.vertices[t[1]] - h.vertices[t[0]])
+                                .cross(h.vertices[t[2]] - h.vertices[t[0]])
+                                .norm();
+      ShapeDef m;
+      m.type = ShapeType::mesh;
+      m.vertices = h.vertices;
+      m.triangles = h.triangles;
+      c.mesh = make_mesh(m, what);
+      hull->vertices = std::move(h.vertices);
+      hull->triangles = std::move(h.triangles);
+      c.hull = std::move(hull);
+      c.shape = Collider::Shape::mesh;
+      break;
+    }
     default:
       throw std::invalid_argument(what + ".type is not a shape type");
   }
@@ -343,6 +375,14 @@ ShapeDef ShapeDef::cylinder(double radius, double half_height, const Transform& 
 ShapeDef ShapeDef::capsule(double radius, double half_height, const Transform& offset) {
   ShapeDef s = cylinder(radius, half_height, offset);
   s.type = ShapeType::capsule;
+  return s;
+}
+
+ShapeDef ShapeDef::convex_hull(std::vector<Vec3> points, const Transform& offset) {
+  ShapeDef s;
+  s.type = ShapeType::convex_hull;
+  s.points = std::move(points);
+  s.offset = offset;
   return s;
 }
 

@@ -13,6 +13,7 @@
 
 #include "collision/bvh.hpp"
 #include "collision/narrow_phase.hpp"
+#include "collision/polytope_faces.hpp"
 #include "particles/particle_store.hpp"
 #include "simreel/sim/body.hpp"
 #include "simreel/sim/random.hpp"
@@ -39,6 +40,17 @@ struct MeshShape {
   [[nodiscard]] bool near_surface(const Vec3& p, double tol) const;
 };
 
+/// A convex hull shape's geometry in its local frame (ShapeType::convex_hull), built once at
+/// registration by quickhull (rigid/convex_hull.hpp) and shared, immutable: the hull's vertices
+/// (GJK/EPA support, plane contacts), its merged planar faces (manifold clipping) and its
+/// outward-wound triangles (mass properties, App. D; the particle and cloth mesh).
+struct HullShape {
+  std::vector<Vec3> vertices;                            ///< (m) local frame
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< CCW from outside, into vertices
+  HullFaces faces;
+  double area = 0.0;  ///< (m²) surface area
+};
+
 /// One shape of a body at run time, posed in the world: geometry in the shape frame, material,
 /// and the pose and velocities of the shape frame at the end of the current step. The world
 /// keeps every body's shapes in one dense array (the collision passes loop over it).
@@ -57,6 +69,9 @@ struct Collider {
   double radius = 0.0;               ///< sphere, cylinder, capsule
   double half_height = 0.0;          ///< cylinder, capsule (half the segment)
   std::shared_ptr<const MeshShape> mesh;
+  /// Convex hulls: their hull data; the collider is then a closed `Shape::mesh` of the hull's
+  /// triangles for particles and cloth, and a convex polytope for bodies (body_contacts.cpp).
+  std::shared_ptr<const HullShape> hull;
   /// Pose of the shape frame in its body's frame; identity (the body's only shape, as the
   /// single-collider wrappers build it) takes the body pose unchanged, bit for bit.
   Transform offset;

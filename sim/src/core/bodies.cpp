@@ -88,10 +88,12 @@ void validate_body(const BodyDef& def, const Names& names) {
 
 /// (m²) Mean projected area of a dynamic body's shapes: a quarter of the surface area (Cauchy's
 /// formula, exact for a convex shape averaged over all directions), summed over the shapes.
-double mean_projected_area(const BodyDef& def) {
+double mean_projected_area(const BodyDef& def, const std::vector<Collider>& made) {
   constexpr double pi = 3.14159265358979323846;
   double surface = 0.0;
-  for (const ShapeDef& s : def.shapes) {
+  for (std::size_t i = 0; i < def.shapes.size(); ++i) {
+    const ShapeDef& s = def.shapes[i];
+    if (made[i].hull) surface += made[i].hull->area;
     const double r = s.radius, hh = s.half_height;
     const Vec3& e = s.half_extents;
     switch (s.type) {
@@ -108,7 +110,8 @@ double mean_projected_area(const BodyDef& def) {
 /// Mass properties of a dynamic body in its body frame from its shapes (Coutinho §4.1, App. D):
 /// each shape's closed form at its density, moved to its offset, combined by the parallel-axis
 /// theorem; BodyDef::mass > 0 then rescales the total.
-MassProperties body_mass(const BodyDef& def, const std::string& shape_name, bool indexed) {
+MassProperties body_mass(const BodyDef& def, const std::vector<Collider>& made,
+                         const std::string& shape_name, bool indexed) {
   std::vector<MassPart> parts;
   for (std::size_t i = 0; i < def.shapes.size(); ++i) {
     const ShapeDef& s = def.shapes[i];
@@ -124,6 +127,9 @@ MassProperties body_mass(const BodyDef& def, const std::string& shape_name, bool
       case ShapeType::box: p.props = box_mass(s.half_extents, s.density); break;
       case ShapeType::cylinder: p.props = cylinder_mass(s.radius, s.half_height, s.density); break;
       case ShapeType::capsule: p.props = capsule_mass(s.radius, s.half_height, s.density); break;
+      case ShapeType::convex_hull:  // from its boundary (App. D): the hull's closed triangles
+        p.props = mesh_mass(made[i].hull->vertices, made[i].hull->triangles, s.density);
+        break;
       default: throw std::invalid_argument(what + ": not a shape a dynamic body may have");
     }
     p.translation = s.offset.translation;
@@ -145,12 +151,13 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
     made.push_back(make_collider(def.shapes[i], what));
     if (made.back().shape == Collider::Shape::plane && def.type != BodyType::static_body)
       throw std::invalid_argument(what + ": a plane may only belong to a static body");
-    if (made.back().shape == Collider::Shape::mesh && def.type == BodyType::dynamic)
+    if (made.back().shape == Collider::Shape::mesh && !made.back().hull &&
+        def.type == BodyType::dynamic)
       throw std::invalid_argument(what + ": a mesh may not belong to a dynamic body yet (use "
-                                         "sphere, box, capsule or cylinder shapes)");
+                                         "sphere, box, capsule, cylinder or convex_hull shapes)");
   }
   MassProperties mass;
-  if (def.type == BodyType::dynamic) mass = body_mass(def, names.shape, names.indexed);
+  if (def.type == BodyType::dynamic) mass = body_mass(def, made, names.shape, names.indexed);
   Body b;
   b.type = def.type;
   b.name = def.name;
@@ -171,7 +178,7 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
     b.local_com = mass.center_of_mass;
     b.gravity = def.gravity;
     b.drag_coefficient = def.drag_coefficient;
-    b.drag_area = def.drag_area > 0.0 ? def.drag_area : mean_projected_area(def);
+    b.drag_area = def.drag_area > 0.0 ? def.drag_area : mean_projected_area(def, made);
     const Quat q = def.pose.rotation.normalized();
     RigidBodyDef r;
     r.position = def.pose.translation + q * mass.center_of_mass;

@@ -6,6 +6,7 @@
 // Narrow phase, per pair, A before B:
 //   plane–convex: collide_plane (plane_manifold.hpp);
 //   convex–convex: collide_manifold (box–box SAT, face clipping, GJK/EPA; contact_manifold.hpp);
+//   (a convex hull is convex here: its vertices and planar faces, Collider::hull)
 //   mesh–convex: the mesh's AABB tree queried with the convex's box in the mesh frame; each
 //     triangle found is a 3-point hull for collide() (GJK/EPA); when its normal is the
 //     triangle's, the convex's features over that triangle give up to 4 points (a face
@@ -36,6 +37,9 @@ ConvexShape convex_of(const Collider& c) {
     case Collider::Shape::box: return ConvexShape::box(c.half_extents);
     case Collider::Shape::capsule: return ConvexShape::capsule(c.half_height, c.radius);
     case Collider::Shape::cylinder: return ConvexShape::cylinder(c.radius, c.half_height);
+    case Collider::Shape::mesh:  // a convex hull (a plain mesh never reaches here)
+      if (c.hull) return ConvexShape::hull(c.hull->vertices);
+      return {};
     default: return {};
   }
 }
@@ -161,11 +165,14 @@ class Builder {
   void pair(std::uint32_t a, std::uint32_t b) {
     const Collider& A = w_.shapes[a];
     const Collider& B = w_.shapes[b];
-    if (A.shape == Collider::Shape::mesh) return mesh(a, b);
-    if (B.shape == Collider::Shape::mesh) return mesh(b, a);
+    if (A.shape == Collider::Shape::mesh && !A.hull) return mesh(a, b);
+    if (B.shape == Collider::Shape::mesh && !B.hull) return mesh(b, a);
     ManifoldOptions options;
     options.margin = margin(a, b);
-    add(key(a, b, 0), collide_manifold(posed(A), posed(B), options), a, b);
+    add(key(a, b, 0),
+        collide_manifold(posed(A), posed(B), options, A.hull ? &A.hull->faces : nullptr,
+                         B.hull ? &B.hull->faces : nullptr),
+        a, b);
   }
 
   void mesh(std::uint32_t m, std::uint32_t s) {

@@ -33,11 +33,12 @@ enum class BodyType : std::uint8_t {
   /// Moved by gravity and contacts (Coutinho Ch. 4): mass properties from its shapes' densities
   /// (or BodyDef::mass), state x, q, v, L integrated by semi-implicit Euler, contacts with every
   /// other body's solid and plane shapes solved by sequential impulses with friction and
-  /// restitution (§4.8). Shapes: sphere, box, capsule, cylinder (a dynamic mesh or plane is
-  /// rejected). It appears in the moved list after every advance() in which it moved. Particles and cloth
-  /// vertices that hit it push it back (their momentum change, summed over a step, enters the
-  /// bodies' step: Coutinho §3.7), and force fields push it (ForceFieldDef::bodies). Not yet:
-  /// sleeping, continuous collision, joints.
+  /// restitution (§4.8). Shapes: sphere, box, capsule, cylinder, convex_hull (a dynamic mesh or
+  /// plane is rejected; several shapes at offsets make a compound). It appears in the moved
+  /// list after every advance() in which it moved. Particles and cloth vertices that hit it
+  /// push it back (their momentum change, summed over a step, enters the bodies' step:
+  /// Coutinho §3.7), and force fields push it (ForceFieldDef::bodies). Not yet: continuous
+  /// collision.
   dynamic,
 };
 
@@ -49,6 +50,11 @@ enum class ShapeType : std::uint8_t {
   cylinder,  ///< capped cylinder along local z: `radius`, `half_height`
   capsule,   ///< segment from -half_height to +half_height along local z grown by `radius`
   mesh,      ///< triangle mesh: `vertices`, `triangles`
+  /// Convex hull of `points` (quickhull, built once at add time; Coutinho §2.2.4): static,
+  /// kinematic and dynamic bodies. Bodies collide with it through its vertices and planar faces
+  /// (GJK/EPA + face clipping); particles and cloth collide with its triangles, as with a
+  /// closed mesh; its mass properties come from its boundary (App. D).
+  convex_hull,
 };
 
 /// One shape of a body: geometry in the shape frame, material, and the shape frame's pose in the
@@ -76,6 +82,9 @@ struct ShapeDef {
   /// Mesh: (m) triangles as vertex indices, each < n; two-sided. A mesh whose every edge is
   /// shared by exactly two triangles is closed (particles found inside it are removed).
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  /// Convex hull: (n >= 4) points in the shape frame (m), finite, not all coplanar; the shape is
+  /// their convex hull (interior and duplicate points are dropped).
+  std::vector<Vec3> points;
   Material material;  ///< response of particles and cloth against this shape (§3.6.1); also
                       ///< restitution and friction of body contacts (pair: max e, sqrt(mu_a mu_b))
   /// (kg/m³) > 0: uniform density of a dynamic body's solid shape (its mass and inertia, App. D);
@@ -88,6 +97,7 @@ struct ShapeDef {
   static ShapeDef cylinder(double radius, double half_height, const Transform& offset = {});
   static ShapeDef capsule(double radius, double half_height, const Transform& offset = {});
   static ShapeDef plane(const Vec3& normal = Vec3::UnitZ(), const Transform& offset = {});
+  static ShapeDef convex_hull(std::vector<Vec3> points, const Transform& offset = {});
 };
 
 /// A body: how it moves, and its shapes (at least one). Registered by World::add_body, named by

@@ -1,0 +1,222 @@
+// bodies[i] (README "bodies[i]", Coutinho Ch. 4): keys reach the engine's BodyDef in engine units,
+// compounds of shapes at offsets, convex hulls from points and from a mesh file, a dynamic mesh
+// file as the compound of its closed parts' hulls, the same trajectory as a colliders[i]
+// "motion": "dynamic" box, names for springs and joints, the drawable (no GL), and every bad value
+// reported with the file and JSON pointer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <variant>
+
+#include <unistd.h>
+
+#include "json_reader.hpp"
+#include "scene.hpp"
+#include "scene_list_builder.hpp"
+
+namespace {
+
+using simreel::app::build_world;
+using simreel::app::ColliderScene;
+using simreel::app::json;
+using simreel::app::Scene;
+using simreel::app::scene_from_json;
+using simreel::app::SceneError;
+using simreel::app::SceneWorld;
+namespace render = simreel::render;
+namespace sim = simreel::sim;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::string errors_of(const std::string& text, const std::string& file = "s.json") {
+  try {
+    (void)scene_from_json(json::parse(text), file);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string body_errors(const std::string& body) { return errors_of("{\"bodies\": [" + body + "]}"); }
+
+/// A folder with an OBJ of two unit cubes (closed, apart) and one of an open square.
+std::filesystem::path mesh_folder() {
+  const auto dir = std::filesystem::temp_directory_path() / ("simreel_body_list_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream two(dir / "two_cubes.obj");
+  for (int c = 0; c < 2; ++c)
+    for (int i = 0; i < 8; ++i)
+      two << "v " << ((i & 1) ? 0.5 : -0.5) + 3.0 * c << ' ' << ((i & 2) ? 0.5 : -0.5) << ' '
+          << ((i & 4) ? 0.5 : -0.5) << '\n';
+  const int quads[6][4] = {{1, 3, 4, 2}, {5, 6, 8, 7}, {1, 2, 6, 5}, {3, 7, 8, 4}, {1, 5, 7, 3}, {2, 4, 8, 6}};
+  for (int c = 0; c < 2; ++c)
+    for (const auto& q : quads) two << "f " << q[0] + 8 * c << ' ' << q[1] + 8 * c << ' ' << q[2] + 8 * c << ' ' << q[3] + 8 * c << '\n';
+  std::ofstream open(dir / "open.obj");
+  open << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 1 2 5\n";
+  return dir;
+}
+
+}  // namespace
+
+TEST(SceneBodyList, KeysReachTheBodyDefInEngineUnits) {
+  const Scene s = scene_from_json(json::parse(R"({
+    "simulation": {"gravity": [0, 0, -5]},
+    "bodies": [
+      {"name": "dumbbell", "position": [1, 2, 3], "rotation_deg": [0, 0, 90], "density": 500,
+       "velocity": [1, 0, 0], "angular_velocity_deg": [0, 0, 180], "linear_damping": 0.1, "angular_damping": 0.2,
+       "material": {"restitution": 0.3, "friction": 0.7, "color": [0.1, 0.2, 0.3]},
+       "shapes": [{"type": "sphere", "radius": 0.2, "position": [-0.5, 0, 0]},
+                  {"type": "sphere", "radius": 0.2, "position": [0.5, 0, 0], "density": 1000},
+                  {"type": "capsule", "radius": 0.05, "half_height": 0.4, "rotation_deg": [0, 90, 0]}]},
+      {"name": "wedge", "type": "static", "shape": "convex_hull",
+       "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.1, 0.1, 0.1]]},
+      {"name": "door", "type": "kinematic", "shape": "box", "half_extents": [0.5, 0.05, 1],
+       "path": {"keys": [{"time": 0, "position": [0, 0, 1]}, {"time": 1, "position": [1, 0, 1]}]}}
+    ]})"),
+                                  "s.json");
+  ASSERT_EQ(s.colliders.size(), 3u);
+  const sim::BodyDef& d = s.colliders[0].body;
+  EXPECT_EQ(s.colliders[0].type, ColliderScene::Type::body);
+  EXPECT_TRUE(s.colliders[0].dynamic.enabled);
+  EXPECT_EQ(d.type, sim::BodyType::dynamic);
+  EXPECT_EQ(d.name, "dumbbell");
+  EXPECT_EQ(d.pose.translation, sim::Vec3(1, 2, 3));
+  EXPECT_NEAR((d.pose.rotation * sim::Vec3::UnitX() - sim::Vec3::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(d.angular_velocity.z(), 180 * kDeg, 1e-12);
+  EXPECT_EQ(d.linear_velocity, sim::Vec3(1, 0, 0));
+  EXPECT_EQ(d.linear_damping, 0.1);
+  EXPECT_EQ(d.angular_damping, 0.2);
+  EXPECT_EQ(d.gravity, sim::Vec3(0, 0, -5));
+  ASSERT_EQ(d.shapes.size(), 3u);
+  EXPECT_EQ(d.shapes[0].offset.translation, sim::Vec3(-0.5, 0, 0));
+  EXPECT_EQ(d.shapes[0].density, 500.0);
+  EXPECT_EQ(d.shapes[1].density, 1000.0);
+  EXPECT_EQ(d.shapes[2].type, sim::ShapeType::capsule);
+  EXPECT_EQ(d.shapes[1].material.restitution, 0.3);
+  EXPECT_EQ(d.shapes[2].material.friction, 0.7);
+  EXPECT_FLOAT_EQ(s.colliders[0].color.x(), 0.1f);
+  EXPECT_EQ(s.colliders[1].body.type, sim::BodyType::static_body);
+  EXPECT_EQ(s.colliders[1].body.shapes[0].type, sim::ShapeType::convex_hull);
+  EXPECT_EQ(s.colliders[1].body.shapes[0].points.size(), 5u);
+  EXPECT_EQ(s.colliders[2].body.type, sim::BodyType::kinematic);
+  EXPECT_EQ(s.colliders[2].body.path.keys.size(), 2u);
+
+  // The engine gets them: the dumbbell's mass is its spheres' (500 and 1000 kg/m³) + the bar.
+  SceneWorld sw = build_world(s);
+  const sim::BodyMotion m = sw.world.motion(sw.colliders[0]);
+  const double v = 4.0 / 3.0 * std::numbers::pi * 0.008;
+  const double bar = std::numbers::pi * 0.0025 * 0.8 + 4.0 / 3.0 * std::numbers::pi * 0.05 * 0.05 * 0.05;
+  EXPECT_NEAR(m.mass, 500 * v + 1000 * v + 500 * bar, 1e-9);
+  // Heavier sphere at body +x, turned 90° about z: the centre of mass moves to +y of (1, 2, 3).
+  EXPECT_NEAR(m.center_of_mass.y(), 2.0 + 0.5 * (1000 * v - 500 * v) / m.mass, 1e-9);
+}
+
+TEST(SceneBodyList, BodyBoxFollowsTheSameTrajectoryAsADynamicCollider) {
+  // One engine path: the same box from bodies[i] and from colliders[i] "motion": "dynamic".
+  auto run2 = [](const std::string& text) {
+    Scene s = scene_from_json(json::parse(text), "s.json");
+    SceneWorld sw = build_world(s);
+    for (int i = 0; i < 60; ++i) sw.world.advance(1.0 / 30.0);
+    return sw.world.pose(sw.colliders[1]);
+  };
+  const sim::MovedObject c = run2(R"({"colliders": [{"type": "plane"}, {"type": "box", "motion": "dynamic",
+      "half_extents": [0.2, 0.3, 0.1], "position": [0, 0, 1], "rotation_deg": [20, 10, 0], "restitution": 0.2,
+      "friction": 0.6}]})");
+  const sim::MovedObject b = run2(R"({"colliders": [{"type": "plane"}], "bodies": [{"shape": "box",
+      "half_extents": [0.2, 0.3, 0.1], "position": [0, 0, 1], "rotation_deg": [20, 10, 0],
+      "material": {"restitution": 0.2, "friction": 0.6}}]})");
+  EXPECT_EQ(b.translation, c.translation);
+  EXPECT_EQ(b.rotation, c.rotation);
+  EXPECT_NEAR(c.translation.z(), 0.1, 2e-3);  // it fell and lies on its largest face
+}
+
+TEST(SceneBodyList, MeshFilesGiveHullsAndDynamicCompoundsOfTheirClosedParts) {
+  const auto dir = mesh_folder();
+  const std::string file = (dir / "s.json").string();
+  const Scene s = scene_from_json(json::parse(R"({"bodies": [
+      {"name": "pair", "shape": "mesh", "mesh": "two_cubes.obj", "density": 100, "position": [0, 0, 5]},
+      {"name": "hull", "shape": "convex_hull", "mesh": "two_cubes.obj", "scale": 0.5},
+      {"name": "static", "type": "static", "shape": "mesh", "mesh": "open.obj"}]})"),
+                                  file);
+  ASSERT_EQ(s.colliders.size(), 3u);
+  const sim::BodyDef& pair = s.colliders[0].body;
+  ASSERT_EQ(pair.shapes.size(), 2u);  // two closed parts -> two hulls
+  EXPECT_EQ(pair.shapes[0].type, sim::ShapeType::convex_hull);
+  EXPECT_EQ(pair.shapes[1].points.size(), 8u);
+  EXPECT_TRUE(s.colliders[0].body_draw[1].skip);
+  EXPECT_EQ(s.colliders[1].body.shapes.size(), 1u);  // one hull around both cubes
+  EXPECT_EQ(s.colliders[2].body.shapes[0].type, sim::ShapeType::mesh);
+  SceneWorld sw = build_world(s);
+  const sim::BodyMotion m = sw.world.motion(sw.colliders[0]);
+  EXPECT_NEAR(m.mass, 200.0, 1e-9);                                       // two 1 m³ cubes at 100 kg/m³
+  EXPECT_NEAR((m.center_of_mass - sim::Vec3(1.5, 0, 5)).norm(), 0.0, 1e-9);  // midway
+  const sim::BodyMotion h = sw.world.motion(sw.colliders[1]);
+  EXPECT_NEAR(h.mass, 1000.0 * 2.0 * 0.5 * 0.5, 1e-9);  // the hull (scaled 0.5): 2 x 0.5 x 0.5 m
+
+  // Drawables: the compound draws its file once (two cubes, 12 triangles); the hull its 6 faces.
+  const render::SceneList list = simreel::app::initial_scene_list(s, sw);
+  const auto& pair_mesh = std::get<render::MeshDesc>(list.added[0].desc);
+  EXPECT_EQ(pair_mesh.indices.size(), 3u * 24u);
+  const auto& hull_mesh = std::get<render::MeshDesc>(list.added[1].desc);
+  EXPECT_EQ(hull_mesh.indices.size(), 3u * 12u);
+  EXPECT_EQ(hull_mesh.positions.size(), 3u * 24u);  // flat: 4 vertices per face
+
+  const std::string bad = errors_of(R"({"bodies": [{"shape": "mesh", "mesh": "open.obj"}]})", file);
+  EXPECT_NE(bad.find("/bodies/0/mesh: expected a file of closed parts for a dynamic mesh"), std::string::npos) << bad;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SceneBodyList, CompoundDrawableHasEveryShapeAtItsOffset) {
+  const Scene s = scene_from_json(json::parse(R"({"bodies": [{"shapes": [
+      {"type": "box", "half_extents": [0.5, 0.5, 0.5]},
+      {"type": "convex_hull", "position": [0, 0, 2], "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]}]}]})"),
+                                  "s.json");
+  SceneWorld sw = build_world(s);
+  const render::SceneList list = simreel::app::initial_scene_list(s, sw);
+  const auto& d = std::get<render::MeshDesc>(list.added[0].desc);
+  EXPECT_EQ(d.indices.size(), 3u * (12u + 4u));
+  float zmax = -1e9f;
+  for (std::size_t i = 2; i < d.positions.size(); i += 3) zmax = std::max(zmax, d.positions[i]);
+  EXPECT_FLOAT_EQ(zmax, 3.0f);  // the tetrahedron's apex at offset z 2 + 1
+}
+
+TEST(SceneBodyList, SpringsAndJointsNameBodies) {
+  const Scene s = scene_from_json(json::parse(R"({"bodies": [{"name": "bob", "shape": "sphere", "radius": 0.1}],
+      "springs": [{"body_a": "world", "body_b": "bob", "anchor_a": [0, 0, 2], "anchor_b": [0, 0, 0], "stiffness": 10}]})"),
+                                  "s.json");
+  EXPECT_EQ(s.springs[0].index_b, 0u);
+  const std::string e = errors_of(R"({"bodies": [{"name": "bob", "shape": "sphere"}],
+      "springs": [{"body_a": "world", "body_b": "bbo", "stiffness": 10}]})");
+  EXPECT_NE(e.find("/springs/0/body_b: expected \"world\" or the name of a collider"), std::string::npos) << e;
+  EXPECT_NE(e.find("did you mean \"bob\"?"), std::string::npos) << e;
+}
+
+TEST(SceneBodyList, BadBodiesAreReportedWithTheirPointers) {
+  auto has = [](const std::string& errors, const std::string& part) {
+    EXPECT_NE(errors.find(part), std::string::npos) << "missing: " << part << "\nin: " << errors;
+  };
+  has(body_errors(R"({"type": "dynamc", "shape": "sphere"})"), "s.json: /bodies/0/type: expected one of \"dynamic\"");
+  has(body_errors(R"({"shape": "sphere", "densty": 3})"), "/bodies/0/densty");
+  has(body_errors(R"({"shape": "sphere", "densty": 3})"), "did you mean \"density\"");
+  has(body_errors(R"({"shape": "spheer"})"), "/bodies/0/shape: expected one of \"sphere\"");
+  has(body_errors(R"({"name": "x"})"), "/bodies/0: expected \"shapes\": [...] or an inline \"shape\"");
+  has(body_errors(R"({"shape": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]})"),
+      "/bodies/0/points: expected points bounding a volume for a convex hull (at least 4, not all in one plane), "
+      "found: all points are coplanar");
+  has(body_errors(R"({"shape": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, "a", 0]]})"),
+      "/bodies/0/points/3: expected a point [x, y, z] (m)");
+  has(body_errors(R"({"shape": "convex_hull"})"), "/bodies/0: expected \"points\"");
+  has(body_errors(R"({"shapes": [{"type": "box", "half_extents": [1, -1, 1]}]})"), "/bodies/0/shapes/0/half_extents");
+  has(body_errors(R"({"type": "static", "shape": "box", "velocity": [1, 0, 0]})"),
+      "/bodies/0/velocity: expected \"type\": \"dynamic\" for \"velocity\", found a static body");
+  has(body_errors(R"({"type": "kinematic", "shape": "box"})"), "expected a \"path\" to follow for a \"kinematic\" body");
+  has(body_errors(R"({"shape": "box", "density": 5, "mass": 2})"), "/bodies/0/mass: expected \"density\" or \"mass\", found both");
+  has(body_errors(R"({"shape": "box", "material": {"texture": "nope.png"}})"), "/bodies/0/material/texture: expected an image file");
+  has(body_errors(R"({"shape": "mesh", "mesh": "missing.obj"})"), "/bodies/0/mesh");
+  has(errors_of(R"({"colliders": [{"type": "box", "name": "a"}], "bodies": [{"name": "a", "shape": "box"}]})"),
+      "/bodies/0): expected a name not used by another collider");
+}
