@@ -22,7 +22,7 @@ using ojson = nlohmann::ordered_json;
 /// extras, force field, pin and path appears once. Keys of the same array (all collider types)
 /// share one object schema: the schema is a little looser than the loader there.
 const char* kProbe = R"({
-  "simulation": {}, "render": {}, "light": {},
+  "simulation": {}, "render": {"bloom": {}}, "light": {},
   "camera": {"path": [{"time": 0, "target": [0, 0, 1]}], "orbit": {}},
   "colliders": [
     {"type": "plane", "material": {}, "collider": {"on_hit": "split", "split": {}, "static_friction": 1},

@@ -65,18 +65,29 @@ void render_settings(ObjectReader& r, Scene& scene) {
                                              scene.render.sky_bottom.z(), 1});
   scene.render.sky_top = to_vec3f(top);
   scene.render.sky_bottom = to_vec3f(bottom);
-  // "background": "sky" (the gradient) or a colour [r, g, b].
+  // "background": "sky" (the gradient), "transparent" (alpha 0) or a colour [r, g, b].
   if (const json* bg = s.get("background")) {
     if (bg->is_string() && bg->get<std::string>() == "sky") {
       scene.render.background = render::Background::sky_gradient;
+    } else if (bg->is_string() && bg->get<std::string>() == "transparent") {
+      scene.render.background = render::Background::transparent;
     } else if (bg->is_array()) {
       scene.render.background = render::Background::solid;
       scene.render.background_color = to_vec3f(s.color("background", {0, 0, 0, 1}));
     } else {
-      s.error("background", "\"sky\" or a colour [r, g, b] in [0, 1]", *bg);
+      s.error("background", "\"sky\", \"transparent\" or a colour [r, g, b] in [0, 1]", *bg);
     }
   }
   scene.render.particle_shadows = s.boolean("particle_shadows", false);
+  // "bloom": {"intensity", "radius"}; intensity 0 turns it off.
+  if (const json* bo = object_member(s, "bloom")) {
+    ObjectReader b(*bo, s.pointer("bloom"), s.file(), s.errors());
+    scene.render.bloom.intensity = float(b.number("intensity", scene.render.bloom.intensity, 0.0, 1.0));
+    scene.render.bloom.radius = float(b.number("radius", scene.render.bloom.radius, 0.0, 1.0));
+    b.finish();
+  }
+  scene.render.shutter_deg = float(s.number("shutter_deg", scene.render.shutter_deg, 0.0, 360.0));
+  scene.render.shutter_samples = int(s.integer("shutter_samples", scene.render.shutter_samples, 2, 64));
   s.finish();
 }
 

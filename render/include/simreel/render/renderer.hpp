@@ -47,8 +47,28 @@ struct Light {
 
 /// What is drawn behind everything; meshes fog towards it with distance.
 enum class Background {
-  sky_gradient,  ///< RenderSettings::sky_bottom at the bottom of the frame to sky_top at the top
+  /// The sky along each pixel's view direction: RenderSettings::sky_bottom at the horizon,
+  /// sky_top overhead, the sun (disk and haze) where Light::direction comes from; below the
+  /// horizon the ground plane (the first horizontal plane) continues into aerial perspective.
+  sky_gradient,
   solid,         ///< RenderSettings::background_color everywhere
+  /// Nothing behind the scene: alpha 0 where nothing is drawn (PNG with alpha, WebM VP9 with
+  /// alpha); meshes fog towards the sky gradient's colour and fade out in alpha with the fog.
+  transparent,
+};
+
+/// HDR bloom (Jimenez, "Next generation post processing in Call of Duty: Advanced Warfare",
+/// SIGGRAPH 2014): the linear frame is downsampled into a chain of half-size levels with a
+/// 13-tap filter, the levels are added back up with a 3x3 tent, and the result is mixed into
+/// the frame: frame' = (1 - intensity) frame + intensity blur. No threshold, so the sum of the
+/// image is kept (within the filters' edge clamp) and only what is brighter than its
+/// surroundings visibly glows; bright HDR values (fire, sparks, the sun's highlights) spread
+/// far more light than the 8-bit tone map can show.
+struct Bloom {
+  float intensity = 0.04f;  ///< [0, 1] weight of the blurred image; 0 disables the pass
+  /// [0, 1] how much each coarser (wider) level adds to the one above it when the chain is
+  /// added back up: 0 keeps the glow tight, 1 spreads it over the frame.
+  float radius = 0.7f;
 };
 
 /// Output size and background. All colours in the renderer's inputs are linear RGB; shading
@@ -59,19 +79,28 @@ struct RenderSettings {
   int height = 720;        ///< (pixels) >= 1
   int msaa_samples = 4;    ///< 0 or 1 disables multisampling
   Background background = Background::sky_gradient;
-  Vec3f sky_top{0.32f, 0.50f, 0.78f};     ///< background gradient, top of the frame (linear RGB)
-  Vec3f sky_bottom{0.80f, 0.86f, 0.93f};  ///< background gradient, bottom of the frame
+  Vec3f sky_top{0.32f, 0.50f, 0.78f};     ///< sky overhead, the zenith (linear RGB)
+  Vec3f sky_bottom{0.80f, 0.86f, 0.93f};  ///< sky at the horizon, the fog colour of far things
   Vec3f background_color{0.05f, 0.05f, 0.06f};  ///< linear RGB of Background::solid
   /// Soft and droplet particles cast sun shadows: discs facing the sun in the shadow map,
   /// translucent ones in proportion to their opacity (each keeps that fraction of its
   /// shadow-map texels, by a fixed hash; the filtered lookups average them). Smoke then shades
   /// itself: particles behind others as seen from the sun are darker.
   bool particle_shadows = false;
+  Bloom bloom;  ///< HDR bloom post-pass; bloom.intensity 0 turns it off
+  /// Camera shutter angle (degrees, [0, 360]): moving meshes and the camera are drawn at
+  /// `shutter_samples` evenly spaced instants over the last shutter_deg / 360 of the frame
+  /// interval (between the previous frame's transforms and this frame's) and averaged. 0: off.
+  /// Particles read it for their own streaks.
+  float shutter_deg = 0.f;
+  int shutter_samples = 8;  ///< sub-frame instants per frame with motion blur, [2, 64]
 };
 
 /// A finite, drawn piece of an infinite ground plane, centred on the plane's origin. Its
 /// checker (cells aligned with the world x/y axes when the normal is z) fades with distance,
-/// and the square fades into the sky colour towards its edge and with distance (fog).
+/// and everything fogs towards the sky's horizon colour with distance. Towards its edge the
+/// square turns into the unshadowed plain plane that the sky pass continues to the horizon when
+/// it is the ground (the first plane facing +z); any other plane fades into the fog there.
 struct PlaneDesc {
   Vec3f point{0.f, 0.f, 0.f};   ///< (m) the plane's origin, world frame
   Vec3f normal{0.f, 0.f, 1.f};
@@ -162,7 +191,9 @@ class Renderer {
   /// (update_mesh), camera (set_camera). @throws what those calls throw.
   void apply(const SceneList& list);
 
-  /// Draws the frame and reads it back: RGBA8, rows top to bottom, alpha 255.
+  /// Draws the frame and reads it back: RGBA8, rows top to bottom, alpha 255 (with
+  /// Background::transparent: the coverage, 0 where nothing is drawn, colours not premultiplied).
+  /// With shutter_deg > 0, what moved since the previous render() is blurred along its motion.
   /// @throws ContextError if OpenGL reports an error.
   [[nodiscard]] Image render();
 
