@@ -66,9 +66,6 @@ void BloomPass::draw(GLuint frame, float radius, GLuint empty_vao) {
   gl.Disable(GL_BLEND);
   gl.BindVertexArray(empty_vao);
   gl.ActiveTexture(GL_TEXTURE0);
-  gl.BindTexture(GL_TEXTURE_2D, frame);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
 
   down_.use();
   down_.set("u_src", 0);
@@ -85,6 +82,7 @@ void BloomPass::draw(GLuint frame, float radius, GLuint empty_vao) {
     gl.BindTexture(GL_TEXTURE_2D, src);
     down_.set("u_src_texel", 1.f / float(src_w), 1.f / float(src_h));
     down_.set("u_dst_size", float(l.width), float(l.height));
+    down_.set("u_box", i == 0 ? 1 : 0);
     gl.DrawArrays(GL_TRIANGLES, 0, 3);
     src = l.down;
     src_w = l.width;
@@ -108,6 +106,7 @@ void BloomPass::draw(GLuint frame, float radius, GLuint empty_vao) {
     gl.BindTexture(GL_TEXTURE_2D, coarse_tex);
     up_.set("u_coarse_texel", 1.f / float(coarse.width), 1.f / float(coarse.height));
     up_.set("u_dst_size", float(l.width), float(l.height));
+    up_.set("u_tent", i == 0 ? 0 : 1);
     gl.DrawArrays(GL_TRIANGLES, 0, 3);
   }
   gl.BindVertexArray(0);

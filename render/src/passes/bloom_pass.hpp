@@ -1,7 +1,8 @@
 #pragma once
 // Private: the HDR bloom chain (RenderSettings::Bloom). The linear frame is downsampled into
-// levels 1..N of half size each (13-tap filter of Jimenez, "Next generation post processing in
-// Call of Duty: Advanced Warfare", SIGGRAPH 2014), then added back up: up_N = down_N,
+// levels 1..N of half size each (a 2 x 2 box into level 1, then the 13-tap filter of Jimenez,
+// "Next generation post processing in Call of Duty: Advanced Warfare", SIGGRAPH 2014), then
+// added back up (3 x 3 tent; bilinear into level 1): up_N = down_N,
 // up_i = (1 - radius) down_i + radius tent(up_{i+1}). Every filter's weights sum to 1 and every
 // level halves both sizes, so each level keeps the frame's mean: up_1 (half size) holds the
 // frame's light blurred, and the post pass mixes it in, (1 - intensity) frame + intensity up_1,
@@ -19,8 +20,8 @@ class BloomPass {
   /// @throws ContextError if a framebuffer is incomplete.
   void create(const GlTable& gl, int width, int height);
   void destroy() noexcept;
-  /// Runs the chain on `frame` (a width x height RGBA16F texture; its filter is set to linear,
-  /// which texelFetch readers do not see). Leaves the viewport at the last level's size.
+  /// Runs the chain on `frame` (a width x height RGBA16F texture, read with texelFetch only).
+  /// Leaves the viewport at the last level's size.
   void draw(GLuint frame, float radius, GLuint empty_vao);
   /// up_1 after draw(): RGBA16F, half the frame's size (rounded up), linear filtering.
   [[nodiscard]] GLuint result() const {
