@@ -197,6 +197,22 @@ TEST(Transparent, AlphaIsZeroWhereNothingIsDrawnAndOpaqueOnTheBox) {
   EXPECT_EQ(img.pixel(2, 2)[0] + img.pixel(2, 2)[1] + img.pixel(2, 2)[2], 0);
 }
 
+TEST(Transparent, AGroundFillingMostOfTheFrameLeavesTheSkyClear) {
+  // Bloom blurs the ground over the whole frame; none of it may leak into the empty sky.
+  auto ctx = create_context(Backend::osmesa);
+  RenderSettings s = test::small_settings();
+  s.background = Background::transparent;
+  Renderer r(*ctx, s);
+  Camera c = test::front_camera();
+  c.position = Vec3f(0.f, -10.f, 3.f);
+  r.set_camera(c);
+  r.add_plane(1, PlaneDesc{});
+  const Image img = r.render();
+  dump(img, "transparent_ground");
+  for (int x = 0; x < img.width; ++x) ASSERT_EQ(img.pixel(x, 0)[3], 0) << x;
+  EXPECT_EQ(img.pixel(img.width / 2, img.height - 1)[3], 255);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sky and ground
 

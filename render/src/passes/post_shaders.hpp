@@ -48,19 +48,22 @@ void main() {
   vec2 frag = vec2(gl_FragCoord.x, u_size.y - gl_FragCoord.y);
   ivec2 texel = ivec2(frag);
   vec4 frame = texelFetch(u_hdr, texel, 0);
-  vec4 src = frame;
-  if (u_bloom_intensity > 0.0) {
-    src = mix(frame, texture(u_bloom, (vec2(texel) + 0.5) / u_size), u_bloom_intensity);
-  }
-  vec3 c = max(src.rgb, 0.0);
   float alpha = 1.0;
+  float bloom = u_bloom_intensity;
   if (u_transparent != 0) {
-    // The frame is premultiplied over transparent black. Additive light (glow, sparks, bloom)
-    // adds colour but no alpha: it counts as coverage by its brightness, so it composites as
-    // light; bloom never thins what was drawn opaque. Under half an 8-bit step: nothing.
-    alpha = clamp(max(max(frame.a, src.a), max(c.r, max(c.g, c.b))), 0.0, 1.0);
-    c = alpha >= 0.5 / 255.0 ? c / alpha : vec3(0.0);
-    if (alpha < 0.5 / 255.0) alpha = 0.0;
+    // The frame is premultiplied over transparent black. Additive light (glow, sparks) adds
+    // colour but no alpha: it counts as coverage by its brightness, so it composites as light.
+    // Bloom stays within that coverage: where nothing was drawn, alpha stays exactly 0.
+    vec3 f = max(frame.rgb, 0.0);
+    alpha = clamp(max(frame.a, max(f.r, max(f.g, f.b))), 0.0, 1.0);
+    bloom *= alpha;
+  }
+  vec4 src = frame;
+  if (bloom > 0.0) src = mix(frame, texture(u_bloom, (vec2(texel) + 0.5) / u_size), bloom);
+  vec3 c = max(src.rgb, 0.0);
+  if (u_transparent != 0) {
+    if (alpha < 0.5 / 255.0) alpha = 0.0;  // under half an 8-bit step: nothing
+    c = alpha > 0.0 ? c / alpha : vec3(0.0);
   }
   uint rg = packHalf2x16(c.rg);
   uint b = packHalf2x16(vec2(c.b, 0.0));
