@@ -84,7 +84,7 @@ void main() {
   if (u_ground_plane != 0 && u_sky_mode != 2) {
     // The ground continues as the sky pass's far ground: towards the edge the square turns
     // into exactly that (no checker, no shadow), then both fog alike.
-    color = mix(color, ground_color(u_color.rgb, -v), edge);
+    if (edge > 0.0) color = mix(color, ground_color(u_color.rgb, -v), edge);
     fade = fog;
   }
   if (u_sky_mode == 2) {

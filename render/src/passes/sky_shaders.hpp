@@ -26,7 +26,7 @@ vec3 sky_color(vec3 dir, float disk) {
   float haze = 1.0 - 0.6 * el;
   c += u_sun_color * (0.10 * haze * pow(mu, 6.0) + 0.25 * pow(mu, 180.0));
   // The disk: 0.8 degrees in radius, its edge smoothed over a few hundredths of a degree.
-  c += u_sun_color * (24.0 * disk * smoothstep(0.999893, 0.999912, mu));
+  if (disk > 0.0) c += u_sun_color * (24.0 * disk * smoothstep(0.999893, 0.999912, mu));
   return c;
 }
 // The far ground beyond the drawn square: the ground plane's colour lit like the mesh pass lights
