@@ -50,6 +50,8 @@ struct Case {
   std::size_t particles;
   bool particle_shadows;
   ParticleTexture texture = ParticleTexture::none;
+  float bloom = Bloom{}.intensity;  // the default look: bloom on
+  float shutter_deg = 0.f;          // > 0: a box moves every frame, blurred by the shutter
 };
 
 }  // namespace
@@ -62,24 +64,36 @@ int main(int argc, char** argv) {
 
   double full = 0.0;
   for (const Case& c : {Case{"soft, msaa 4 (the baseline's frame)", 4, ParticleStyle::soft, n, false},
+                        Case{"soft, msaa 4, bloom off", 4, ParticleStyle::soft, n, false, ParticleTexture::none, 0.f},
                         Case{"soft, msaa 0", 0, ParticleStyle::soft, n, false},
                         Case{"additive (no sort), msaa 4", 4, ParticleStyle::additive, n, false},
                         Case{"droplet (opaque), msaa 4", 4, ParticleStyle::droplet, n, false},
                         Case{"soft + particle shadows, msaa 4", 4, ParticleStyle::soft, n, true},
-                        Case{"soft, smoke texture, msaa 4", 4, ParticleStyle::soft, n, false, ParticleTexture::smoke},
-                        Case{"additive, flame texture, msaa 4", 4, ParticleStyle::additive, n, false, ParticleTexture::flame},
-                        Case{"empty frame (sky, tone map, read back), msaa 4", 4, ParticleStyle::soft, 0, false}}) {
+                         Case{"soft, smoke texture, msaa 4", 4, ParticleStyle::soft, n, false, ParticleTexture::smoke},
+                         Case{"additive, flame texture, msaa 4", 4, ParticleStyle::additive, n, false, ParticleTexture::flame},
+                         Case{"empty frame (sky, tone map, read back), msaa 4", 4, ParticleStyle::soft, 0, false},
+                         Case{"empty frame, bloom off", 4, ParticleStyle::soft, 0, false, ParticleTexture::none, 0.f},
+                         Case{"soft + moving box, shutter 0", 4, ParticleStyle::soft, n, false, ParticleTexture::none,
+                              Bloom{}.intensity, 0.f},
+                         Case{"soft + moving box, shutter 180 (8 samples)", 4, ParticleStyle::soft, n, false,
+                              ParticleTexture::none, Bloom{}.intensity, 180.f}}) {
     RenderSettings s;
     s.width = 1280;
     s.height = 720;
     s.msaa_samples = c.msaa;
     s.particle_shadows = c.particle_shadows;
+    s.bloom.intensity = c.bloom;
+    s.shutter_deg = c.shutter_deg;
     Renderer r(*context, s);
+    const bool box = std::strstr(c.name, "moving box") != nullptr;
+    if (box) r.add_box(2, BoxDesc{});
+    int frame = 0;
     ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
     batch.texture = c.texture;
     double wall = 0.0;
     const double ms = median_ms(frames, [&] {
       r.set_particles(1, batch);  // new data every frame, as from a simulation
+      if (box) r.set_transform(2, Vec3f(0.2f * float(frame++ % 10) - 1.f, 0.f, 0.5f), Mat3f::Identity());
       (void)r.render();
     }, &wall);
     if (full == 0.0) full = ms;

@@ -173,7 +173,8 @@ int render_command(const RenderOptions& o) {
       video_paths.push_back(out);
     }
   }
-  render::VideoOptions video{scene.fps, o.crf, o.bitrate};
+  render::VideoOptions video{scene.fps, o.crf, o.bitrate,
+                             scene.render.background == render::Background::transparent};
   for (const auto& out : video_paths) {
     try {
       sinks.push_back(render::make_video(out, scene.render.width, scene.render.height, video));

@@ -29,6 +29,10 @@ struct Drawable {
   DrawableKind kind = DrawableKind::box;
   Vec3f translation = Vec3f::Zero();
   Mat3f rotation = Mat3f::Identity();
+  // The transform the last rendered frame showed (motion blur interpolates from it).
+  Vec3f shown_translation = Vec3f::Zero();
+  Mat3f shown_rotation = Mat3f::Identity();
+  bool shown = false;
   Vec4f color = Vec4f::Ones();
   Vec3f half_extents = Vec3f::Ones();  // box
   PlaneDesc plane;                     // plane

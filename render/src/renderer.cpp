@@ -12,8 +12,11 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "drawables.hpp"
 #include "gl/buffers.hpp"
@@ -21,6 +24,7 @@
 #include "gl/targets.hpp"
 #include "passes/frame.hpp"
 #include "passes/mesh_pass.hpp"
+#include "passes/motion_blur.hpp"
 #include "passes/particle_look.hpp"
 #include "passes/particle_pass.hpp"
 #include "passes/post_pass.hpp"
@@ -67,6 +71,11 @@ struct Renderer::Impl {
   detail::MeshPass meshes;
   detail::ParticlePass particles;
   detail::PostPass post;
+  detail::MotionBlur blur;  // made when settings.shutter_deg > 0
+  Camera shown_camera;      // the camera of the last rendered frame
+  bool camera_shown = false;
+
+  void draw_opaque(const detail::FrameView& frame, const detail::ShadowView& shadow);
 };
 
 void Renderer::Impl::create() {
@@ -84,6 +93,7 @@ void Renderer::Impl::create() {
   meshes.create(gl);
   particles.create(gl);
   post.create(gl, settings, empty_vao);
+  if (settings.shutter_deg > 0.f) blur.create(gl, settings.width, settings.height);
   detail::check_error(gl, "creating the renderer's framebuffers and buffers");
 }
 
@@ -97,6 +107,7 @@ void Renderer::Impl::destroy() noexcept {
   for (auto& [key, d] : table.by_key) destroy_drawable(d);
   table.by_key.clear();
   table.order.clear();
+  blur.destroy();
   post.destroy();
   particles.destroy();
   meshes.destroy();
@@ -118,30 +129,13 @@ Drawable& Renderer::Impl::find(ObjectKey key) {
 // ---------------------------------------------------------------------------------------------
 // Frame
 
-Image Renderer::render() {
-  Impl& r = *impl_;
-  const GlTable& gl = r.gl;
-  const int w = r.settings.width;
-  const int h = r.settings.height;
-  const Camera& cam = r.camera;
-  detail::FrameView frame{r.settings, r.camera, r.light};
-  frame.view = detail::look_at(cam.position, cam.target, cam.up);
-  frame.proj = detail::perspective(cam.fov_deg * std::numbers::pi_v<float> / 180.f,
-                                   float(w) / float(h), cam.near_m, cam.far_m);
-
-  gl.Disable(GL_BLEND);
-  gl.Disable(GL_CULL_FACE);
-  gl.CullFace(GL_BACK);
-  r.particles.gather(r.table, cam);
-  const detail::ShadowView& shadow =
-      r.shadow.draw(frame, r.table, r.meshes.cube(), r.particles.soft(), r.particles.droplets());
-
-  gl.Viewport(0, 0, w, h);
-  r.sky.draw(r.target.draw_fbo(), r.empty_vao);
-  gl.BindFramebuffer(GL_FRAMEBUFFER, r.target.draw_fbo());
+/// Sky, then the meshes (planes, boxes, meshes, cloth) into the scene target with depth.
+void Renderer::Impl::draw_opaque(const detail::FrameView& frame, const detail::ShadowView& shadow) {
+  gl.Viewport(0, 0, settings.width, settings.height);
+  sky.draw(frame, table, target.draw_fbo(), empty_vao);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, target.draw_fbo());
   gl.DepthMask(GL_TRUE);
   gl.Clear(GL_DEPTH_BUFFER_BIT);
-
   gl.Enable(GL_DEPTH_TEST);
   gl.DepthFunc(GL_LESS);
   gl.ActiveTexture(GL_TEXTURE1);
@@ -149,17 +143,124 @@ Image Renderer::render() {
   // Unit 3 holds the scene depth for soft particles; until it is copied, bind the copy anyway
   // (a sampler must not see the depth buffer being written).
   gl.ActiveTexture(GL_TEXTURE3);
-  gl.BindTexture(GL_TEXTURE_2D, r.target.depth_copy_texture());
-  r.meshes.draw(frame, shadow, r.table);
-  r.particles.draw_droplets(frame, shadow, r.target.samples());
+  gl.BindTexture(GL_TEXTURE_2D, target.depth_copy_texture());
+  meshes.draw(frame, shadow, table);
+}
+
+namespace {
+
+detail::FrameView frame_view(const RenderSettings& settings, const Camera& cam, const Light& light) {
+  detail::FrameView frame{settings, cam, light};
+  frame.view = detail::look_at(cam.position, cam.target, cam.up);
+  frame.proj = detail::perspective(cam.fov_deg * std::numbers::pi_v<float> / 180.f,
+                                   float(settings.width) / float(settings.height), cam.near_m, cam.far_m);
+  return frame;
+}
+
+Mat3f slerp(const Mat3f& a, const Mat3f& b, float s) {
+  const Eigen::Quaternionf qa(a);
+  const Eigen::Quaternionf qb(b);
+  return qa.slerp(s, qb).toRotationMatrix();
+}
+
+}  // namespace
+
+Image Renderer::render() {
+  Impl& r = *impl_;
+  const GlTable& gl = r.gl;
+  const Camera& cam = r.camera;
+  const detail::FrameView frame = frame_view(r.settings, cam, r.light);
+
+  gl.Disable(GL_BLEND);
+  gl.Disable(GL_CULL_FACE);
+  gl.CullFace(GL_BACK);
+  r.particles.gather(r.table, cam);
+  auto draw_shadow = [&](const detail::FrameView& f) -> const detail::ShadowView& {
+    return r.shadow.draw(f, r.table, r.meshes.cube(), r.particles.soft(), r.particles.droplets());
+  };
+
+  // The shutter: moving meshes and a moving camera are drawn at sub-frame instants
+  // s in (1 - shutter/360, 1] between the last frame's pose (s = 0) and this one's (s = 1).
+  bool moved = false;
+  if (r.settings.shutter_deg > 0.f) {
+    const auto& c0 = r.shown_camera;
+    moved = r.camera_shown && (c0.position != cam.position || c0.target != cam.target ||
+                               c0.fov_deg != cam.fov_deg || c0.up != cam.up);
+    r.table.for_each([&](const Drawable& d) {
+      moved |= d.kind != DrawableKind::particles && d.shown &&
+               (d.shown_translation != d.translation || d.shown_rotation != d.rotation);
+    });
+  }
+  const detail::ShadowView* shadow = nullptr;
+  if (!moved) {
+    shadow = &draw_shadow(frame);
+    r.draw_opaque(frame, *shadow);
+  } else {
+    const int n = std::clamp(r.settings.shutter_samples, 2, 64);
+    const float open = std::min(r.settings.shutter_deg, 360.f) / 360.f;
+    // The poses at s = 1, put back after the sub-frames.
+    std::vector<std::pair<Vec3f, Mat3f>> poses;
+    poses.reserve(r.table.order.size());
+    r.table.for_each([&](const Drawable& d) { poses.emplace_back(d.translation, d.rotation); });
+    r.blur.begin();
+    for (int k = 0; k < n; ++k) {
+      // Evenly spaced, the last one at s = 1: its depth is what the particles test against.
+      const float s = 1.f - open * float(n - 1 - k) / float(n);
+      const bool last = k == n - 1;  // exactly this frame's poses
+      std::size_t i = 0;
+      for (const ObjectKey key : r.table.order) {
+        Drawable& d = r.table.by_key.at(key);
+        const auto& [t1, r1] = poses[i++];
+        if (d.kind == DrawableKind::particles || !d.shown) continue;
+        d.translation = last ? t1 : Vec3f(d.shown_translation + s * (t1 - d.shown_translation));
+        d.rotation = last ? r1 : slerp(d.shown_rotation, r1, s);
+      }
+      Camera sub = cam;
+      if (r.camera_shown && !last) {
+        const Camera& c0 = r.shown_camera;
+        sub.position = c0.position + s * (cam.position - c0.position);
+        sub.target = c0.target + s * (cam.target - c0.target);
+        sub.up = c0.up + s * (cam.up - c0.up);
+        sub.fov_deg = c0.fov_deg + s * (cam.fov_deg - c0.fov_deg);
+      }
+      // Shadows move with their casters: the shadow map is fitted and drawn per instant; the
+      // last one (this frame's poses) is what the particles use.
+      const detail::FrameView sub_frame = frame_view(r.settings, sub, r.light);
+      shadow = &draw_shadow(sub_frame);
+      r.draw_opaque(sub_frame, *shadow);
+      r.target.resolve();
+      r.blur.add(r.target.resolve_texture(), 1.f / float(n), r.empty_vao);
+    }
+    std::size_t i = 0;
+    for (const ObjectKey key : r.table.order) {
+      Drawable& d = r.table.by_key.at(key);
+      std::tie(d.translation, d.rotation) = poses[i++];
+    }
+    r.blur.end(r.target.draw_fbo(), r.empty_vao);
+    gl.Enable(GL_DEPTH_TEST);
+    gl.DepthFunc(GL_LESS);
+    gl.ActiveTexture(GL_TEXTURE1);
+    gl.BindTexture(GL_TEXTURE_2D, shadow->texture);
+    gl.ActiveTexture(GL_TEXTURE3);
+    gl.BindTexture(GL_TEXTURE_2D, r.target.depth_copy_texture());
+  }
+  r.particles.draw_droplets(frame, *shadow, r.target.samples());
   bool opaque_drawables = false;
   r.table.for_each([&](const Drawable& d) { opaque_drawables |= d.kind != DrawableKind::particles; });
-  r.particles.draw_blended(frame, shadow, r.target, opaque_drawables);
+  r.particles.draw_blended(frame, *shadow, r.target, opaque_drawables);
 
   r.target.resolve();
   r.post.draw(r.target.resolve_texture(), r.empty_vao);
   Image image = r.post.read_back();
   detail::check_error(gl, "drawing a frame");
+
+  for (auto& [key, d] : r.table.by_key) {
+    d.shown_translation = d.translation;
+    d.shown_rotation = d.rotation;
+    d.shown = true;
+  }
+  r.shown_camera = cam;
+  r.camera_shown = true;
   return image;
 }
 

@@ -164,6 +164,26 @@ TEST(SceneCamera, BadPathAndOrbitValuesNamePointers) {
   EXPECT_NE(e.find("s.json: /render/background: expected \"sky\", \"transparent\" or a colour"), std::string::npos) << e;
 }
 
+// --- the frame (issue 14 A): bloom, shutter, transparent background ---
+
+TEST(SceneRender, BloomShutterAndTransparentBackgroundAreRead) {
+  const auto d = scene_from_json(json::parse(R"({})"), "s.json");
+  EXPECT_FLOAT_EQ(d.render.bloom.intensity, 0.04f);  // on by default
+  EXPECT_FLOAT_EQ(d.render.shutter_deg, 0.f);        // motion blur off by default
+  const auto s = scene_from_json(json::parse(R"({"render":{"background":"transparent",
+      "bloom":{"intensity":0.1,"radius":0.5},"shutter_deg":180,"shutter_samples":12}})"), "s.json");
+  EXPECT_EQ(s.render.background, simreel::render::Background::transparent);
+  EXPECT_FLOAT_EQ(s.render.bloom.intensity, 0.1f);
+  EXPECT_FLOAT_EQ(s.render.bloom.radius, 0.5f);
+  EXPECT_FLOAT_EQ(s.render.shutter_deg, 180.f);
+  EXPECT_EQ(s.render.shutter_samples, 12);
+  std::string e = errors_of(json::parse(R"({"render":{"shutter_deg":400}})"));
+  EXPECT_NE(e.find("s.json: /render/shutter_deg: expected a number in [0, 360]"), std::string::npos) << e;
+  e = errors_of(json::parse(R"({"render":{"bloom":{"intensity":2,"glow":1}}})"));
+  EXPECT_NE(e.find("s.json: /render/bloom/intensity"), std::string::npos) << e;
+  EXPECT_NE(e.find("/render/bloom/glow"), std::string::npos) << e;
+}
+
 TEST(SceneCloth, ParticleContactKeysAreReadAndChecked) {
   const auto s = scene_from_json(json::parse(R"({"cloths":[{"collide_particles":false,"restitution":0.4}]})"), "s.json");
   ASSERT_EQ(s.cloths.size(), 1u);

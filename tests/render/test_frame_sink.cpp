@@ -270,6 +270,32 @@ TEST(RenderVideo, WebmIsVp9WhenTheEncoderExists) {
   EXPECT_FALSE(ffmpeg_has_encoder("no-such-encoder"));
 }
 
+TEST(RenderVideo, WebmKeepsAlphaWhenAsked) {
+  ASSERT_TRUE(ffmpeg_available());
+  if (!ffmpeg_has_encoder("libvpx-vp9")) GTEST_SKIP() << "this ffmpeg has no libvpx-vp9";
+  const test::TempDir dir("webm-alpha");
+  const fs::path path = dir.path() / "clip.webm";
+  VideoOptions options{10.0, 30, ""};
+  options.alpha = true;
+  auto sink = make_video(path, 64, 36, options);
+  for (int i = 0; i < 5; ++i) {
+    Image f = frame(64, 36, i);
+    for (int y = 0; y < 36; ++y) {
+      for (int x = 0; x < 32; ++x) f.rgba[(std::size_t(y) * 64 + x) * 4 + 3] = 0;  // left half clear
+    }
+    sink->write(f, i);
+  }
+  sink->finish();
+  EXPECT_EQ(run("ffprobe -v error -show_entries stream_tags=alpha_mode -of csv=p=0 '" + path.string() + "'"), "1");
+  // Decoded with libvpx, the alpha comes back: clear on the left, opaque on the right.
+  const std::string alpha = run("ffmpeg -v error -c:v libvpx-vp9 -i '" + path.string() +
+                                "' -frames:v 1 -vf alphaextract,scale=2:1:flags=area -f rawvideo -pix_fmt gray - | od -An -tu1");
+  int left = -1, right = -1;
+  std::sscanf(alpha.c_str(), "%d %d", &left, &right);
+  EXPECT_LT(left, 16) << alpha;
+  EXPECT_GT(right, 239) << alpha;
+}
+
 TEST(RenderVideo, BitrateReplacesCrfAndIsChecked) {
   ASSERT_TRUE(ffmpeg_available());
   const test::TempDir dir("rate");

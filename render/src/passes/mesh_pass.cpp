@@ -8,6 +8,7 @@
 #include "common_glsl.hpp"
 #include "mesh_shaders.hpp"
 #include "shadow_shaders.hpp"
+#include "sky_pass.hpp"
 #include "sky_shaders.hpp"
 #include "transforms.hpp"
 
@@ -43,7 +44,7 @@ void unit_cube(std::vector<Vertex>& vertices, std::vector<GLuint>& indices) {
 void MeshPass::create(const GlTable& gl) {
   gl_ = &gl;
   program_ = Program(gl, "lit mesh", glsl_source({kLitVs}),
-                     glsl_source({kSkyGlsl, kShadowGlsl, kAmbientGlsl, kLitFs}));
+                     glsl_source({kAmbientGlsl, kSkyGlsl, kShadowGlsl, kLitFs}));
   std::vector<Vertex> vertices;
   std::vector<GLuint> indices;
   unit_cube(vertices, indices);
@@ -65,18 +66,11 @@ void MeshPass::draw(const FrameView& frame, const ShadowView& shadow, const Draw
   p.use();
   p.set("u_view_proj", Mat4f(frame.proj * frame.view));
   p.set("u_eye", camera.position);
-  p.set("u_light_dir", light.direction.squaredNorm() > 0.f ? Vec3f(light.direction.normalized())
-                                                           : Vec3f(0.f, 0.f, -1.f));
-  p.set("u_light_color", light.color);
-  p.set("u_ambient", light.ambient);
+  set_sky_uniforms(p, settings, light);  // also the light's direction, colour and ambient
   p.set("u_ground_ambient", light.ground_ambient);
-  const bool solid = settings.background == Background::solid;
-  p.set("u_sky_top", solid ? settings.background_color : settings.sky_top);
-  p.set("u_sky_bottom", solid ? settings.background_color : settings.sky_bottom);
-  p.set("u_viewport", float(settings.width), float(settings.height));
-  // Fog scales with how far the camera stands from what it looks at, so it reads the same in
-  // a tabletop scene and a field.
-  p.set("u_fog_distance", std::max(5.f * (camera.target - camera.position).norm(), 1e-3f));
+  p.set("u_fog_distance", fog_distance(camera));
+  const Drawable* ground = find_ground(table);
+  p.set("u_ground_plane", 0);
   p.set("u_shadow_map", 1);
   p.set("u_texture", 2);
   p.set("u_shadow_enabled", shadow.enabled ? 1 : 0);
@@ -94,8 +88,10 @@ void MeshPass::draw(const FrameView& frame, const ShadowView& shadow, const Draw
       p.set("u_specular", 0.06f);
       p.set("u_checker_m", std::max(d.plane.checker_m, 0.f));
       p.set("u_half_size", std::max(d.plane.half_size, 1e-6f));
+      p.set("u_ground_plane", &d == ground ? 1 : 0);
       gl.BindVertexArray(d.mesh.vao);
       gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
+      p.set("u_ground_plane", 0);
     } else if (d.kind == DrawableKind::box) {
       p.set("u_model", affine(d.rotation * d.half_extents.asDiagonal(), d.translation));
       p.set("u_normal_matrix", d.rotation);

@@ -27,14 +27,13 @@ in vec3 v_normal;
 in vec2 v_uv;
 out vec4 o_color;
 uniform vec3 u_eye;
-uniform vec3 u_light_dir;     // direction the light travels
-uniform vec3 u_light_color;
 uniform vec4 u_color;
 uniform sampler2D u_texture;
 uniform int u_has_texture;
 uniform float u_specular;
 uniform float u_checker_m;    // 0: plain colour
 uniform float u_half_size;    // 0: no edge fade (boxes)
+uniform int u_ground_plane;   // 1: the ground (find_ground): its edge fades into the far ground
 uniform float u_fog_distance; // (m)
 
 // Box-filtered checker (1 on dark cells): the filter width is the pixel footprint, so cells
@@ -78,8 +77,23 @@ void main() {
   float spec = u_specular * pow(max(dot(n, h), 0.0), 48.0) * ndl;
   vec3 ambient = hemisphere(n.z);
   vec3 color = albedo * (ambient + u_light_color * (ndl * sun)) + u_light_color * (spec * sun);
-  color = mix(color, sky_at(gl_FragCoord.xy), max(fog, edge));
-  o_color = vec4(color, 1.0);
+  // Aerial perspective: fog towards the sky seen behind the point (its horizon colour for
+  // anything below the horizon).
+  vec3 fog_color = sky_color(-v, 0.0);
+  float fade = max(fog, edge);
+  if (u_ground_plane != 0 && u_sky_mode != 2) {
+    // The ground continues as the sky pass's far ground: towards the edge the square turns
+    // into exactly that (no checker, no shadow), then both fog alike.
+    if (edge > 0.0) color = mix(color, ground_color(u_color.rgb, -v), edge);
+    fade = fog;
+  }
+  if (u_sky_mode == 2) {
+    // Nothing behind to fog towards: objects stay opaque for compositing; only the ground
+    // square's edge fades out (premultiplied, over nothing).
+    o_color = vec4(color * (1.0 - edge), 1.0 - edge);
+  } else {
+    o_color = vec4(mix(color, fog_color, fade), 1.0);
+  }
 }
 )";
 

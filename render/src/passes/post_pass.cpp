@@ -14,6 +14,9 @@ void PostPass::create(const GlTable& gl, const RenderSettings& settings, GLuint 
   gl_ = &gl;
   width_ = settings.width;
   height_ = settings.height;
+  bloom_ = settings.bloom;
+  transparent_ = settings.background == Background::transparent;
+  if (bloom_.intensity > 0.f) bloom_pass_.create(gl, width_, height_);
   program_ = Program(gl, "tone map", glsl_source({kFullscreenVs}),
                      glsl_source({kPackingExtension, kPostFs}));
 
@@ -59,23 +62,32 @@ void PostPass::destroy() noexcept {
   if (fbo_ != 0) gl_->DeleteFramebuffers(1, &fbo_);
   if (color_ != 0) gl_->DeleteRenderbuffers(1, &color_);
   if (tone_lut_ != 0) gl_->DeleteTextures(1, &tone_lut_);
+  bloom_pass_.destroy();
   fbo_ = color_ = tone_lut_ = 0;
   program_ = Program();
 }
 
 void PostPass::draw(GLuint hdr_texture, GLuint empty_vao) {
   const GlTable& gl = *gl_;
+  const bool bloom = bloom_.intensity > 0.f;
+  if (bloom) bloom_pass_.draw(hdr_texture, bloom_.radius, empty_vao);
   gl.BindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  gl.Viewport(0, 0, width_, height_);
   gl.Disable(GL_DEPTH_TEST);
-  gl.ActiveTexture(GL_TEXTURE0);
-  gl.BindTexture(GL_TEXTURE_2D, hdr_texture);
+  gl.Disable(GL_BLEND);
   program_.use();
   program_.set("u_hdr", 0);
   program_.set("u_tone_lut", 4);
+  program_.set("u_bloom", 5);
+  program_.set("u_bloom_intensity", bloom ? bloom_.intensity : 0.f);
+  program_.set("u_size", float(width_), float(height_));
+  program_.set("u_transparent", transparent_ ? 1 : 0);
+  gl.ActiveTexture(GL_TEXTURE5);
+  gl.BindTexture(GL_TEXTURE_2D, bloom ? bloom_pass_.result() : 0);
   gl.ActiveTexture(GL_TEXTURE4);
   gl.BindTexture(GL_TEXTURE_2D, tone_lut_);
   gl.ActiveTexture(GL_TEXTURE0);
-  program_.set("u_height", float(height_));
+  gl.BindTexture(GL_TEXTURE_2D, hdr_texture);
   gl.BindVertexArray(empty_vao);
   gl.DrawArrays(GL_TRIANGLES, 0, 3);
   gl.BindVertexArray(0);

@@ -36,21 +36,42 @@ void main() {
 inline constexpr char kPostFs[] = R"(
 uniform sampler2D u_hdr;
 uniform sampler2D u_tone_lut;  // kToneLutFs
+uniform sampler2D u_bloom;     // BloomPass::result(), half size, linear filtering
+uniform float u_bloom_intensity;
+uniform vec2 u_size;           // the frame (pixels)
+uniform int u_transparent;     // Background::transparent: keep alpha, un-premultiply
 out vec4 o_color;
 float tone_lut(uint bits) { return texelFetch(u_tone_lut, ivec2(int(bits & 255u), int(bits >> 8)), 0).r; }
-uniform float u_height;  // rows of the target: the image is written upside down (see below)
 void main() {
   // The scene's pixel this fragment shows: rows are flipped here, so that GL's bottom-to-top
   // read back is already the image's top-to-bottom order (exact: integers and halves).
-  vec2 frag = vec2(gl_FragCoord.x, u_height - gl_FragCoord.y);
-  vec3 c = texelFetch(u_hdr, ivec2(frag), 0).rgb;
+  vec2 frag = vec2(gl_FragCoord.x, u_size.y - gl_FragCoord.y);
+  ivec2 texel = ivec2(frag);
+  vec4 frame = texelFetch(u_hdr, texel, 0);
+  float alpha = 1.0;
+  float bloom = u_bloom_intensity;
+  if (u_transparent != 0) {
+    // The frame is premultiplied over transparent black. Additive light (glow, sparks) adds
+    // colour but no alpha: it counts as coverage by its brightness, so it composites as light.
+    // Bloom stays within that coverage: where nothing was drawn, alpha stays exactly 0.
+    vec3 f = max(frame.rgb, 0.0);
+    alpha = clamp(max(frame.a, max(f.r, max(f.g, f.b))), 0.0, 1.0);
+    bloom *= alpha;
+  }
+  vec4 src = frame;
+  if (bloom > 0.0) src = mix(frame, texture(u_bloom, (vec2(texel) + 0.5) / u_size), bloom);
+  vec3 c = max(src.rgb, 0.0);
+  if (u_transparent != 0) {
+    if (alpha < 0.5 / 255.0) alpha = 0.0;  // under half an 8-bit step: nothing
+    c = alpha > 0.0 ? c / alpha : vec3(0.0);
+  }
   uint rg = packHalf2x16(c.rg);
   uint b = packHalf2x16(vec2(c.b, 0.0));
   c = vec3(tone_lut(rg & 0xffffu), tone_lut(rg >> 16), tone_lut(b & 0xffffu));
   // Half-LSB interleaved-gradient dither: no banding in the sky gradient; fixed per pixel.
   float noise = fract(52.9829189 * fract(dot(frag, vec2(0.06711056, 0.00583715))));
   c += (noise - 0.5) / 255.0;
-  o_color = vec4(c, 1.0);
+  o_color = vec4(c, alpha);
 }
 )";
 

@@ -193,7 +193,7 @@ class VideoSink final : public FrameSink {
       args.insert(args.end(), {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libvpx-vp9",
                                "-deadline", "good", "-cpu-used", "5", "-row-mt", "1"});
       args.insert(args.end(), rate.begin(), rate.end());
-      args.insert(args.end(), {"-pix_fmt", "yuv420p", "-f", "webm"});
+      args.insert(args.end(), {"-pix_fmt", options.alpha ? "yuva420p" : "yuv420p", "-f", "webm"});
     } else {
       args.insert(args.end(),
                   {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-f", "gif"});

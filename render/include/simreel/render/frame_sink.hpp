@@ -44,12 +44,16 @@ struct VideoOptions {
   int crf = 18;
   /// Target bit rate as ffmpeg spells it ("4M", "800k"); empty = constant quality (`crf`).
   std::string bitrate;
+  /// Keep the frames' alpha (RenderSettings Background::transparent): a .webm is then VP9 with
+  /// an alpha channel (yuva420p, ffprobe shows the tag alpha_mode=1); .mp4 and .gif drop it.
+  bool alpha = false;
 };
 
 /// A video through `ffmpeg` fed raw RGBA frames on a pipe, chosen by the extension
 /// (case-insensitive):
 ///  - .mp4:  H.264 (libx264, preset veryfast), yuv420p, odd sizes padded to even, faststart;
-///  - .webm: VP9 (libvpx-vp9), yuv420p; needs an ffmpeg built with libvpx;
+///  - .webm: VP9 (libvpx-vp9), yuv420p (yuva420p with VideoOptions::alpha); needs an ffmpeg
+///           built with libvpx;
 ///  - .gif:  two passes over the frames inside ffmpeg: palettegen builds one 256-colour palette
 ///           from all frames, paletteuse dithers every frame with it.
 /// The parent directory is created if missing; frames must be width x height. ffmpeg runs in
