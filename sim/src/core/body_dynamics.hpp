@@ -198,15 +198,16 @@ void begin_continuous(WorldState& w, double h);
 
 /// Continuous collision after the positions are integrated (body_ccd.cpp): every awake dynamic
 /// body not in a joint whose motion over the step (|Δx| + θ r_max, its bounding radius r_max)
-/// exceeds a quarter of its thinnest shape is swept from its start pose to its end pose (centre
-/// of mass linear, orientation by slerp) against every shape of every body that is not itself
-/// swept (static, kinematic and sleeping ones where they are, awake dynamic ones at their end
-/// pose; planes; mesh triangles through the mesh's AABB tree). The time of impact is found by
+/// exceeds half its thinnest shape's inner radius is swept from its start pose to its end pose
+/// (centre of mass linear, orientation by slerp) against every shape of every body that is not
+/// itself swept (static, kinematic and sleeping ones where they are; awake dynamic ones at their
+/// end pose, only when its motion exceeds both bodies' inner radii together; planes; mesh
+/// triangles through the mesh's AABB tree). The time of impact is found by
 /// conservative advancement (Mirtich 1996, "Impulse-based Dynamic Simulation of Rigid Body
 /// Systems", §2.3.2) on GJK distances (gjk.hpp): advance by (d - gap) / (approach bound), the
 /// bound being the centre's speed towards the other shape plus θ r_max. A pair already
-/// touching at the start, or one the body cannot penetrate by more than a quarter of its
-/// thickness, is left to the discrete contacts. The body is put back at its earliest time of
+/// touching at the start, or one the body cannot penetrate by more than half its inner radius,
+/// is left to the discrete contacts. The body is put back at its earliest time of
 /// impact, keeping its velocity; the next step's speculative contact stops or bounces it. The
 /// book's end-of-step test with bisection (§4.4) cannot see a body that is past a thin wall at
 /// the end of the step; this replaces it for fast bodies.

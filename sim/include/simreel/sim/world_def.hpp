@@ -25,7 +25,8 @@ struct WorldDef {
   /// touches them or World::wake is called; false keeps every body simulated every step.
   bool allow_sleeping = true;
   /// Dynamic bodies that move more than a quarter of their thickness in a step are swept from
-  /// their start to their end pose against the other bodies and stopped at the time of impact
+  /// their start to their end pose against static, kinematic and sleeping bodies (and against a
+  /// moving body they could pass through in one step) and stopped at the time of impact
   /// (conservative advancement: Mirtich 1996; Box2D v3's continuous step), and their contacts are
   /// found with a speculative margin, so a 5 cm box at 100 m/s stops at a 1 cm wall instead of
   /// passing it. The part of the step after the impact is dropped for that body (Box2D and Jolt
