@@ -160,14 +160,7 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
     s.radius = r.number("radius", type == "capsule" ? 0.25 : 0.5, ranges::kColliderSize);
     s.half_height = r.number("half_height", 0.5, ranges::kColliderSize);
   } else if (type == "convex_hull" || type == "mesh") {
-    std::array<double, 3> scale{1, 1, 1};
-    if (const json* sj = r.get("scale"); sj && sj->is_number()) {
-      const double k = r.number("scale", 1.0, 0.0, kInf, true);
-      scale = {k, k, k};
-    } else if (sj) {
-      const auto k = r.numbers("scale", {1, 1, 1}, 3, 0.0, kInf, true);
-      scale = {k[0], k[1], k[2]};
-    }
+    const std::array<double, 3> scale = mesh_scale(r);
     std::shared_ptr<const assets::TriangleMesh> asset;
     std::vector<sim::Vec3> verts;
     if (type == "convex_hull" && r.has("points") && r.has("mesh")) {

@@ -25,14 +25,7 @@ sim::SpringParams spring_params(ObjectReader& r, const std::string& key, sim::Sp
 /// the same place are welded (a file's UV or normal seams would otherwise cut the cloth); "scale"
 /// (one number or [sx, sy, sz]) multiplies them. Returns the mesh area (m²) for "areal_density".
 double cloth_mesh(ObjectReader& r, sim::ClothMesh& mesh) {
-  std::array<double, 3> scale{1, 1, 1};
-  if (const json* sj = r.get("scale"); sj && sj->is_number()) {
-    const double k = r.number("scale", 1.0, 0.0, kInf, true);
-    scale = {k, k, k};
-  } else if (sj) {
-    const auto k = r.numbers("scale", {1, 1, 1}, 3, 0.0, kInf, true);
-    scale = {k[0], k[1], k[2]};
-  }
+  const std::array<double, 3> scale = mesh_scale(r);
   const std::string name = r.string("mesh", "");
   if (name.empty()) {
     r.error_at(r.pointer("mesh"), "expected a mesh file name (OBJ, PLY, glTF, ...)");

@@ -121,14 +121,7 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
     c.type = ColliderScene::Type::mesh;
     c.mesh.transform.translation = to_vec(r.vec3("position", {0, 0, 0}));
     c.mesh.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
-    // "scale": one number (uniform) or [sx, sy, sz], each > 0, applied to the vertices.
-    if (const json* sj = r.get("scale"); sj && sj->is_number()) {
-      const double k = r.number("scale", 1.0, 0.0, kInf, true);
-      c.mesh_scale = {k, k, k};
-    } else if (sj) {
-      const auto k = r.numbers("scale", {1, 1, 1}, 3, 0.0, kInf, true);
-      c.mesh_scale = {k[0], k[1], k[2]};
-    }
+    c.mesh_scale = mesh_scale(r);  // applied to the vertices
     c.mesh.material = collider_material(r);
     c.mesh.path = keyframe_path(r, "path");
     if (!r.has("file")) r.error_at(ptr, "expected a \"file\": the mesh file (OBJ, STL, PLY, glTF, ...)");

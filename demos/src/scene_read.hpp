@@ -58,6 +58,9 @@ sim::Distribution distribution(ObjectReader& r, const std::string& key, sim::Dis
 /// {"loop", "smooth", "keys": [{"time" (s), "position" (m), "rotation_deg"}]}; empty if absent.
 sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key);
 
+/// A mesh file's "scale": one number for all axes or [sx, sy, sz], each > 0 (default 1).
+std::array<double, 3> mesh_scale(ObjectReader& r);
+
 /// Calls each(object, pointer, index) for every element of the array r[key]; reports non-arrays
 /// and non-object elements.
 template <class F>

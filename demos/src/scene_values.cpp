@@ -120,4 +120,15 @@ sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key) {
   return path;
 }
 
+std::array<double, 3> mesh_scale(ObjectReader& r) {
+  const json* sj = r.get("scale");
+  if (sj != nullptr && sj->is_number()) {
+    const double k = r.number("scale", 1.0, 0.0, kInf, true);
+    return {k, k, k};
+  }
+  if (sj == nullptr) return {1, 1, 1};
+  const auto k = r.numbers("scale", {1, 1, 1}, 3, 0.0, kInf, true);
+  return {k[0], k[1], k[2]};
+}
+
 }  // namespace simreel::app::scene_read
