@@ -3,17 +3,21 @@
 // inline ("shape": "box", ...), density or mass, pose, velocities, damping, a material for
 // contacts and drawing, a path for a kinematic body. A convex_hull shape comes from "points" or
 // from a mesh file's vertices (§2.2.4); a dynamic "mesh" shape becomes a compound of the convex
-// hulls of the file's closed parts (the "where the file holds several closed parts").
+// pieces of each closed part of the file (convex decomposition, App. F).
 // README "bodies[i]".
 #include <algorithm>
 #include <array>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 #include "scene_read.hpp"
 #include "simreel/assets/mesh.hpp"
+#include "simreel/sim/convex_decomposition.hpp"
 #include "simreel/sim/hull_mesh.hpp"
 #include "simreel/sim/world.hpp"
 
@@ -53,6 +57,7 @@ std::vector<sim::Vec3> points(ObjectReader& r) {
 /// closed (every edge shared by exactly two of its triangles).
 struct MeshPart {
   std::vector<sim::Vec3> points;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< into `points`
   bool closed = true;
 };
 
@@ -82,7 +87,8 @@ std::vector<MeshPart> mesh_parts(const std::vector<sim::Vec3>& v, const std::vec
   std::map<std::uint32_t, std::size_t> part_of;  // root -> part, in order of first triangle
   std::vector<MeshPart> parts;
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> edges;
-  std::vector<char> taken(v.size(), 0);
+  constexpr std::uint32_t kNone = ~0u;
+  std::vector<std::uint32_t> local(v.size(), kNone);  // welded vertex → index in its part
   for (const auto& tri : t) {
     const std::uint32_t root = find(weld[tri[0]]);
     auto [it, fresh] = part_of.emplace(root, parts.size());
@@ -90,14 +96,18 @@ std::vector<MeshPart> mesh_parts(const std::vector<sim::Vec3>& v, const std::vec
       parts.emplace_back();
       edges.emplace_back();
     }
+    MeshPart& part = parts[it->second];
+    std::array<std::uint32_t, 3> lt{};
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = weld[tri[std::size_t(k)]], b = weld[tri[std::size_t((k + 1) % 3)]];
       edges[it->second].emplace_back(std::min(a, b), std::max(a, b));
-      if (!taken[a]) {
-        taken[a] = 1;
-        parts[it->second].points.push_back(v[a]);
+      if (local[a] == kNone) {
+        local[a] = std::uint32_t(part.points.size());
+        part.points.push_back(v[a]);
       }
+      lt[std::size_t(k)] = local[a];
     }
+    part.triangles.push_back(lt);
   }
   for (std::size_t p = 0; p < parts.size(); ++p) {
     auto& e = edges[p];
@@ -110,6 +120,27 @@ std::vector<MeshPart> mesh_parts(const std::vector<sim::Vec3>& v, const std::vec
     }
   }
   return parts;
+}
+
+/// The convex decomposition of a closed part, remembered by the part's exact vertices, triangles
+/// and options: a scene with the same ring five times decomposes it once. At most 32 parts are
+/// kept (a `sweep` loads many scenes in one process); the result depends only on the key.
+std::vector<sim::ConvexPiece> decomposed(const MeshPart& part, const sim::ConvexDecompositionOptions& o) {
+  std::string key(reinterpret_cast<const char*>(part.points.data()), part.points.size() * sizeof(sim::Vec3));
+  key.append(reinterpret_cast<const char*>(part.triangles.data()), part.triangles.size() * sizeof(part.triangles[0]));
+  key.append(reinterpret_cast<const char*>(&o.max_concavity), sizeof o.max_concavity);
+  key.append(reinterpret_cast<const char*>(&o.max_convex_hulls), sizeof o.max_convex_hulls);
+  static std::mutex mutex;
+  static std::map<std::string, std::vector<sim::ConvexPiece>> memo;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = memo.find(key); it != memo.end()) return it->second;
+  }
+  std::vector<sim::ConvexPiece> pieces = sim::convex_decomposition(part.points, part.triangles, o);
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (memo.size() >= 32) memo.clear();
+  memo.emplace(std::move(key), pieces);
+  return pieces;
 }
 
 /// A mesh file relative to the scene's folder, scaled; reports at `key` and returns null on error.
@@ -167,6 +198,11 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
       r.known("points");
       r.error_at(r.pointer("mesh"), "expected \"points\" or \"mesh\", found both");
     }
+    sim::ConvexDecompositionOptions decomposition;  // a dynamic mesh's (read before the file, for the schema)
+    if (type == "mesh" && body_type == sim::BodyType::dynamic) {
+      decomposition.max_concavity = r.number("max_concavity", 0.0, 0.0, 1e6);
+      decomposition.max_convex_hulls = int(r.integer("max_convex_hulls", 32, 1, 256));
+    }
     if (type == "mesh" || r.has("mesh")) {
       if (!r.has("mesh")) {
         r.error_at(r.pointer(), "expected a \"mesh\": the mesh file (OBJ, STL, PLY, glTF, ...)");
@@ -190,7 +226,8 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
       s.triangles = asset->triangles;
       draw.asset = asset;
     } else if (type == "mesh") {
-      // Dynamic: each closed part of the file becomes the convex hull of its vertices.
+      // Dynamic: each closed part of the file becomes the convex pieces of its decomposition
+      // (App. F), a convex part one hull of its vertices.
       const std::vector<MeshPart> parts = mesh_parts(verts, asset->triangles);
       for (std::size_t p = 0; p < parts.size(); ++p)
         if (!parts[p].closed) {
@@ -199,16 +236,28 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
                                         " of " + std::to_string(parts.size()) + " open");
           return;
         }
+      bool first = true;
       for (std::size_t p = 0; p < parts.size(); ++p) {
-        sim::ShapeDef part = s;
-        part.type = sim::ShapeType::convex_hull;
-        part.points = parts[p].points;
-        c.body.shapes.push_back(std::move(part));
-        BodyShapeDraw d;
-        d.scale = scale;
-        if (p == 0) d.asset = asset;
-        else d.skip = true;
-        c.body_draw.push_back(d);
+        std::vector<sim::ConvexPiece> pieces;
+        try {
+          pieces = decomposed(parts[p], decomposition);
+        } catch (const std::invalid_argument& e) {
+          r.error_at(r.pointer("mesh"), "expected closed, outward-wound parts for a dynamic mesh, found part " +
+                                            std::to_string(p + 1) + ": " + e.what());
+          return;
+        }
+        for (sim::ConvexPiece& piece : pieces) {
+          sim::ShapeDef hull = s;
+          hull.type = sim::ShapeType::convex_hull;
+          hull.points = std::move(piece);
+          c.body.shapes.push_back(std::move(hull));
+          BodyShapeDraw d;  // the file is drawn once, with the first piece
+          d.scale = scale;
+          if (first) d.asset = asset;
+          else d.skip = true;
+          first = false;
+          c.body_draw.push_back(d);
+        }
       }
       return;
     } else {

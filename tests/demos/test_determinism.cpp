@@ -129,6 +129,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"rain", 0xb2c0900519690b5full},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
       {"ragdolls_stairs", 0x261b76b5e3ca9235ull},
+      {"ring_toss", 0x1d842fa4b7666922ull},  // convex decomposition (App. F); 1, 2 and 4 threads agreed
       {"rope_bridge", 0x0f4da7dafece3b50ull},
       {"shells", 0x7d0ae63ec5578a8bull},
       {"smoke", 0x40ec5f645362abb2ull},

@@ -55,6 +55,13 @@ std::filesystem::path mesh_folder() {
   const int quads[6][4] = {{1, 3, 4, 2}, {5, 6, 8, 7}, {1, 2, 6, 5}, {3, 7, 8, 4}, {1, 5, 7, 3}, {2, 4, 8, 6}};
   for (int c = 0; c < 2; ++c)
     for (const auto& q : quads) two << "f " << q[0] + 8 * c << ' ' << q[1] + 8 * c << ' ' << q[2] + 8 * c << ' ' << q[3] + 8 * c << '\n';
+  // An L-shaped prism (3 unit cells, 1 m tall): concave, one closed part.
+  std::ofstream ell(dir / "ell.obj");
+  const double xy[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  for (int z = 0; z < 2; ++z)
+    for (const auto& p : xy) ell << "v " << p[0] << ' ' << p[1] << ' ' << z << '\n';
+  ell << "f 7 8 9\nf 7 9 10\nf 7 10 11\nf 7 11 12\nf 1 3 2\nf 1 4 3\nf 1 5 4\nf 1 6 5\n";
+  for (int i = 1; i <= 6; ++i) ell << "f " << i << ' ' << i % 6 + 1 << ' ' << i % 6 + 7 << ' ' << i + 6 << '\n';
   std::ofstream open(dir / "open.obj");
   open << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 1 2 5\n";
   return dir;
@@ -167,6 +174,29 @@ TEST(SceneBodyList, MeshFilesGiveHullsAndDynamicCompoundsOfTheirClosedParts) {
 
   const std::string bad = errors_of(R"({"bodies": [{"shape": "mesh", "mesh": "open.obj"}]})", file);
   EXPECT_NE(bad.find("/bodies/0/mesh: expected a file of closed parts for a dynamic mesh"), std::string::npos) << bad;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SceneBodyList, ADynamicConcaveMeshIsTheCompoundOfItsConvexDecomposition) {
+  const auto dir = mesh_folder();
+  const std::string file = (dir / "s.json").string();
+  const Scene s = scene_from_json(json::parse(R"({"bodies": [
+      {"name": "ell", "shape": "mesh", "mesh": "ell.obj", "density": 100},
+      {"name": "one", "shape": "mesh", "mesh": "ell.obj", "density": 100, "max_convex_hulls": 1}]})"),
+                                  file);
+  const sim::BodyDef& ell = s.colliders[0].body;
+  ASSERT_EQ(ell.shapes.size(), 2u);  // an L: two boxes
+  EXPECT_FALSE(s.colliders[0].body_draw[0].skip);
+  EXPECT_TRUE(s.colliders[0].body_draw[1].skip);  // the file is drawn once
+  EXPECT_EQ(s.colliders[1].body.shapes.size(), 1u);
+  SceneWorld sw = build_world(s);
+  const sim::BodyMotion m = sw.world.motion(sw.colliders[0]);
+  EXPECT_NEAR(m.mass, 300.0, 1e-9);  // the L's 3 m³, not its hull's 3.5
+  EXPECT_NEAR((m.center_of_mass - sim::Vec3(5.0 / 6.0, 5.0 / 6.0, 0.5)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(sw.world.motion(sw.colliders[1]).mass, 350.0, 1e-9);  // one piece: the hull
+
+  const std::string bad = errors_of(R"({"bodies": [{"shape": "mesh", "mesh": "ell.obj", "max_convex_hulls": 0}]})", file);
+  EXPECT_NE(bad.find("/bodies/0/max_convex_hulls"), std::string::npos) << bad;
   std::filesystem::remove_all(dir);
 }
 
