@@ -644,15 +644,8 @@ void ParticleCollider::solve() {
     const Vec3 vt = dv - dv.dot(c.n) * c.n;
     Vec3 pt_new = c.pt - c.m_eff * vt;
     const double bound = c.mu * c.pn;
-    // Clamp to the cone when |pt_new| > bound. The square root (on the sweep's dependency
-    // chain) is taken only when |pt_new|² is not clearly inside: below bound² (1 - 1e-14), bound²
-    // normal, the correctly rounded root cannot exceed bound, so the outcome is the same bit
-    // for bit.
-    const double len2 = pt_new.squaredNorm(), bb = bound * bound;
-    if (!(len2 <= bb * (1.0 - 1e-14) && bb >= 1e-300)) {
-      const double len = std::sqrt(len2);
-      if (len > bound) pt_new *= bound / len;
-    }
+    const double len = pt_new.norm();
+    if (len > bound) pt_new *= bound / len;
     const Vec3 dpt = pt_new - c.pt;
     c.pt = pt_new;
     if (!wall) v[c.i] -= wi * dpt;
