@@ -4,7 +4,8 @@
 //   mesh_broad/N, mesh_broad_narrow/N
 //                         the same swept segments against the mesh: AABB-tree query alone
 //                         (broad) and query + swept-sphere triangle tests (broad + narrow)
-//   internal_world/N/T    N particles in a box with particle–particle collisions, whole step,
+//   internal_world/N/T    N particles in a box with particle–particle collisions, whole step (the
+//                         first 10 steps from the same start, so that runs compare),
 //                         T threads
 //   internal_grid/N, internal_solve/N
 //                         the grid pair search (broad) and the sequential-impulse solve (narrow
@@ -15,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include "collision/bvh.hpp"
@@ -138,6 +140,35 @@ void internal_world(benchmark::State& state) {
       benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
+
+/// Five steps of internal_world/N/T, then a hash of the positions and velocities (its low 48 bits
+/// as a counter): old and new builds and thread counts compared bit for bit.
+void internal_hash(benchmark::State& state) {
+  const auto n = std::size_t(state.range(0));
+  std::uint64_t h = 0;
+  for (auto _ : state) {
+    World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
+    ParticleSystemDef def;
+    def.emitter.rate = 0.0;
+    def.emitter.max_particles = n;
+    def.gravity = Vec3::Zero();
+    def.collide_particles = true;
+    const auto ps = world.add_particle_system(def);
+    const detail::ParticleCollider pc = cloud(n);
+    for (std::size_t i = 0; i < n; ++i) world.spawn_particle(ps, pc.x[i], pc.v[i], 1e-3, 0.01, 1e9);
+    for (int s = 0; s < 5; ++s) world.advance(1.0 / 240);
+    const ParticleView v = world.particles(ps);
+    h = 0xcbf29ce484222325ull;
+    const auto mix = [&](const float* p, std::size_t m) {
+      const auto* b = reinterpret_cast<const unsigned char*>(p);
+      for (std::size_t k = 0; k < m * sizeof(float); ++k) h = (h ^ b[k]) * 0x100000001b3ull;
+    };
+    mix(v.position, 3 * v.count);
+    mix(v.velocity, 3 * v.count);
+  }
+  state.counters["hash48"] = double(h & ((std::uint64_t{1} << 48) - 1));
+}
+
 void internal_phase(benchmark::State& state, bool solve) {
   const auto n = std::size_t(state.range(0));
   detail::ParticleCollider pc = cloud(n);
@@ -220,7 +251,8 @@ void pile_in_bowl(benchmark::State& state) {
 BENCHMARK(rain_on_mesh)->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(mesh_phases, mesh_broad, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(mesh_phases, mesh_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
-BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(internal_hash)->Args({30'000, 1})->Args({30'000, 2})->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_solve, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(pile_in_bowl)->Iterations(1)->Unit(benchmark::kSecond);

@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "core/state_io.hpp"
+#include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
 namespace simreel::sim::detail {
@@ -20,6 +21,23 @@ std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uin
   const auto h = std::uint64_t(x) * 73856093ull ^ std::uint64_t(y) * 19349663ull ^
                  std::uint64_t(z) * 83492791ull ^ std::uint64_t(level) * 2654435761ull;
   return std::uint32_t(h ^ (h >> 29)) & mask;
+}
+
+/// d2[k] = the squared distance from (xi, yi, zi) to candidate k when it is within reach
+/// (ri + r_k + margin min(ri, r_k)) and not coincident, else 0; element-wise (the scalar
+/// arithmetic in every lane), so the AVX2 clone gives the same bits.
+SIMREEL_VECTOR_CLONES
+void within_reach(double xi, double yi, double zi, double ri, double margin,
+                  const double* __restrict cx, const double* __restrict cy,
+                  const double* __restrict cz, const double* __restrict cr, std::size_t m,
+                  double* __restrict d2) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const double dx = cx[k] - xi, dy = cy[k] - yi, dz = cz[k] - zi;
+    const double e = dx * dx + dy * dy + dz * dz;
+    const double rj = cr[k];
+    const double reach = ri + rj + margin * (rj < ri ? rj : ri);
+    d2[k] = e < reach * reach && e > 0.0 ? e : 0.0;
+  }
 }
 
 }  // namespace
@@ -471,17 +489,40 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
       run_b[col + 1] = first[cur];
       run_e[col + 1] = first[end];
     }
+    // The cell's candidates: its own run (the cell and the one above), then the four columns.
+    // Particle si of the cell takes those after its own position, in the same order as a loop
+    // over the runs: one vectorised pass for distances and reaches, a branch-free compaction of
+    // the pairs within reach, then try_pair() in order.
+    std::size_t m = 0;
+    for (int col = 0; col < 5; ++col) m += run_e[col] - run_b[col];
+    if (cand_s_.size() < m) {
+      cand_s_.resize(m);
+      cand_keep_.resize(m);
+      for (auto* a : {&cand_x_, &cand_y_, &cand_z_, &cand_r_, &cand_d2_}) a->resize(m);
+    }
+    std::size_t k = 0;
+    for (int col = 0; col < 5; ++col)
+      for (std::uint32_t sj = run_b[col]; sj < run_e[col]; ++sj, ++k) {
+        cand_s_[k] = sj;
+        cand_x_[k] = px[sj];
+        cand_y_[k] = py[sj];
+        cand_z_[k] = pz[sj];
+        cand_r_[k] = pr[sj];
+      }
     for (std::uint32_t si = first[c]; si < first[c + 1]; ++si) {
-      const double xi = px[si], yi = py[si], zi = pz[si], ri = pr[si];
-      run_b[0] = si + 1;
-      for (int col = 0; col < 5; ++col)
-        for (std::uint32_t sj = run_b[col]; sj < run_e[col]; ++sj) {
-          const double dx = px[sj] - xi, dy = py[sj] - yi, dz = pz[sj] - zi;
-          const double d2 = dx * dx + dy * dy + dz * dz;
-          const double reach = ri + pr[sj] + margin * std::min(ri, pr[sj]);
-          if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
-          try_pair(order_[si], order_[sj], d2, contact_speed, h);
-        }
+      const std::size_t from = si + 1 - first[c];
+      within_reach(px[si], py[si], pz[si], pr[si], margin, cand_x_.data() + from,
+                   cand_y_.data() + from, cand_z_.data() + from, cand_r_.data() + from, m - from,
+                   cand_d2_.data() + from);
+      std::size_t kept = 0;
+      for (std::size_t q = from; q < m; ++q) {
+        cand_keep_[kept] = std::uint32_t(q);
+        kept += std::size_t(cand_d2_[q] > 0.0);
+      }
+      for (std::size_t u = 0; u < kept; ++u) {
+        const std::size_t q = cand_keep_[u];
+        try_pair(order_[si], order_[cand_s_[q]], cand_d2_[q], contact_speed, h);
+      }
     }
   }
 }

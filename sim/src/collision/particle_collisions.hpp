@@ -168,6 +168,10 @@ class ParticleCollider {
   std::vector<std::uint64_t> occupied_;    ///< occupied cells' keys, increasing
   std::vector<std::uint32_t> count_;       ///< counting-sort scratch
   std::vector<double> sx_, sy_, sz_, sr_;  ///< x, y, z, radius in sorted order
+  /// find_pairs(): one cell's candidates (sorted position, x, y, z, radius), their squared
+  /// distances within reach (0: out of reach) and the ones kept
+  std::vector<std::uint32_t> cand_s_, cand_keep_;
+  std::vector<double> cand_x_, cand_y_, cand_z_, cand_r_, cand_d2_;
   std::uint64_t stride_y_ = 0, stride_x_ = 0;  ///< linear key = cx stride_x + cy stride_y + cz
   std::uint64_t cells_x_ = 0;              ///< cells along x (the key's major axis)
   /// Contacts of run() in slabs of grid columns along x: band b holds the pairs whose first

@@ -74,11 +74,27 @@ struct Dynamics {
   // grid scratch (reused; no allocation once grown)
   std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle
   std::vector<std::uint32_t> order_;        // (n) particle indices sorted by (cell key, index)
-  std::vector<double> sorted_;              // (n x 5) x, y, z, q, m in that order
+  std::vector<std::uint32_t> rank_;         // (n) particle index -> sorted position
+  std::vector<std::uint64_t> sorted_key_;   // (n) cell keys in sorted order
+  std::vector<double> sorted_;              // (5 x n) x, then y, z, q, m, each in cell order
+  std::vector<double> accel_;               // (n x 3) pair accelerations in sorted order
   std::vector<std::uint64_t> cell_keys_;    // occupied cells' keys, increasing
   std::vector<std::uint32_t> cell_start_;   // first particle (in order_) of each cell, + n
   std::vector<std::uint32_t> cell_count_;   // counting-sort scratch (cells of the bounding box)
   std::vector<std::int64_t> cell_xyz_;      // (n x 3) integer cell coordinates
+  /// One thread's candidates of a cell (the particles of its 27 neighbour cells, in run order):
+  /// positions, sorted index, squared distances to the current particle, the ones kept.
+  struct PairGather {
+    std::vector<double> x, y, z, r2;
+    std::vector<std::uint32_t> s, keep;
+    void resize(std::size_t m) {
+      if (x.size() >= m) return;
+      for (auto* a : {&x, &y, &z, &r2}) a->resize(m);
+      s.resize(m);
+      keep.resize(m);
+    }
+  };
+  std::vector<PairGather> gather_;  // one per thread
 };
 
 /// The velocity factor of a step with the drag taken at the new velocity v' = u d,
