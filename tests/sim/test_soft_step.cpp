@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <vector>
 
@@ -45,23 +46,28 @@ BodyDef ground_plane(const Material& m = {0.0, 0.5}) {
 }
 
 /// Top-box drift (m) of a stack of n 0.5 m boxes after `seconds`, and whether it fell asleep.
-std::pair<double, bool> stack(int n, int substeps, double seconds) {
-  World w(soft_def(substeps));
+std::pair<double, bool> stack(int n, int substeps, double seconds, bool sleeping) {
+  World w(soft_def(substeps, sleeping));
   w.add_body(ground_plane());
   const double half = 0.25;
   std::vector<BodyHandle> boxes;
-  for (int k = 0; k < n; ++k)
-    boxes.push_back(w.add_body(dynamic_body(ShapeDef::box({half, half, half}), {0.0, 0.0, half * (2 * k + 1)})));
-  const Vec3 top0 = w.pose(boxes.back()).translation;
+  for (int k = 0; k < n; ++k)  // 1 cm apart: the stack falls onto itself and settles
+    boxes.push_back(w.add_body(dynamic_body(ShapeDef::box({half, half, half}), {0.0, 0.0, (half + 0.005) * (2 * k + 1)})));
+  const Vec3 top0(0.0, 0.0, half * (2 * n - 1));  // where the top box rests
   for (int i = 0; i < int(std::lround(seconds / kFrame)); ++i) w.advance(kFrame);
   return {(w.pose(boxes.back()).translation - top0).norm(), !w.is_awake(boxes.back())};
 }
 
 TEST(SoftStep, TenBoxStackStandsTenSecondsAtOneStepPerFrameAndSleeps) {
-  const auto [drift, asleep] = stack(10, 4, 10.0);
+  // Sleeping off: the solver alone keeps the top box within 1 cm for 10 s.
+  const double drift = stack(10, 4, 10.0, false).first;
   RecordProperty("top_drift_m", std::to_string(drift));
   EXPECT_LT(drift, 0.01);
-  EXPECT_TRUE(asleep);
+  // Sleeping on: it settles and falls asleep.
+  EXPECT_TRUE(stack(10, 4, 10.0, true).second);
+  // The same step without substeps (for comparison, not asserted).
+  std::printf("[ figures  ] 10-box stack at 1/60 s: top drift %.4f m with 4 substeps, %.4f m with none\n", drift,
+              stack(10, 1, 10.0, false).first);
 }
 
 TEST(SoftStep, BoxOnTiltedGravitySlidesWithCoulombAccelerationOrSticks) {

@@ -292,32 +292,47 @@ void ContactSolver::solve_soft(RigidBodies& bodies, std::span<ContactPoint> cont
       mass_scale = mass_scale_;
       impulse_scale = impulse_scale_;
     }
+    // The two bodies' velocities in registers for the contact's three rows (one load and one
+    // store per body instead of one per row).
+    const bool has_a = r.a != kStaticBody, has_b = r.b != kStaticBody;
+    Vec3 va = has_a ? v[r.a] : Vec3::Zero(), wa = has_a ? w[r.a] : Vec3::Zero();
+    Vec3 vb = has_b ? v[r.b] : Vec3::Zero(), wb = has_b ? w[r.b] : Vec3::Zero();
+    const double ima = r.move_a ? r.inv_mass_a : 0.0, imb = r.move_b ? r.inv_mass_b : 0.0;
+    auto speed = [&](const Axis& x) { return vb.dot(x.d) + wb.dot(x.rb_d) - va.dot(x.d) - wa.dot(x.ra_d); };
+    auto push = [&](const Axis& x, double lambda) {
+      va -= (ima * lambda) * x.d;
+      wa -= lambda * x.ia_d;  // zero unless a moves
+      vb += (imb * lambda) * x.d;
+      wb += lambda * x.ib_d;
+    };
     // Friction (no bias), bounded by the normal impulse so far (Catto 2005), then the normal.
     const double limit = r.friction * c.normal_impulse;
-    const Axis* const tangents[2] = {&r.t1, &r.t2};
-    for (int j = 0; j < 2; ++j) {
-      const Axis& t = *tangents[j];
-      const double old_t = c.tangent_impulse[j];
-      c.tangent_impulse[j] = old_t - t.mass * relative_speed(r, t, v, w);
-      apply(r, t, c.tangent_impulse[j] - old_t, v, w);
-    }
-    const double mag = std::sqrt(c.tangent_impulse[0] * c.tangent_impulse[0] +
-                                 c.tangent_impulse[1] * c.tangent_impulse[1]);
+    const double t0 = c.tangent_impulse[0] - r.t1.mass * speed(r.t1);
+    push(r.t1, t0 - c.tangent_impulse[0]);
+    const double t1 = c.tangent_impulse[1] - r.t2.mass * speed(r.t2);
+    push(r.t2, t1 - c.tangent_impulse[1]);
+    const double mag = std::sqrt(t0 * t0 + t1 * t1);
+    double f0 = t0, f1 = t1;
     if (mag > limit) {
       const double f = mag > 0.0 ? limit / mag : 0.0;
-      const double fix0 = c.tangent_impulse[0] * f - c.tangent_impulse[0];
-      const double fix1 = c.tangent_impulse[1] * f - c.tangent_impulse[1];
-      c.tangent_impulse[0] += fix0;
-      c.tangent_impulse[1] += fix1;
-      apply(r, r.t1, fix0, v, w);
-      apply(r, r.t2, fix1, v, w);
+      f0 = t0 * f;
+      f1 = t1 * f;
+      push(r.t1, f0 - t0);
+      push(r.t2, f1 - t1);
     }
-    const double vn = relative_speed(r, r.n, v, w);
+    c.tangent_impulse[0] = f0;
+    c.tangent_impulse[1] = f1;
+    const double vn = speed(r.n);
     const double old_n = c.normal_impulse;
     c.normal_impulse =
         std::max(old_n - r.n.mass * mass_scale * (vn + bias) - impulse_scale * old_n, 0.0);
-    apply(r, r.n, c.normal_impulse - old_n, v, w);
+    push(r.n, c.normal_impulse - old_n);
+    // The approach speed for restitution: that of the substep where the contact first pushes
+    // (a body falling through the step hits faster than it moved at the step's start).
+    if (s.max_normal == 0.0 && c.normal_impulse > 0.0) s.approach = std::min(s.approach, vn);
     s.max_normal = std::max(s.max_normal, c.normal_impulse);
+    if (r.move_a) v[r.a] = va, w[r.a] = wa;
+    if (r.move_b) v[r.b] = vb, w[r.b] = wb;
   }
 }
 

@@ -173,7 +173,7 @@ class ContactSolver {
     double separation;       ///< (m) -depth at the step's start
     double current;          ///< (m) separation at the bodies' current poses (track_separations)
     double restitution;      ///< e
-    double approach;         ///< (m/s) v_n at the step's start (before gravity)
+    double approach;         ///< (m/s) v_n at the step's start (before gravity), or at first push
     double max_normal;       ///< (N s) largest normal impulse of the step
   };
 
