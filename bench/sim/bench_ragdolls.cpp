@@ -439,6 +439,8 @@ int main(int argc, char** argv) {
   std::printf("20 ragdolls on the stairs, %d frames of 1/60 s, %d rounds (CPU time, median)%s\n", g_frames, reps,
               g_no_sleep ? ", no sleeping" : "");
   print(scene, "simreel", g_steps, ours);
+  if (g_substeps > 1)
+    std::printf("simreel  (soft step: %d internal steps/frame of %d substeps)\n", g_steps / g_substeps, g_substeps);
   if (peer.empty()) {
     std::printf("Bullet   not built (libbullet-dev not found)\n");
     return 0;
