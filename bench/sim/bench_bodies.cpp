@@ -47,6 +47,13 @@ constexpr double kTerrainSize = 40.0;
 constexpr int kDropped = 500;
 bool g_bullet_no_sleep = false;  // --bullet-no-sleep: Bullet without deactivation
 int g_simreel_steps = 4;         // --simreel-steps N: simreel's internal steps per frame
+int g_simreel_substeps = 1;      // --simreel-substeps N: WorldDef::body_substeps (soft step when >= 2)
+
+WorldDef simreel_world() {
+  WorldDef def{kStep / g_simreel_steps, 1, 0.05, 1};
+  def.body_substeps = g_simreel_substeps;
+  return def;
+}
 
 double cpu_seconds() {
   timespec t{};
@@ -121,7 +128,7 @@ std::vector<Drop> drops() {
 // simreel
 
 Result run_simreel_pyramid() {
-  World world(WorldDef{kStep / g_simreel_steps, 1, 0.05, 1});
+  World world(simreel_world());
   BodyDef ground;
   ground.shapes = {ShapeDef::plane()};
   ground.shapes[0].material = Material(0.0, 0.5);
@@ -147,7 +154,7 @@ Result run_simreel_pyramid() {
 }
 
 Result run_simreel_terrain() {
-  World world(WorldDef{kStep / g_simreel_steps, 1, 0.05, 1});
+  World world(simreel_world());
   BodyDef ground;
   ShapeDef mesh;
   mesh.type = ShapeType::mesh;
@@ -298,7 +305,7 @@ void report(const char* scene, const std::vector<Result>& ours, const std::vecto
   std::printf("%-8s Bullet  %8.3f ms/frame  top drift %.4f m  tunnelled %d  off the edge %d\n", scene,
               1e3 * median(b), peer.back().top_drift, peer.back().tunnelled, peer.back().off_edge);
   std::printf("%-8s ratio simreel / Bullet = %.2f (median of %zu rounds, CPU time; simreel %d "
-              "steps per frame)\n", scene, median(a) / median(b), a.size(), g_simreel_steps);
+              "steps per frame, %d substeps)\n", scene, median(a) / median(b), a.size(), g_simreel_steps, g_simreel_substeps);
 }
 
 }  // namespace
@@ -312,8 +319,10 @@ int main(int argc, char** argv) {
     else if (std::strcmp(argv[i], "--bullet-no-sleep") == 0) g_bullet_no_sleep = true;
     else if (std::strcmp(argv[i], "--simreel-steps") == 0 && i + 1 < argc)
       g_simreel_steps = std::max(1, std::atoi(argv[++i]));
+    else if (std::strcmp(argv[i], "--simreel-substeps") == 0 && i + 1 < argc)
+      g_simreel_substeps = std::max(1, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep] [--simreel-steps N]\n");
+      std::fprintf(stderr, "usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep] [--simreel-steps N] [--simreel-substeps N]\n");
       return 2;
     }
   }

@@ -36,7 +36,9 @@
 // frame, the largest body speed at the end (rest state: m/s and rad/s), bodies below the ground
 // (tunnelled) and bodies that left the stairs' footprint.
 //
-// Usage: bench_ragdolls [--reps N] [--steps N] [--bullet-steps N] [--frames N] [--no-sleep]
+// --simreel-substeps S: simreel's soft step (WorldDef::body_substeps = S), N / S internal steps
+// per frame of S substeps each, so its solver runs at the same 1/(60 N) s as Bullet's steps.
+// Usage: bench_ragdolls [--reps N] [--steps N] [--simreel-substeps S] [--bullet-steps N] [--frames N] [--no-sleep]
 //                       [--simreel-only] [--write-scene FILE]  (writes the 20-ragdoll scene JSON and exits)
 // Figures go in bench/README.md and issue notes, never thresholds in tests.
 #include <time.h>
@@ -74,6 +76,7 @@ constexpr double kRestitutionThreshold = 0.5;  // (m/s) simreel's ContactSetting
 int g_frames = 600;
 int g_steps = 4;          // internal steps per frame, both engines
 int g_bullet_steps = 0;   // 0: g_steps
+int g_substeps = 1;       // --simreel-substeps S: simreel takes g_steps / S internal steps of S substeps
 bool g_no_sleep = false;
 bool g_simreel_only = false;  // --simreel-only: for profiling
 
@@ -94,7 +97,8 @@ json bench_scene() {
   doc["description"] = "bench_ragdolls: 20 ragdolls dropped onto the stairs of ragdolls_stairs.json";
   doc["fps"] = 60;
   doc["frames"] = g_frames;
-  doc["simulation"]["max_step"] = kFrame / g_steps;
+  doc["simulation"]["max_step"] = kFrame * g_substeps / g_steps;
+  if (g_substeps > 1) doc["simulation"]["body_substeps"] = g_substeps;
   for (json& c : doc["colliders"]) {
     c["friction"] = kFriction;
     c["restitution"] = kRestitution;
@@ -406,13 +410,14 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) count(reps);
     else if (std::strcmp(argv[i], "--steps") == 0 && i + 1 < argc) count(g_steps);
     else if (std::strcmp(argv[i], "--bullet-steps") == 0 && i + 1 < argc) count(g_bullet_steps);
+    else if (std::strcmp(argv[i], "--simreel-substeps") == 0 && i + 1 < argc) count(g_substeps);
     else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) count(g_frames);
     else if (std::strcmp(argv[i], "--no-sleep") == 0) g_no_sleep = true;
     else if (std::strcmp(argv[i], "--simreel-only") == 0) g_simreel_only = true;
     else if (std::strcmp(argv[i], "--write-scene") == 0 && i + 1 < argc) write_scene = argv[++i];
     else {
       std::fprintf(stderr,
-                   "usage: bench_ragdolls [--reps N] [--steps N] [--bullet-steps N] [--frames N] [--no-sleep] [--simreel-only] "
+                   "usage: bench_ragdolls [--reps N] [--steps N] [--simreel-substeps S] [--bullet-steps N] [--frames N] [--no-sleep] [--simreel-only] "
                    "[--write-scene FILE]\n");
       return 2;
     }
@@ -434,6 +439,8 @@ int main(int argc, char** argv) {
   std::printf("20 ragdolls on the stairs, %d frames of 1/60 s, %d rounds (CPU time, median)%s\n", g_frames, reps,
               g_no_sleep ? ", no sleeping" : "");
   print(scene, "simreel", g_steps, ours);
+  if (g_substeps > 1)
+    std::printf("simreel  (soft step: %d internal steps/frame of %d substeps)\n", g_steps / g_substeps, g_substeps);
   if (peer.empty()) {
     std::printf("Bullet   not built (libbullet-dev not found)\n");
     return 0;

@@ -56,6 +56,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     scene.world.max_distance = s.number("max_distance", scene.world.max_distance, sim::ranges::kWorldMaxDistance);
     gravity = to_vec(s.vec3("gravity", {0, 0, -9.81}));
     scene.world.threads = int(s.integer("threads", 0, 0, 1024));
+    scene.world.body_substeps = int(s.integer("body_substeps", 1, 1, 16));
     s.finish();
   }
   if (std::string m = steps_per_frame_problem(scene.fps, scene.world.max_step); !m.empty())

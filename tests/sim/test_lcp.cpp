@@ -206,6 +206,42 @@ TEST(LcpVsSolver, ThreeBoxStackImpulsesMatchLcp) {
               sweeps, lcp.pivots);
 }
 
+TEST(LcpVsSolver, SoftStepRelaxSweepsMatchLcpOnAThreeBoxStack) {
+  // The soft step's relax sweeps (solve_soft without bias, contacts touching) are sequential
+  // impulses on the substep's velocities: iterated, they reach the App. G LCP's impulses.
+  RigidScene s;
+  s.friction = 0.0;
+  s.add_ground();
+  const Vec3 half(0.4, 0.3, 0.2);
+  s.add_box_stack(3, half, 300.0, 200.0);
+  s.bodies.linear_velocity[3] = Vec3(0.0, 0.0, -0.1);
+  s.bodies.angular_velocity[2] = Vec3(0.0, 0.3, 0.0);
+  s.bodies.angular_momentum[2] = world_inertia(s.bodies, 2) * s.bodies.angular_velocity[2];
+  for (int k = 0; k < 3; ++k)
+    for (const double x : {-half.x(), half.x()}) {
+      ContactPoint c;
+      c.body_a = k == 0 ? kStaticBody : std::uint32_t(k);
+      c.body_b = std::uint32_t(k + 1);
+      c.point = Vec3(x, 0.0, 2.0 * half.z() * k);
+      s.contacts.push_back(c);
+    }
+  const double h = 1.0 / 240.0;
+  s.solver.prepare_soft(s.bodies, s.contacts, h);
+  apply_gravity(s.bodies, s.gravity);
+  integrate_velocities(s.bodies, h);
+  clear_forces(s.bodies);
+  MatX A;
+  VecX b;
+  contact_lcp(s.bodies, s.contacts, A, b);
+  s.solver.warm_start_soft(s.bodies, s.contacts);
+  for (int sweep = 0; sweep < 20000; ++sweep) s.solver.solve_soft(s.bodies, s.contacts, false);
+  const LcpResult lcp = solve_lcp_dantzig(A, b);
+  ASSERT_TRUE(lcp.solved);
+  for (std::size_t i = 0; i < s.contacts.size(); ++i)
+    EXPECT_NEAR(s.contacts[i].normal_impulse, lcp.f[Eigen::Index(i)], 1e-6 * lcp.f.maxCoeff())
+        << "contact " << i;
+}
+
 TEST(LcpVsSolver, WarmStartingConvergesInFewerSweeps) {
   // A settled 3-box stack with 4 corner contacts per face: count the sweeps one step needs to
   // converge to 1e-6 with the previous step's impulses as the start, and from zero.

@@ -39,6 +39,62 @@ void mark_articulations_in_contact(BodyDynamics& d) {
   for (std::uint32_t i = 0; i < n; ++i) d.in_contact[i] = d.in_contact[uf_find(d.parent, i)];
 }
 
+/// L ← I_w ω for every dynamic body (after a sweep changed ω directly).
+void sync_all(RigidBodies& r) {
+  for (std::size_t i = 0; i < r.size(); ++i)
+    if (r.is_dynamic(i)) sync_angular_momentum(r, i);
+}
+
+/// The soft step (WorldDef::body_substeps >= 2; rigid/contact_solver.hpp): the contacts found
+/// once for the step h, then n substeps of h/n of integrate velocities -> warm start -> biased
+/// sweep(s) -> integrate positions -> relax sweep(s), joints solved exactly after every contact
+/// sweep (§5.4, as in the one-step path); restitution once; the joint projection (drift, §5.4)
+/// once at the end of the step, its displacement turned into velocity for articulations that
+/// touch nothing (RATTLE).
+void soft_step(WorldState& w, double h, int n) {
+  BodyDynamics& d = w.dyn;
+  RigidBodies& r = d.rigid;
+  JointSolver& js = d.joint_solver;
+  ContactSolver& cs = d.solver;
+  const double hs = h / n;
+  const ContactSolverSettings& set = cs.settings();
+  cs.prepare_soft(r, d.points, hs);
+  bool joints = false;
+  for (int s = 0; s < n; ++s) {
+    integrate_velocities(r, hs);
+    js.prepare(r, d.joint_models, d.joint_bodies, hs);
+    joints = !js.empty();
+    cs.warm_start_soft(r, d.points);
+    if (joints) js.solve_equality(r);
+    for (int it = 0; it < set.substep_iterations; ++it) {
+      cs.solve_soft(r, d.points, true);
+      if (joints) {
+        js.iterate_rows(r);
+        js.solve_equality(r);
+      }
+    }
+    sync_all(r);
+    integrate_positions(r, hs, Motion::velocity);
+    cs.track_separations(r);
+    for (int it = 0; it < set.relax_iterations; ++it) {
+      cs.solve_soft(r, d.points, false);
+      if (joints) {
+        js.iterate_rows(r);
+        js.solve_equality(r);
+      }
+    }
+    sync_all(r);
+  }
+  cs.restitution_soft(r, d.points);
+  sync_all(r);
+  if (joints) {
+    js.finish(r);
+    finish_joints(w, hs);  // the last substep's impulses over its length: the joint forces
+    mark_articulations_in_contact(d);
+    js.project_positions(r, d.joint_models, d.joint_bodies, h, d.in_contact);
+  }
+}
+
 }  // namespace
 
 void stage_bodies(WorldState& w, double t0, double t1) {
@@ -71,8 +127,11 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   apply_body_springs(w);  // §4.3.3
   // Particles' and cloth's impulses of this step, force fields (§3.7; body_coupling.cpp).
   apply_coupling(w, t0, t1);
-  d.solver.prepare(r, d.points, h);
   JointSolver& js = d.joint_solver;
+  if (w.def.body_substeps > 1) {
+    soft_step(w, h, w.def.body_substeps);
+  } else {
+  d.solver.prepare(r, d.points, h);
   js.prepare(r, d.joint_models, d.joint_bodies, h);
   integrate_velocities(r, h);
   if (js.empty()) {
@@ -105,6 +164,7 @@ void stage_bodies(WorldState& w, double t0, double t1) {
     js.project_positions(r, d.joint_models, d.joint_bodies, h, d.in_contact);
     integrate_positions(r, h, Motion::bias);
     js.project_positions(r, d.joint_models, d.joint_bodies, h, {});
+  }
   }
   continuous_collisions(w);  // fast bodies back to their time of impact (body_ccd.cpp)
   clear_forces(r);

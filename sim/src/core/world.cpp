@@ -19,6 +19,7 @@ namespace detail {
 
 void validate(const WorldDef& def) {
   require_in(def.max_step, ranges::kWorldMaxStep, "WorldDef.max_step");
+  require_in(double(def.body_substeps), ranges::kWorldBodySubsteps, "WorldDef.body_substeps");
   require_in(def.contact_speed, ranges::kWorldContactSpeed, "WorldDef.contact_speed");
   require_in(def.max_speed, ranges::kWorldMaxSpeed, "WorldDef.max_speed");
   require_in(def.max_distance, ranges::kWorldMaxDistance, "WorldDef.max_distance");

@@ -207,6 +207,151 @@ void ContactSolver::solve(RigidBodies& bodies, std::span<ContactPoint> contacts)
   finish(bodies);
 }
 
+void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const ContactPoint> contacts,
+                                 double h_sub) {
+  prepare(bodies, contacts, h_sub);
+  h_sub_ = h_sub;
+  // Soft constraint of stiffness ω = 2π f, damping ratio ζ over the substep h (Catto 2024,
+  // b2MakeSoft): bias rate ω / (2ζ + h ω), mass scale h ω (2ζ + h ω) / (1 + h ω (2ζ + h ω)),
+  // impulse scale 1 / (1 + h ω (2ζ + h ω)). f is capped at a quarter of the substep rate.
+  const double hertz = std::min(settings_.contact_hertz, 0.25 / h_sub);
+  const double omega = 2.0 * 3.14159265358979323846 * hertz;
+  const double a1 = 2.0 * settings_.damping_ratio + h_sub * omega;
+  const double a2 = h_sub * omega * a1;
+  const double a3 = 1.0 / (1.0 + a2);
+  bias_rate_ = omega / a1;
+  mass_scale_ = a2 * a3;
+  impulse_scale_ = a3;
+
+  const std::size_t n = bodies.size();
+  start_x_.assign(bodies.position.begin(), bodies.position.end());
+  start_q_.assign(bodies.orientation.begin(), bodies.orientation.end());
+  moved_x_.resize(n);
+  turned_.resize(n);
+  soft_.resize(contacts.size());
+  (void)n;
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    const ContactPoint& c = contacts[k];
+    SoftRow& s = soft_[k];
+    s.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - bodies.position[c.body_a]);
+    s.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - bodies.position[c.body_b]);
+    s.separation = -c.depth;
+    s.current = s.separation;
+    s.restitution = c.restitution;
+    s.approach = relative_velocity(bodies, c.body_a, c.body_b, c.point).dot(c.normal);
+    s.max_normal = 0.0;
+  }
+}
+
+void ContactSolver::warm_start_soft(RigidBodies& bodies, std::span<ContactPoint> contacts) const {
+  assert(contacts.size() == rows_.size());
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    ContactPoint& c = contacts[k];
+    if (!settings_.warm_start) continue;
+    const Row& r = rows_[k];
+    apply(r, r.n, c.normal_impulse, bodies.linear_velocity, bodies.angular_velocity);
+    apply(r, r.t1, c.tangent_impulse[0], bodies.linear_velocity, bodies.angular_velocity);
+    apply(r, r.t2, c.tangent_impulse[1], bodies.linear_velocity, bodies.angular_velocity);
+  }
+}
+
+void ContactSolver::track_separations(const RigidBodies& bodies) {
+  // Each body's displacement and turn since prepare_soft, then each contact's separation from
+  // them: the anchors are fixed in the bodies, so the separation follows them without a
+  // narrow phase (the normal is held for the step).
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (!bodies.is_dynamic(i)) continue;
+    moved_x_[i] = bodies.position[i] - start_x_[i];
+    turned_[i] = (bodies.orientation[i] * start_q_[i].conjugate()).toRotationMatrix() - Mat3::Identity();
+  }
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    const Row& r = rows_[k];
+    SoftRow& s = soft_[k];
+    Vec3 d = Vec3::Zero();
+    if (r.move_b) d += moved_x_[r.b] + turned_[r.b] * s.rb;
+    if (r.move_a) d -= moved_x_[r.a] + turned_[r.a] * s.ra;
+    s.current = s.separation + d.dot(r.n.d);
+  }
+}
+
+void ContactSolver::solve_soft(RigidBodies& bodies, std::span<ContactPoint> contacts, bool use_bias) {
+  assert(contacts.size() == rows_.size());
+  auto& v = bodies.linear_velocity;
+  auto& w = bodies.angular_velocity;
+  const double inv_h = 1.0 / h_sub_;
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    const Row& r = rows_[k];
+    SoftRow& s = soft_[k];
+    ContactPoint& c = contacts[k];
+    const double sep = s.current;
+    double bias = 0.0, mass_scale = 1.0, impulse_scale = 0.0;
+    if (sep > 0.0) {
+      bias = sep * inv_h;  // speculative: close the gap within the substep, no more
+    } else if (use_bias) {
+      bias = std::max(bias_rate_ * std::min(sep + settings_.soft_slop, 0.0), -settings_.max_push_speed);
+      mass_scale = mass_scale_;
+      impulse_scale = impulse_scale_;
+    }
+    // The two bodies' velocities in registers for the contact's three rows (one load and one
+    // store per body instead of one per row).
+    const bool has_a = r.a != kStaticBody, has_b = r.b != kStaticBody;
+    Vec3 va = has_a ? v[r.a] : Vec3::Zero(), wa = has_a ? w[r.a] : Vec3::Zero();
+    Vec3 vb = has_b ? v[r.b] : Vec3::Zero(), wb = has_b ? w[r.b] : Vec3::Zero();
+    const double ima = r.move_a ? r.inv_mass_a : 0.0, imb = r.move_b ? r.inv_mass_b : 0.0;
+    auto speed = [&](const Axis& x) { return vb.dot(x.d) + wb.dot(x.rb_d) - va.dot(x.d) - wa.dot(x.ra_d); };
+    auto push = [&](const Axis& x, double lambda) {
+      va -= (ima * lambda) * x.d;
+      wa -= lambda * x.ia_d;  // zero unless a moves
+      vb += (imb * lambda) * x.d;
+      wb += lambda * x.ib_d;
+    };
+    // Friction (no bias), bounded by the normal impulse so far (Catto 2005), then the normal.
+    const double limit = r.friction * c.normal_impulse;
+    const double t0 = c.tangent_impulse[0] - r.t1.mass * speed(r.t1);
+    push(r.t1, t0 - c.tangent_impulse[0]);
+    const double t1 = c.tangent_impulse[1] - r.t2.mass * speed(r.t2);
+    push(r.t2, t1 - c.tangent_impulse[1]);
+    const double mag = std::sqrt(t0 * t0 + t1 * t1);
+    double f0 = t0, f1 = t1;
+    if (mag > limit) {
+      const double f = mag > 0.0 ? limit / mag : 0.0;
+      f0 = t0 * f;
+      f1 = t1 * f;
+      push(r.t1, f0 - t0);
+      push(r.t2, f1 - t1);
+    }
+    c.tangent_impulse[0] = f0;
+    c.tangent_impulse[1] = f1;
+    const double vn = speed(r.n);
+    const double old_n = c.normal_impulse;
+    c.normal_impulse =
+        std::max(old_n - r.n.mass * mass_scale * (vn + bias) - impulse_scale * old_n, 0.0);
+    push(r.n, c.normal_impulse - old_n);
+    // The approach speed for restitution: that of the substep where the contact first pushes
+    // (a body falling through the step hits faster than it moved at the step's start).
+    if (s.max_normal == 0.0 && c.normal_impulse > 0.0) s.approach = std::min(s.approach, vn);
+    s.max_normal = std::max(s.max_normal, c.normal_impulse);
+    if (r.move_a) v[r.a] = va, w[r.a] = wa;
+    if (r.move_b) v[r.b] = vb, w[r.b] = wb;
+  }
+}
+
+void ContactSolver::restitution_soft(RigidBodies& bodies, std::span<ContactPoint> contacts) {
+  auto& v = bodies.linear_velocity;
+  auto& w = bodies.angular_velocity;
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    const Row& r = rows_[k];
+    const SoftRow& s = soft_[k];
+    if (s.restitution == 0.0 || s.approach > -settings_.restitution_threshold || s.max_normal == 0.0)
+      continue;
+    ContactPoint& c = contacts[k];
+    const double vn = relative_speed(r, r.n, v, w);
+    const double old_n = c.normal_impulse;
+    c.normal_impulse = std::max(old_n - r.n.mass * (vn + s.restitution * s.approach), 0.0);
+    apply(r, r.n, c.normal_impulse - old_n, v, w);
+  }
+}
+
 void step_with_contacts(RigidBodies& bodies, ContactSolver& solver,
                         std::span<ContactPoint> contacts, double h, const Vec3& g) {
   apply_gravity(bodies, g);

@@ -54,6 +54,7 @@ inline constexpr Range kWorldMaxStep{1e-6, 1.0};  ///< (s) largest internal step
 /// Most internal steps one World::advance(sampling_time) may take (ceil(sampling_time /
 /// max_step)); more is refused with std::invalid_argument instead of running for hours.
 inline constexpr std::uint64_t kMaxStepsPerAdvance = 1'000'000;
+inline constexpr Range kWorldBodySubsteps{1.0, 16.0};  ///< bodies' solver substeps per internal step (integer)
 inline constexpr Range kWorldContactSpeed = kNonNegative;  ///< (m/s) resting-contact threshold (§3.6.3)
 inline constexpr Range kWorldMaxSpeed{0.0, 3e38, true};     ///< (m/s) divergence bound on |v_k|
 inline constexpr Range kWorldMaxDistance{0.0, 3e38, true};  ///< (m) divergence bound on |x_k|

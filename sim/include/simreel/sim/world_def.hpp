@@ -33,6 +33,15 @@ struct WorldDef {
   /// do the same). false: discrete contacts only (Coutinho §4.4's end-of-step check), which lets
   /// fast thin bodies tunnel. Jointed bodies are never swept (their joint projection runs after).
   bool continuous_collision = true;
+  /// Substeps of the bodies' solver per internal step, in [1, 16]. 1 (the default): each internal
+  /// step finds the contacts and solves them by sequential impulses (10 sweeps) with split-impulse
+  /// position correction. N >= 2: the soft step (Catto 2024; Box2D v3): contacts are found once
+  /// per internal step, then N substeps of max_step / N each integrate, solve soft contacts and
+  /// joints once with a push-out bias and once without (relax), with the contacts' separations
+  /// followed from the bodies' motion; restitution once at the end. Stable stacks at a
+  /// quarter of the collision work: max_step 1/60 with 4 substeps solves like 1/240 and finds
+  /// contacts like 1/60. Particles and cloth still step at max_step.
+  int body_substeps = 1;
 };
 
 }  // namespace simreel::sim
