@@ -103,7 +103,10 @@ std::uint64_t run(const fs::path& file, int threads) {
 /// fire_smoke (its smoke now thins out dark grey instead of black: the colours are state) and
 /// fountain (a basin collider and a ground that removes stray drops). dominoes, explosion_wall
 /// and cloth_pile came in with bodies[i] and convex-hull shapes (issue 12), re-pinned at the merge
-/// with continuous collision, the midpoint rotation and the new explosion preset. The hashes are the same
+/// with continuous collision, the midpoint rotation and the new explosion preset. Issue 19 B
+/// re-pinned the three curl-noise scenes (fire_smoke, forces, smoke) on purpose: the noise became
+/// three hashed potentials on one lattice in single precision (frames looked at; 1, 2 and 4
+/// threads agreed). The hashes are the same
 /// with and without the AVX2 kernel clones (-DSIMREEL_VECTOR_CLONES=OFF).
 /// Same compiler, flags and CPU family as CI.
 const std::map<std::string, std::uint64_t>& pinned() {
@@ -116,11 +119,11 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"tablecloth", 0x98173dc203bdabc6ull},
       {"explosion", 0x2b8a67fbb4020e17ull},
       {"explosion_wall", 0x6f77a6752b7321ecull},
-      {"fire_smoke", 0x83be94637b123da8ull},
+      {"fire_smoke", 0x4c2dea80c2844da4ull},
       {"fireworks", 0xa843a276bd6be29eull},
       {"flag", 0x806e318803a6c5f0ull},
       {"flag_gale", 0x86c447d23f1e3a59ull},  // issue 16; 1, 2 and 4 threads agreed
-      {"forces", 0xd6d70a5dc62686a0ull},
+      {"forces", 0x7ee14b658c96672dull},
       {"fountain", 0x6fd21b514d981ab8ull},
       {"jet", 0x32e133308e45664full},
       {"jet_crates", 0xfc13fdd78ea3dbcdull},
@@ -132,7 +135,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"ring_toss", 0x1d842fa4b7666922ull},  // convex decomposition (App. F); 1, 2 and 4 threads agreed
       {"rope_bridge", 0x0f4da7dafece3b50ull},
       {"shells", 0x7d0ae63ec5578a8bull},
-      {"smoke", 0x40ec5f645362abb2ull},
+      {"smoke", 0xc05cc11e2bb86b08ull},
       {"sprinkler", 0x814394ec7ebc467bull},
       {"tumble", 0x7cd4cc4ce6b7be71ull},
   };

@@ -9,6 +9,7 @@
 
 #include "collision/bvh.hpp"
 #include "collision/collider_impl.hpp"
+#include "collision/mesh_grid.hpp"
 #include "collision/narrow_phase.hpp"
 #include "sim_test_util.hpp"
 #include "simreel/sim/random.hpp"
@@ -119,6 +120,50 @@ TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
     }
   }
   EXPECT_GT(hits, 100);  // the test exercises hits, not only misses (168 with this seed)
+}
+
+TEST(SimCollisionMesh, MeshGridGivesTheTreesTrianglesInTheTreesOrder) {
+  // The grid must hand out exactly the triangles whose own box overlaps the query, in the
+  // order the tree visits them (so a first-hit sweep over either gives the same bits), or
+  // decline (a large box). Triangles of mixed sizes, small and large query boxes.
+  Rng rng(11, 2);
+  std::vector<detail::Triangle> tris;
+  for (int t = 0; t < 3000; ++t) {
+    const Vec3 c(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-1, 1));
+    const double e = t % 50 == 0 ? 1.5 : 0.15;
+    detail::Triangle x{c + e * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)),
+                       c + e * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)),
+                       c + e * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)),
+                       Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  const detail::Bvh bvh(tris);
+  const detail::MeshGrid grid(tris, bvh.visit_order());
+  int answered = 0, declined = 0, found = 0;
+  for (int q = 0; q < 4000; ++q) {
+    const Vec3 c(rng.uniform(-6, 6), rng.uniform(-6, 6), rng.uniform(-1.5, 1.5));
+    const Vec3 h = Vec3::Constant(q % 10 == 0 ? rng.uniform(0.5, 3.0) : rng.uniform(0.0, 0.1));
+    const Vec3 lo = c - h, hi = c + h;
+    std::vector<std::uint32_t> from_tree, from_grid;
+    bvh.query(lo, hi, [&](std::uint32_t t) {
+      detail::Aabb b;
+      b.grow(tris[t].a);
+      b.grow(tris[t].b);
+      b.grow(tris[t].c);
+      if (b.overlaps(lo, hi)) from_tree.push_back(t);
+    });
+    if (!grid.query(lo, hi, [&](std::uint32_t t) { from_grid.push_back(t); })) {
+      ++declined;
+      continue;
+    }
+    ++answered;
+    found += int(from_grid.size());
+    ASSERT_EQ(from_grid, from_tree) << q;
+  }
+  EXPECT_GT(answered, 3000);  // small boxes are answered by the grid
+  EXPECT_GT(declined, 100);   // large ones go to the tree
+  EXPECT_GT(found, 2000);     // and the answers are not empty
 }
 
 TEST(SimCollisionMesh, SweptSphereHitsFaceEdgeAndVertexWithTheirNormals) {

@@ -65,6 +65,8 @@ class Bvh {
       }
     }
   }
+  /// Triangle indices in the order query() visits them (leaf by leaf, depth first).
+  [[nodiscard]] const std::vector<std::uint32_t>& visit_order() const { return order_; }
   [[nodiscard]] const Aabb& bounds() const { return nodes_.front().box; }
   [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }
   [[nodiscard]] int depth() const { return depth_; }

@@ -232,6 +232,7 @@ std::shared_ptr<const MeshShape> make_mesh(const ShapeDef& def, const std::strin
     }
   }
   shape->bvh = Bvh(shape->triangles);
+  shape->grid = MeshGrid(shape->triangles, shape->bvh.visit_order());
   const Aabb& b = shape->bvh.bounds();
   shape->local_center = 0.5 * (b.lo + b.hi);
   shape->local_half = 0.5 * (b.hi - b.lo);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "collision/bvh.hpp"
+#include "collision/mesh_grid.hpp"
 #include "collision/narrow_phase.hpp"
 #include "collision/polytope_faces.hpp"
 #include "particles/particle_store.hpp"
@@ -25,6 +26,7 @@ namespace simreel::sim::detail {
 struct MeshShape {
   std::vector<Triangle> triangles;
   Bvh bvh;
+  MeshGrid grid;  ///< the small queries of swept particles (sweep.cpp)
   bool closed = false;  ///< every edge shared by exactly two triangles
   /// Convex edges sharper than ~20 degrees and open edges (indices into sharp_vertices), and
   /// their end points, local frame: the features cloth triangles and edges collide with.

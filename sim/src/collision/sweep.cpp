@@ -199,8 +199,10 @@ void sweep_capsule(const Collider& c, const Vec3& a, const Vec3& b, double r, bo
 }
 
 /// Sphere moving a -> b against a triangle mesh: the segment goes into the mesh frame (§2.1), the
-/// AABB tree gives the triangles near the segment's box grown by r (§2.2), and each is swept
-/// exactly (narrow_phase.hpp, §3.7).
+/// mesh's grid (§2.3.1; for a long segment the AABB tree, §2.2) gives the triangles near the
+/// segment's box grown by r, and each is swept exactly (narrow_phase.hpp, §3.7), in the tree's
+/// order either way (the grid hands out only triangles whose own box overlaps; one that does
+/// not cannot be touched, so the first hit is the same).
 void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, bool first,
                 Hit& best) {
   Vec3 la, ld;
@@ -210,8 +212,9 @@ void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, bool 
   SweepHit h;
   h.s = best.s;
   const MeshShape& m = *c.mesh;
-  m.bvh.query(la.cwiseMin(lb) - grow, la.cwiseMax(lb) + grow,
-              [&](std::uint32_t t) { sweep_triangle(m.triangles[t], la, ld, r, h); });
+  const Vec3 lo = la.cwiseMin(lb) - grow, hi = la.cwiseMax(lb) + grow;
+  const auto test = [&](std::uint32_t t) { sweep_triangle(m.triangles[t], la, ld, r, h); };
+  if (!m.grid.query(lo, hi, test)) m.bvh.query(lo, hi, test);
   if (!(h.s < best.s)) return;
   best = Hit{h.s, Vec3(c.R * h.normal), Vec3(c.center + c.R * h.point), &c};
 }

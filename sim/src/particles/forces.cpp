@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/vector_clones.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/ranges.hpp"
@@ -78,11 +79,8 @@ Vec3 FieldState::acceleration(const Vec3& x, const Vec3& v, double m, double t) 
       const Vec3 rhat = rho / r;
       return w * (def.strength * axis.cross(rhat) - def.inward_strength * rhat);
     }
-    case FieldKind::curl_noise: {
-      const Vec3 p = def.frequency * (rotation.transpose() * (x - centre) - def.scroll * t);
-      const Vec3 u = def.amplitude * (rotation * curl_noise(noise, p));
-      return (w * def.drag / m) * (u - v);
-    }
+    case FieldKind::curl_noise:  // as add_curl_block(), here one particle
+      return (w * def.drag / m) * (air_velocity(x, t) - v);
   }
   return Vec3::Zero();
 }
@@ -92,80 +90,110 @@ Vec3 FieldState::acceleration(const Vec3& x, const Vec3& v, double m, double t) 
 
 namespace {
 
-constexpr std::size_t kNoiseBlock = 64;  ///< particles per batch of curl-noise samples
+constexpr std::size_t kNoiseBlock = Dynamics::kBlock;  ///< particles per batch of curl-noise samples
 
-/// Adds curl-noise field f's acceleration to a (n x 3) for particles [b, e) (e - b <=
-/// kNoiseBlock): FieldState::acceleration() with the three noise gradients of each particle taken
-/// in one vectorised batch (GradientNoise::gradients, bit for bit sample()).
-void add_curl_block(const FieldState& f, std::size_t b, std::size_t e, const double* x,
-                    const double* v, const double* mass, double t, double* a) {
-  const std::size_t len = e - b;
-  alignas(64) double px[3 * kNoiseBlock] = {}, py[3 * kNoiseBlock] = {}, pz[3 * kNoiseBlock] = {};
-  alignas(64) double gx[3 * kNoiseBlock], gy[3 * kNoiseBlock], gz[3 * kNoiseBlock];
-  double w[kNoiseBlock];
+/// Noise coordinates of len particles (rows of x): p = frequency (R^T (x - c) - scroll t), with
+/// r = R^T row-major (r[3 i + j] = R(j, i)) and o = scroll t.
+SIMREEL_VECTOR_CLONES
+void noise_coordinates(std::size_t len, const double* __restrict x, const double* r,
+                       const double* c, const double* o, double frequency, double* __restrict px,
+                       double* __restrict py, double* __restrict pz) {
+  for (std::size_t k = 0; k < len; ++k) {
+    const double d0 = x[3 * k] - c[0], d1 = x[3 * k + 1] - c[1], d2 = x[3 * k + 2] - c[2];
+    px[k] = frequency * (r[0] * d0 + r[1] * d1 + r[2] * d2 - o[0]);
+    py[k] = frequency * (r[3] * d0 + r[4] * d1 + r[5] * d2 - o[1]);
+    pz[k] = frequency * (r[6] * d0 + r[7] * d1 + r[8] * d2 - o[2]);
+  }
+}
+
+/// a += (w drag / m) (amplitude R u - v) for len particles, 0 where w = 0 (outside the region);
+/// R row-major in q.
+SIMREEL_VECTOR_CLONES
+void add_noise_drag(std::size_t len, const double* __restrict w, const double* __restrict ux,
+                    const double* __restrict uy, const double* __restrict uz, const double* q,
+                    double amplitude, double drag, const double* __restrict mass,
+                    const double* __restrict v, double* __restrict a) {
+  for (std::size_t k = 0; k < len; ++k) {
+    const double u0 = amplitude * (q[0] * ux[k] + q[1] * uy[k] + q[2] * uz[k]);
+    const double u1 = amplitude * (q[3] * ux[k] + q[4] * uy[k] + q[5] * uz[k]);
+    const double u2 = amplitude * (q[6] * ux[k] + q[7] * uy[k] + q[8] * uz[k]);
+    const double s = w[k] * drag / mass[k];
+    const bool in = w[k] != 0.0;
+    a[3 * k] += in ? s * (u0 - v[3 * k]) : 0.0;
+    a[3 * k + 1] += in ? s * (u1 - v[3 * k + 1]) : 0.0;
+    a[3 * k + 2] += in ? s * (u2 - v[3 * k + 2]) : 0.0;
+  }
+}
+
+/// Adds curl-noise field f's acceleration (FieldState::acceleration()) to a for the len <=
+/// kNoiseBlock particles whose rows x, v, mass and a point at, the curl of each particle taken in
+/// one vectorised batch (GradientNoise::curl).
+void add_curl_block(const FieldState& f, std::size_t len, const double* x, const double* v,
+                    const double* mass, double t, double* a) {
+  alignas(64) double px[kNoiseBlock], py[kNoiseBlock], pz[kNoiseBlock];
+  alignas(64) double ux[kNoiseBlock], uy[kNoiseBlock], uz[kNoiseBlock];
+  alignas(64) double w[kNoiseBlock];
   const ForceFieldDef& d = f.def;
-  for (std::size_t k = 0; k < len; ++k) {
-    const std::size_t i = b + k;
-    const Vec3 xi(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-    w[k] = f.weight(xi);
-    const Vec3 p = d.frequency * (f.rotation.transpose() * (xi - f.centre) - d.scroll * t);
-    const Vec3 p1 = p + kCurlOffset1, p2 = p + kCurlOffset2;
-    px[k] = p.x(), py[k] = p.y(), pz[k] = p.z();
-    px[len + k] = p1.x(), py[len + k] = p1.y(), pz[len + k] = p1.z();
-    px[2 * len + k] = p2.x(), py[2 * len + k] = p2.y(), pz[2 * len + k] = p2.z();
-  }
-  f.noise.gradients(3 * len, px, py, pz, gx, gy, gz);
-  for (std::size_t k = 0; k < len; ++k) {
-    const std::size_t i = b + k;
-    Vec3 af = Vec3::Zero();  // acceleration() outside the field's region (still added: -0 + 0)
-    if (w[k] != 0.0) {
-      const std::size_t k2 = len + k, k3 = 2 * len + k;
-      const Vec3 g1(gx[k], gy[k], gz[k]), g2(gx[k2], gy[k2], gz[k2]), g3(gx[k3], gy[k3], gz[k3]);
-      const Vec3 curl(g3.y() - g2.z(), g1.z() - g3.x(), g2.x() - g1.y());  // as curl_noise()
-      const Vec3 u = d.amplitude * (f.rotation * curl);
-      const Vec3 vi(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-      af = (w[k] * d.drag / mass[i]) * (u - vi);
+  double r[9], q[9];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      r[3 * i + j] = f.rotation(j, i);
+      q[3 * i + j] = f.rotation(i, j);
     }
-    a[3 * i] += af.x();
-    a[3 * i + 1] += af.y();
-    a[3 * i + 2] += af.z();
-  }
+  const Vec3 o = d.scroll * t;
+  noise_coordinates(len, x, r, f.centre.data(), o.data(), d.frequency, px, py, pz);
+  f.noise.curl(len, px, py, pz, ux, uy, uz);
+  if (d.shape == RegionShape::everywhere)
+    std::fill(w, w + len, 1.0);
+  else
+    for (std::size_t k = 0; k < len; ++k) w[k] = f.weight(Vec3(x[3 * k], x[3 * k + 1], x[3 * k + 2]));
+  add_noise_drag(len, w, ux, uy, uz, q, d.amplitude, d.drag, mass, v, a);
 }
 
 }  // namespace
 
-void Dynamics::eval(double t, const double* x, const double* v, double* a, bool with_drag) {
+void Dynamics::pose_fields(double t) {
   for (FieldState* f : fields) f->pose_at(t);
+}
+
+void Dynamics::eval_block(double t, std::size_t len, const double* x, const double* v,
+                          const double* mass, double* a, bool with_drag) const {
+  // Gravity and drag, then each field in order, the curl-noise ones batched; per particle the
+  // same sums in the same order as eval()'s particle loop.
+  const double g0 = gravity.x(), g1 = gravity.y(), g2 = gravity.z();
+  for (std::size_t i = 0; i < len; ++i) {
+    const double c = with_drag ? drag_at(v + 3 * i) / mass[i] : 0.0;
+    a[3 * i] = g0 - c * v[3 * i];
+    a[3 * i + 1] = g1 - c * v[3 * i + 1];
+    a[3 * i + 2] = g2 - c * v[3 * i + 2];
+  }
+  for (const FieldState* f : fields) {
+    if (f->def.kind == FieldKind::curl_noise) {
+      add_curl_block(*f, len, x, v, mass, t, a);
+      continue;
+    }
+    for (std::size_t i = 0; i < len; ++i) {
+      const Vec3 af = f->acceleration(Vec3(x[3 * i], x[3 * i + 1], x[3 * i + 2]),
+                                      Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]), mass[i], t);
+      a[3 * i] += af.x();
+      a[3 * i + 1] += af.y();
+      a[3 * i + 2] += af.z();
+    }
+  }
+}
+
+void Dynamics::eval(double t, const double* x, const double* v, double* a, bool with_drag) {
+  pose_fields(t);
   const double g0 = gravity.x(), g1 = gravity.y(), g2 = gravity.z();
   const bool has_fields = !fields.empty();
   bool noise = false;
   for (const FieldState* f : fields) noise = noise || f->def.kind == FieldKind::curl_noise;
   if (noise) {
-    // Blocks of particles: gravity and drag, then each field in order, the curl-noise ones
-    // batched; per particle the same sums in the same order as the loop below.
-    const std::size_t blocks = (n + kNoiseBlock - 1) / kNoiseBlock;
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)
     for (std::size_t blk = 0; blk < blocks; ++blk) {
-      const std::size_t b = blk * kNoiseBlock, e = std::min(n, b + kNoiseBlock);
-      for (std::size_t i = b; i < e; ++i) {
-        const double c = with_drag ? drag_at(v + 3 * i) / mass[i] : 0.0;
-        a[3 * i] = g0 - c * v[3 * i];
-        a[3 * i + 1] = g1 - c * v[3 * i + 1];
-        a[3 * i + 2] = g2 - c * v[3 * i + 2];
-      }
-      for (const FieldState* f : fields) {
-        if (f->def.kind == FieldKind::curl_noise) {
-          add_curl_block(*f, b, e, x, v, mass, t, a);
-          continue;
-        }
-        for (std::size_t i = b; i < e; ++i) {
-          const Vec3 af = f->acceleration(Vec3(x[3 * i], x[3 * i + 1], x[3 * i + 2]),
-                                          Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]), mass[i], t);
-          a[3 * i] += af.x();
-          a[3 * i + 1] += af.y();
-          a[3 * i + 2] += af.z();
-        }
-      }
+      const std::size_t b = blk * kBlock, e = std::min(n, b + kBlock);
+      eval_block(t, e - b, x + 3 * b, v + 3 * b, mass + b, a + 3 * b, with_drag);
     }
   } else {
 #pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelMin)

@@ -62,6 +62,20 @@ struct Dynamics {
   /// implicitly).
   void eval(double t, const double* x, const double* v, double* a, bool with_drag);
 
+  /// True when each particle's acceleration depends on that particle alone (no pair forces,
+  /// springs or attractor springs): eval_block() then gives eval()'s values on any slice.
+  [[nodiscard]] bool local() const {
+    return !(pair.enabled() && n > 1) && springs.empty() && pulls.empty();
+  }
+  /// Poses every field at time t (what eval() does first; eval_block() leaves it to the caller).
+  void pose_fields(double t);
+  /// eval() for `len` <= kBlock particles whose rows x, v (len x 3), mass (len) and a (len x 3)
+  /// point at, with the fields already posed at t; only when local(). Bit for bit eval()'s
+  /// values for those particles (the same sums in the same order).
+  void eval_block(double t, std::size_t len, const double* x, const double* v, const double* mass,
+                  double* a, bool with_drag) const;
+  static constexpr std::size_t kBlock = 64;  ///< particles per block (one batch of curl noise)
+
   /// (kg/s) The effective linear drag coefficient k_d + c_2 |v| at velocity v.
   [[nodiscard]] double drag_at(const double* v3) const {
     if (drag_quadratic == 0.0) return drag;

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/vector_clones.hpp"
+
 namespace simreel::sim::detail {
 
 namespace {
@@ -141,6 +143,107 @@ void implicit_euler_step(Dynamics& dyn, double t, double h, double* x, double* v
   }
 }
 
+/// Semi-implicit Euler for one particle of mass m, (x, v) in place, a its acceleration without
+/// the drag: the drag at the new velocity (see Integrator::semi_implicit_euler), the rest
+/// explicit; the position takes -h²/2 (g - k_d v' / m) d², exact for a constant acceleration
+/// (the springs, fields and pair forces stay symplectic Euler: their stability is unchanged).
+inline void semi_implicit_particle(const Dynamics& dyn, double h, double m, double* x, double* v,
+                                   const double* a) {
+  double c = dyn.drag / m;
+  double damp = 1.0 / (1.0 + h * c);
+  if (dyn.drag_quadratic != 0.0) {
+    // v' = u / (1 + h (k_d + c_2 |v'|) / m), u = v + h a: |v'| solves a quadratic.
+    double u[3];
+    for (int k = 0; k < 3; ++k) u[k] = v[k] + h * a[k];
+    damp = quadratic_drag_damp(h, m, dyn.drag, dyn.drag_quadratic,
+                               std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+    const double s1 = damp * std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    c = (dyn.drag + dyn.drag_quadratic * s1) / m;
+  }
+  for (int k = 0; k < 3; ++k) {
+    v[k] = (v[k] + h * a[k]) * damp;
+    x[k] += h * v[k] - 0.5 * h * h * (dyn.gravity[k] - c * v[k]) * damp * damp;
+  }
+}
+
+/// semi_implicit_particle() with a linear drag (c_2 = 0) for len particles, in element-wise
+/// loops the compiler vectorises: the same operations in the same order per particle.
+SIMREEL_VECTOR_CLONES
+void semi_implicit_linear_lanes(std::size_t len, double h, double drag, double g0, double g1,
+                                double g2, const double* __restrict m, double* __restrict x,
+                                double* __restrict v, const double* __restrict a) {
+  for (std::size_t i = 0; i < len; ++i) {
+    const double c = drag / m[i];
+    const double damp = 1.0 / (1.0 + h * c);
+    const double v0 = (v[3 * i] + h * a[3 * i]) * damp;
+    const double v1 = (v[3 * i + 1] + h * a[3 * i + 1]) * damp;
+    const double v2 = (v[3 * i + 2] + h * a[3 * i + 2]) * damp;
+    v[3 * i] = v0;
+    v[3 * i + 1] = v1;
+    v[3 * i + 2] = v2;
+    x[3 * i] += h * v0 - 0.5 * h * h * (g0 - c * v0) * damp * damp;
+    x[3 * i + 1] += h * v1 - 0.5 * h * h * (g1 - c * v1) * damp * damp;
+    x[3 * i + 2] += h * v2 - 0.5 * h * h * (g2 - c * v2) * damp * damp;
+  }
+}
+
+/// Float store rows -> double (m entries each).
+SIMREEL_VECTOR_CLONES
+void widen_lanes(std::size_t m, const float* __restrict px, const float* __restrict pv,
+                 double* __restrict x, double* __restrict v) {
+  for (std::size_t k = 0; k < m; ++k) {
+    x[k] = px[k];
+    v[k] = pv[k];
+  }
+}
+
+/// Double -> float store rows (m entries each); true on a value beyond the divergence bounds
+/// (or NaN).
+SIMREEL_VECTOR_CLONES
+bool narrow_lanes(std::size_t m, const double* __restrict x, const double* __restrict v,
+                  double max_distance, double max_speed, float* __restrict px,
+                  float* __restrict pv) {
+  unsigned bad = 0;
+  for (std::size_t k = 0; k < m; ++k) {
+    bad |= unsigned(!(std::abs(x[k]) <= max_distance)) | unsigned(!(std::abs(v[k]) <= max_speed));
+    px[k] = float(x[k]);
+    pv[k] = float(v[k]);
+  }
+  return bad != 0;
+}
+
+/// Semi-implicit Euler over [begin, end) of s when every acceleration is the particle's own
+/// (Dynamics::local()): blocks of Dynamics::kBlock particles go from the float store to double,
+/// through eval_block() and semi_implicit_particle(), and back, so the (n x 3) double arrays
+/// are never written. Bit for bit integrate_system()'s general path (the same operations per
+/// particle). Returns true on a non-finite or diverging value.
+bool semi_implicit_blocks(ParticleStore& s, std::size_t begin, std::size_t end, double t0,
+                          double h, Dynamics& dyn, bool par) {
+  constexpr std::size_t B = Dynamics::kBlock;
+  const std::size_t n = end - begin, blocks = (n + B - 1) / B;
+  dyn.pose_fields(t0);
+  const bool linear = dyn.drag_quadratic == 0.0;
+  unsigned bad = 0;
+#pragma omp parallel for schedule(static) num_threads(dyn.threads) reduction(| : bad) if (par)
+  for (std::size_t blk = 0; blk < blocks; ++blk) {
+    const std::size_t b = begin + blk * B, len = std::min(end, b + B) - b;
+    alignas(64) double x[3 * B], v[3 * B], a[3 * B], m[B];
+    float* px = s.position.data() + 3 * b;
+    float* pv = s.velocity.data() + 3 * b;
+    widen_lanes(3 * len, px, pv, x, v);
+    for (std::size_t i = 0; i < len; ++i) m[i] = s.mass[b + i];
+    dyn.eval_block(t0, len, x, v, m, a, false);
+    if (linear)
+      semi_implicit_linear_lanes(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
+                                 dyn.gravity.z(), m, x, v, a);
+    else
+      for (std::size_t i = 0; i < len; ++i)
+        semi_implicit_particle(dyn, h, m[i], x + 3 * i, v + 3 * i, a + 3 * i);
+    bad |= unsigned(narrow_lanes(3 * len, x, v, dyn.max_distance, dyn.max_speed, px, pv));
+  }
+  return bad != 0;
+}
+
 }  // namespace
 
 bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, double t0, double h,
@@ -153,6 +256,19 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
   if (w.m.size() < n) w.m.resize(n);
   const int th = dyn.threads;
   const bool par = n >= kParallelMin && th > 1;
+  dyn.n = n;
+  if (integrator == Integrator::semi_implicit_euler && dyn.local()) {
+    if (s.track_prev)
+      std::memcpy(&s.prev_position[3 * begin], &s.position[3 * begin], m * sizeof(float));
+    dyn.charge = nullptr;  // only pair forces read it
+    const bool bad = semi_implicit_blocks(s, begin, end, t0, h, dyn, par);
+    ++state.substeps;
+    if (age_particles) {
+      const float hf = float(h);
+      for (std::size_t i = begin; i < end; ++i) s.age[i] += hf;
+    }
+    return bad;
+  }
   {
     double* __restrict wx = w.x.data();
     double* __restrict wv = w.v.data();
@@ -194,24 +310,8 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
       // fields and pair forces stay symplectic Euler: their stability is unchanged).
       dyn.eval(t0, x, v, w.a1.data(), false);
 #pragma omp parallel for schedule(static) num_threads(th) if (par)
-      for (std::size_t i = 0; i < n; ++i) {
-        double c = dyn.drag / w.m[i];
-        double damp = 1.0 / (1.0 + h * c);
-        if (dyn.drag_quadratic != 0.0) {
-          // v' = u / (1 + h (k_d + c_2 |v'|) / m), u = v + h a: |v'| solves a quadratic.
-          double u[3];
-          for (int k = 0; k < 3; ++k) u[k] = v[3 * i + std::size_t(k)] + h * w.a1[3 * i + std::size_t(k)];
-          damp = quadratic_drag_damp(h, w.m[i], dyn.drag, dyn.drag_quadratic,
-                                     std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
-          const double s1 = damp * std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-          c = (dyn.drag + dyn.drag_quadratic * s1) / w.m[i];
-        }
-        for (std::size_t k = 3 * i; k < 3 * i + 3; ++k) {
-          v[k] = (v[k] + h * w.a1[k]) * damp;
-          const double g = dyn.gravity[int(k - 3 * i)];
-          x[k] += h * v[k] - 0.5 * h * h * (g - c * v[k]) * damp * damp;
-        }
-      }
+      for (std::size_t i = 0; i < n; ++i)
+        semi_implicit_particle(dyn, h, w.m[i], x + 3 * i, v + 3 * i, w.a1.data() + 3 * i);
       ++state.substeps;
       break;
     }

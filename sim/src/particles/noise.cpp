@@ -9,78 +9,119 @@
 
 namespace simreel::sim::detail {
 
-// ---------------------------------------------------------------------------------------------
-// Gradient noise
-
 GradientNoise::GradientNoise(std::uint64_t seed) {
   Rng rng(seed, 0xC0FFEE);
-  for (int i = 0; i < 256; ++i) perm_[i] = std::uint8_t(i);
-  for (int i = 255; i > 0; --i) {  // Fisher–Yates with the project's generator
-    const int j = int(rng.next_u64() % std::uint64_t(i + 1));
-    std::swap(perm_[i], perm_[j]);
-  }
-  for (int i = 0; i < 256; ++i) perm_[256 + i] = perm_[i];
-  for (int i = 0; i < 512; ++i) perm32_[i] = perm_[i];
+  for (std::uint32_t& s : seed_) s = std::uint32_t(rng.next_u64() >> 32);
 }
 
 namespace {
 
-/// The 12 edge directions of a cube (Perlin 2002), picked by the low bits of the hash.
-constexpr double kGrad[16][3] = {{1, 1, 0}, {-1, 1, 0}, {1, -1, 0}, {-1, -1, 0},
-                                 {1, 0, 1}, {-1, 0, 1}, {1, 0, -1}, {-1, 0, -1},
-                                 {0, 1, 1}, {0, -1, 1}, {0, 1, -1}, {0, -1, -1},
-                                 {1, 1, 0}, {-1, 1, 0}, {0, -1, 1}, {0, -1, -1}};
+// Cell hash (as FastNoise2 does): the cell's coordinates times large odd primes, XORed with the
+// potential's seed, times an odd multiplier; the top 4 bits of the product (the best mixed ones)
+// pick the gradient. Unsigned 32-bit arithmetic: it wraps, so the lattice repeats every 2^32 cells.
+constexpr std::uint32_t kPrimeX = 501125321u, kPrimeY = 1136930381u, kPrimeZ = 1720413743u;
+constexpr std::uint32_t kHashMul = 0x27d4eb2du;
 
-Vec3 gradient_of(int h) {
-  const double* r = kGrad[h & 15];
-  return {r[0], r[1], r[2]};
+/// Gradient component of table row h (0..15): the 12 cube-edge directions of Perlin (2002),
+/// rows 12..15 repeating four of them. Each component is stored as 2 bits per row (value + 1)
+/// in one constant, so the lookup is a shift by s = 2 h and a mask.
+/// Rows: (1,1,0) (-1,1,0) (1,-1,0) (-1,-1,0) (1,0,1) (-1,0,1) (1,0,-1) (-1,0,-1) (0,1,1)
+/// (0,-1,1) (0,1,-1) (0,-1,-1) (1,1,0) (-1,1,0) (0,-1,1) (0,-1,-1).
+constexpr std::uint32_t kGradX = 0x52552222u, kGradY = 0x0A22550Au, kGradZ = 0x250A0A55u;
+inline float grad_component(std::uint32_t s, std::uint32_t table) {
+  return float(int((table >> s) & 3u) - 1);
 }
 
-}  // namespace
+/// The cell, fade and corner offsets of one point, shared by the three potentials.
+struct Lattice {
+  std::uint32_t x0, y0, z0;  ///< cell coordinates times the primes (corner 0)
+  float f0, f1, f2;          ///< offset of the point in its cell, [0, 1)
+};
 
-double GradientNoise::sample(const Vec3& p, Vec3& grad) const {
-  const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
-  const int ix = int(std::int64_t(fx) & 255), iy = int(std::int64_t(fy) & 255),
-            iz = int(std::int64_t(fz) & 255);
-  const Vec3 f(p.x() - fx, p.y() - fy, p.z() - fz);
-  // Quintic fade 6t^5 - 15t^4 + 10t^3 and its derivative: C2, so the curl is C1.
-  Vec3 u, du;
+/// One potential at one point: value, and gradient (g0, g1, g2) per unit of p. The quintic fade
+/// 6t^5 - 15t^4 + 10t^3 is C2, so the curl is C1; the trilinear blend of the corner ramps and its
+/// exact derivative follow Quilez ("gradient noise derivatives"). Straight-line float code (no
+/// branches, no tables): inlined into the vectorised loop and into sample() alike, with
+/// -ffp-contract=off, so both give the same bits.
+__attribute__((always_inline)) inline float potential(std::uint32_t seed, const Lattice& l,
+                                                      float& g0, float& g1, float& g2) {
+  const float f0 = l.f0, f1 = l.f1, f2 = l.f2;
+  const float x = f0 * f0 * f0 * (f0 * (f0 * 6.0f - 15.0f) + 10.0f);
+  const float y = f1 * f1 * f1 * (f1 * (f1 * 6.0f - 15.0f) + 10.0f);
+  const float z = f2 * f2 * f2 * (f2 * (f2 * 6.0f - 15.0f) + 10.0f);
+  const float dux = 30.0f * f0 * f0 * (f0 * (f0 - 2.0f) + 1.0f);
+  const float duy = 30.0f * f1 * f1 * (f1 * (f1 - 2.0f) + 1.0f);
+  const float duz = 30.0f * f2 * f2 * (f2 * (f2 - 2.0f) + 1.0f);
+  const std::uint32_t x0 = l.x0 ^ seed, x1 = (l.x0 + kPrimeX) ^ seed;
+  const std::uint32_t y0 = l.y0, y1 = l.y0 + kPrimeY, z0 = l.z0, z1 = l.z0 + kPrimeZ;
+  // Corners (cx, cy, cz): gradient and ramp value g . (f - c). Written out so the whole body is
+  // one basic block.
+#define SIMREEL_CORNER(name, hx, hy, hz, cx, cy, cz)                                     \
+  const std::uint32_t h##name = (((hx ^ hy ^ hz) * kHashMul) >> 27) & 30u; /* 2 row */   \
+  const float g##name##0 = grad_component(h##name, kGradX);                             \
+  const float g##name##1 = grad_component(h##name, kGradY);                             \
+  const float g##name##2 = grad_component(h##name, kGradZ);                             \
+  const float v##name = g##name##0 * (f0 - cx) + g##name##1 * (f1 - cy) + g##name##2 * (f2 - cz);
+  SIMREEL_CORNER(a, x0, y0, z0, 0.0f, 0.0f, 0.0f)
+  SIMREEL_CORNER(b, x1, y0, z0, 1.0f, 0.0f, 0.0f)
+  SIMREEL_CORNER(c, x0, y1, z0, 0.0f, 1.0f, 0.0f)
+  SIMREEL_CORNER(d, x1, y1, z0, 1.0f, 1.0f, 0.0f)
+  SIMREEL_CORNER(e, x0, y0, z1, 0.0f, 0.0f, 1.0f)
+  SIMREEL_CORNER(f, x1, y0, z1, 1.0f, 0.0f, 1.0f)
+  SIMREEL_CORNER(g, x0, y1, z1, 0.0f, 1.0f, 1.0f)
+  SIMREEL_CORNER(h, x1, y1, z1, 1.0f, 1.0f, 1.0f)
+#undef SIMREEL_CORNER
+  // value = k0 + k1 u + k2 v + k3 w + k4 uv + k5 vw + k6 wu + k7 uvw (u, v, w: the fades).
+  const float k1 = vb - va, k2 = vc - va, k3 = ve - va, k4 = va - vb - vc + vd,
+              k5 = va - vc - ve + vg, k6 = va - vb - ve + vf,
+              k7 = -va + vb + vc - vd + ve - vf - vg + vh;
+  // The same trilinear blend of the corner gradients, as nested lerps.
+  float out[3];
+#define SIMREEL_BLEND(k)                                                                    \
+  {                                                                                        \
+    const float gx00 = ga##k + x * (gb##k - ga##k), gx10 = gc##k + x * (gd##k - gc##k);     \
+    const float gx01 = ge##k + x * (gf##k - ge##k), gx11 = gg##k + x * (gh##k - gg##k);     \
+    const float gy0 = gx00 + y * (gx10 - gx00), gy1 = gx01 + y * (gx11 - gx01);             \
+    out[k] = gy0 + z * (gy1 - gy0);                                                        \
+  }
+  SIMREEL_BLEND(0)
+  SIMREEL_BLEND(1)
+  SIMREEL_BLEND(2)
+#undef SIMREEL_BLEND
+  g0 = out[0] + dux * (k1 + k4 * y + k6 * z + k7 * y * z);
+  g1 = out[1] + duy * (k2 + k4 * x + k5 * z + k7 * x * z);
+  g2 = out[2] + duz * (k3 + k5 * y + k6 * x + k7 * x * y);
+  return va + k1 * x + k2 * y + k3 * z + k4 * x * y + k5 * y * z + k6 * z * x + k7 * x * y * z;
+}
+
+/// The lattice of p with 64-bit cells (any finite p; a non-finite coordinate takes cell 0),
+/// wrapped to the 32 bits the hash uses.
+Lattice lattice_of(const Vec3& p) {
+  Lattice l;
+  std::uint32_t* cell[3] = {&l.x0, &l.y0, &l.z0};
+  float* frac[3] = {&l.f0, &l.f1, &l.f2};
+  const std::uint32_t prime[3] = {kPrimeX, kPrimeY, kPrimeZ};
   for (int k = 0; k < 3; ++k) {
-    const double t = f[k];
-    u[k] = t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
-    du[k] = 30.0 * t * t * (t * (t - 2.0) + 1.0);
+    const double fl = std::floor(p[k]);
+    const bool ok = std::isfinite(fl) && std::abs(fl) < 9.0e18;
+    *cell[k] = (ok ? std::uint32_t(std::uint64_t(std::int64_t(fl))) : 0u) * prime[k];
+    *frac[k] = ok ? float(p[k] - fl) : 0.0f;
   }
-  auto corner = [&](int cx, int cy, int cz, double& value) {
-    const int h = perm_[perm_[perm_[ix + cx] + iy + cy] + iz + cz];
-    const Vec3 g = gradient_of(h);
-    value = g.dot(f - Vec3(cx, cy, cz));
-    return g;
-  };
-  double va, vb, vc, vd, ve, vf, vg, vh;
-  const Vec3 ga = corner(0, 0, 0, va), gb = corner(1, 0, 0, vb), gc = corner(0, 1, 0, vc),
-             gd = corner(1, 1, 0, vd), ge = corner(0, 0, 1, ve), gf = corner(1, 0, 1, vf),
-             gg = corner(0, 1, 1, vg), gh = corner(1, 1, 1, vh);
-  // Trilinear blend of the corner ramps and its exact derivative (Quilez, "gradient noise
-  // derivatives"): value = k0 + k1 u + k2 v + k3 w + k4 uv + k5 vw + k6 wu + k7 uvw.
-  const double k1 = vb - va, k2 = vc - va, k3 = ve - va, k4 = va - vb - vc + vd,
-               k5 = va - vc - ve + vg, k6 = va - vb - ve + vf,
-               k7 = -va + vb + vc - vd + ve - vf - vg + vh;
-  const double x = u.x(), y = u.y(), z = u.z();
-  const double value = va + k1 * x + k2 * y + k3 * z + k4 * x * y + k5 * y * z + k6 * z * x +
-                       k7 * x * y * z;
-  // The same trilinear blend of the corner gradients, written as nested lerps (cheaper than
-  // the expanded form and algebraically equal).
-  const Vec3 gx00 = ga + x * (gb - ga), gx10 = gc + x * (gd - gc);
-  const Vec3 gx01 = ge + x * (gf - ge), gx11 = gg + x * (gh - gg);
-  const Vec3 gy0 = gx00 + y * (gx10 - gx00), gy1 = gx01 + y * (gx11 - gx01);
-  grad = gy0 + z * (gy1 - gy0);
-  grad.x() += du.x() * (k1 + k4 * y + k6 * z + k7 * y * z);
-  grad.y() += du.y() * (k2 + k4 * x + k5 * z + k7 * x * z);
-  grad.z() += du.z() * (k3 + k5 * y + k6 * x + k7 * x * y);
-  return value;
+  return l;
 }
 
-namespace {
+/// curl ψ from the three potentials' gradients: (∂ψ3/∂y - ∂ψ2/∂z, ∂ψ1/∂z - ∂ψ3/∂x,
+/// ∂ψ2/∂x - ∂ψ1/∂y).
+__attribute__((always_inline)) inline void curl_at(const std::uint32_t* seed, const Lattice& l,
+                                                   float& ux, float& uy, float& uz) {
+  float a0, a1, a2, b0, b1, b2, c0, c1, c2;
+  potential(seed[0], l, a0, a1, a2);
+  potential(seed[1], l, b0, b1, b2);
+  potential(seed[2], l, c0, c1, c2);
+  ux = c1 - b2;
+  uy = a2 - c0;
+  uz = b0 - a1;
+}
 
 /// std::floor(p) for |p| < 2^31, bit for bit (-0 stays -0), from a truncation the vector units
 /// have (GCC vectorises std::floor itself only without -ftrapping-math).
@@ -91,97 +132,77 @@ inline double floor_lane(double p) {
   return p == 0.0 ? p : r;
 }
 
-/// gradients() for lanes whose coordinates fit in 32-bit cells: every expression below is the
-/// one in sample() (same operands, same order; the build has -ffp-contract=off), written per
-/// component so the loop vectorises. The permutation lookups become gathers; the gradient table
-/// kGrad becomes bit masks per component (bit h: row h's component is non-zero; is negative),
-/// selected with shifts: component = nonzero - 2 negative, exactly 1, -1 or +0 as in kGrad.
+constexpr std::size_t kChunk = 64;  ///< points per pass of the two vectorised loops
+
+/// curl() for up to kChunk points; false (and nothing written) when a coordinate is not below
+/// 2^30 in magnitude (NaN included): the 32-bit cells would overflow, the caller takes the
+/// scalar path. Two loops: the lattice in double (four lanes), the noise in float (eight).
 SIMREEL_VECTOR_CLONES
-void gradients_lanes(std::size_t n, const std::int32_t* __restrict perm, const double* __restrict px,
-                     const double* __restrict py, const double* __restrict pz,
-                     double* __restrict gx, double* __restrict gy, double* __restrict gz) {
+bool curl_chunk(std::size_t n, const std::uint32_t* __restrict seed, const double* __restrict px,
+                const double* __restrict py, const double* __restrict pz, double* __restrict ux,
+                double* __restrict uy, double* __restrict uz) {
+  constexpr double kLimit = 1073741824.0;  // 2^30
+  alignas(64) std::uint32_t cx[kChunk], cy[kChunk], cz[kChunk];
+  alignas(64) float fx[kChunk], fy[kChunk], fz[kChunk];
+  alignas(64) float ox[kChunk], oy[kChunk], oz[kChunk];
+  int bad = 0;
   for (std::size_t k = 0; k < n; ++k) {
-    const double fx = floor_lane(px[k]), fy = floor_lane(py[k]), fz = floor_lane(pz[k]);
-    const int ix = int(fx) & 255, iy = int(fy) & 255, iz = int(fz) & 255;
-    const double f0 = px[k] - fx, f1 = py[k] - fy, f2 = pz[k] - fz;
-    const double x = f0 * f0 * f0 * (f0 * (f0 * 6.0 - 15.0) + 10.0);
-    const double y = f1 * f1 * f1 * (f1 * (f1 * 6.0 - 15.0) + 10.0);
-    const double z = f2 * f2 * f2 * (f2 * (f2 * 6.0 - 15.0) + 10.0);
-    const double dux = 30.0 * f0 * f0 * (f0 * (f0 - 2.0) + 1.0);
-    const double duy = 30.0 * f1 * f1 * (f1 * (f1 - 2.0) + 1.0);
-    const double duz = 30.0 * f2 * f2 * (f2 * (f2 - 2.0) + 1.0);
-    const int a = perm[ix], b = perm[ix + 1];
-    const int aa = perm[a + iy], ab = perm[a + iy + 1], ba = perm[b + iy], bb = perm[b + iy + 1];
-    // Corners (cx, cy, cz): hash, gradient, ramp value g . (f - c). Written out (no inner
-    // loops) so the whole body is one basic block.
-#define SIMREEL_CORNER(name, hash, cx, cy, cz)                                               \
-  const int h##name = (hash) & 15;                                                          \
-  const double g##name##0 = double(((0x30FF >> h##name) & 1) - 2 * ((0x20AA >> h##name) & 1)); \
-  const double g##name##1 = double(((0xFF0F >> h##name) & 1) - 2 * ((0xCA0C >> h##name) & 1)); \
-  const double g##name##2 = double(((0xCFF0 >> h##name) & 1) - 2 * ((0x8CC0 >> h##name) & 1)); \
-  const double v##name = g##name##0 * (f0 - cx) + g##name##1 * (f1 - cy) + g##name##2 * (f2 - cz);
-    SIMREEL_CORNER(a, perm[aa + iz], 0.0, 0.0, 0.0)
-    SIMREEL_CORNER(b, perm[ba + iz], 1.0, 0.0, 0.0)
-    SIMREEL_CORNER(c, perm[ab + iz], 0.0, 1.0, 0.0)
-    SIMREEL_CORNER(d, perm[bb + iz], 1.0, 1.0, 0.0)
-    SIMREEL_CORNER(e, perm[aa + iz + 1], 0.0, 0.0, 1.0)
-    SIMREEL_CORNER(f, perm[ba + iz + 1], 1.0, 0.0, 1.0)
-    SIMREEL_CORNER(g, perm[ab + iz + 1], 0.0, 1.0, 1.0)
-    SIMREEL_CORNER(h, perm[bb + iz + 1], 1.0, 1.0, 1.0)
-#undef SIMREEL_CORNER
-    const double k1 = vb - va, k2 = vc - va, k3 = ve - va, k4 = va - vb - vc + vd,
-                 k5 = va - vc - ve + vg, k6 = va - vb - ve + vf,
-                 k7 = -va + vb + vc - vd + ve - vf - vg + vh;
-    double out[3];
-#define SIMREEL_BLEND(d)                                                                   \
-  {                                                                                       \
-    const double gx00 = ga##d + x * (gb##d - ga##d), gx10 = gc##d + x * (gd##d - gc##d);   \
-    const double gx01 = ge##d + x * (gf##d - ge##d), gx11 = gg##d + x * (gh##d - gg##d);   \
-    const double gy0 = gx00 + y * (gx10 - gx00), gy1 = gx01 + y * (gx11 - gx01);           \
-    out[d] = gy0 + z * (gy1 - gy0);                                                       \
+    const double x = px[k], y = py[k], z = pz[k];
+    bad |= int(!(std::abs(x) < kLimit)) | int(!(std::abs(y) < kLimit)) | int(!(std::abs(z) < kLimit));
+    // Clamped only so that the conversions stay defined; such a chunk is discarded.
+    const double xs = std::abs(x) < kLimit ? x : 0.0, ys = std::abs(y) < kLimit ? y : 0.0,
+                 zs = std::abs(z) < kLimit ? z : 0.0;
+    const double flx = floor_lane(xs), fly = floor_lane(ys), flz = floor_lane(zs);
+    cx[k] = std::uint32_t(int(flx)) * kPrimeX;
+    cy[k] = std::uint32_t(int(fly)) * kPrimeY;
+    cz[k] = std::uint32_t(int(flz)) * kPrimeZ;
+    fx[k] = float(xs - flx);
+    fy[k] = float(ys - fly);
+    fz[k] = float(zs - flz);
   }
-    SIMREEL_BLEND(0)
-    SIMREEL_BLEND(1)
-    SIMREEL_BLEND(2)
-#undef SIMREEL_BLEND
-    gx[k] = out[0] + dux * (k1 + k4 * y + k6 * z + k7 * y * z);
-    gy[k] = out[1] + duy * (k2 + k4 * x + k5 * z + k7 * x * z);
-    gz[k] = out[2] + duz * (k3 + k5 * y + k6 * x + k7 * x * y);
+  if (bad) return false;
+  const std::uint32_t s0 = seed[0], s1 = seed[1], s2 = seed[2];
+  const std::uint32_t s[3] = {s0, s1, s2};
+  for (std::size_t k = 0; k < n; ++k) {
+    const Lattice l{cx[k], cy[k], cz[k], fx[k], fy[k], fz[k]};
+    curl_at(s, l, ox[k], oy[k], oz[k]);
   }
+  for (std::size_t k = 0; k < n; ++k) {
+    ux[k] = ox[k];
+    uy[k] = oy[k];
+    uz[k] = oz[k];
+  }
+  return true;
 }
 
 }  // namespace
 
-void GradientNoise::gradients(std::size_t n, const double* px, const double* py,
-                              const double* pz, double* gx, double* gy, double* gz) const {
-  // 32-bit cell indices give the same low 8 bits as sample()'s 64-bit ones while |p| < 2^31.
-  constexpr double kLimit = 1073741824.0;  // 2^30
-  bool fits = true;
-  for (std::size_t k = 0; k < n; ++k)
-    fits = fits && std::abs(px[k]) < kLimit && std::abs(py[k]) < kLimit && std::abs(pz[k]) < kLimit;
-  if (fits) {
-    gradients_lanes(n, perm32_, px, py, pz, gx, gy, gz);
-    return;
-  }
-  for (std::size_t k = 0; k < n; ++k) {
-    Vec3 g;
-    sample(Vec3(px[k], py[k], pz[k]), g);
-    gx[k] = g.x();
-    gy[k] = g.y();
-    gz[k] = g.z();
+double GradientNoise::sample(int c, const Vec3& p, Vec3& grad) const {
+  float g0, g1, g2;
+  const float v = potential(seed_[c], lattice_of(p), g0, g1, g2);
+  grad = Vec3(g0, g1, g2);
+  return v;
+}
+
+void GradientNoise::curl(std::size_t n, const double* px, const double* py, const double* pz,
+                         double* ux, double* uy, double* uz) const {
+  for (std::size_t b = 0; b < n; b += kChunk) {
+    const std::size_t len = std::min(kChunk, n - b);
+    if (curl_chunk(len, seed_, px + b, py + b, pz + b, ux + b, uy + b, uz + b)) continue;
+    for (std::size_t k = b; k < b + len; ++k) {
+      float x, y, z;
+      curl_at(seed_, lattice_of(Vec3(px[k], py[k], pz[k])), x, y, z);
+      ux[k] = x;
+      uy[k] = y;
+      uz[k] = z;
+    }
   }
 }
 
-// Offsets far apart relative to the noise's correlation length (1) decorrelate the components.
-const Vec3 kCurlOffset1(31.416, -47.853, 12.793), kCurlOffset2(-93.989, 26.433, 83.279);
-
 Vec3 curl_noise(const GradientNoise& noise, const Vec3& p) {
-  Vec3 g1, g2, g3;
-  noise.sample(p, g1);
-  noise.sample(p + kCurlOffset1, g2);
-  noise.sample(p + kCurlOffset2, g3);
-  // curl (ψ1, ψ2, ψ3) = (∂ψ3/∂y - ∂ψ2/∂z, ∂ψ1/∂z - ∂ψ3/∂x, ∂ψ2/∂x - ∂ψ1/∂y)
-  return {g3.y() - g2.z(), g1.z() - g3.x(), g2.x() - g1.y()};
+  double u[3];
+  noise.curl(1, &p.x(), &p.y(), &p.z(), &u[0], &u[1], &u[2]);
+  return {u[0], u[1], u[2]};
 }
 
 }  // namespace simreel::sim::detail

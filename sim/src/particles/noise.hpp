@@ -9,30 +9,29 @@
 
 namespace simreel::sim::detail {
 
-/// 3D gradient (Perlin) noise with its analytic gradient, from a permutation shuffled with the
-/// project's Rng (so the field is fixed by the scene seed). Values lie roughly in [-1, 1].
+/// Three decorrelated 3D gradient (Perlin) noises on one integer lattice, with analytic
+/// gradients: Perlin's 12 cube-edge gradients and quintic fade (Perlin 2002), the corner
+/// gradient picked by a multiplicative hash of the cell and a per-potential seed (the seeds come
+/// from the project's Rng, so the field is fixed by the scene seed). Values lie roughly in
+/// [-1, 1]. Evaluated in single precision: the three potentials share the cell, the fade and
+/// the corner offsets, and eight lanes fit an AVX2 register.
 class GradientNoise {
  public:
   explicit GradientNoise(std::uint64_t seed = 0);
-  /// Noise value at p; its gradient (per unit of p) goes to `grad`.
-  double sample(const Vec3& p, Vec3& grad) const;
-  /// Gradients at n points (px, py, pz: n each) into gx, gy, gz: bit for bit what sample()
-  /// gives, lane by lane in a loop the compiler vectorises (the curl needs three per particle).
-  /// Points with a coordinate beyond +-2^30 go through sample() itself.
-  void gradients(std::size_t n, const double* px, const double* py, const double* pz, double* gx,
-                 double* gy, double* gz) const;
+  /// Potential c's (0, 1 or 2) value at p; its gradient (per unit of p) goes to `grad`.
+  double sample(int c, const Vec3& p, Vec3& grad) const;
+  /// Curl-noise velocities at n points (px, py, pz: n each) into ux, uy, uz (Bridson et al.
+  /// 2007): u = curl ψ with ψ = (N0(p), N1(p), N2(p)), all derivatives analytic, so div u = 0
+  /// up to rounding. Bit for bit the curl of sample()'s gradients, in a loop the compiler
+  /// vectorises; per unit of p (the caller scales by amplitude).
+  void curl(std::size_t n, const double* px, const double* py, const double* pz, double* ux,
+            double* uy, double* uz) const;
 
  private:
-  std::uint8_t perm_[512];
-  std::int32_t perm32_[512];  ///< perm_ widened (32-bit gathers)
+  std::uint32_t seed_[3];
 };
 
-/// Curl-noise velocity (Bridson et al. 2007): u = curl ψ with ψ = (N(p), N(p + o1), N(p + o2)),
-/// three decorrelated copies of one noise, all derivatives analytic, so div u = 0 exactly (up to
-/// rounding). Per unit of p; the caller scales by amplitude.
+/// curl() at one point.
 Vec3 curl_noise(const GradientNoise& noise, const Vec3& p);
-
-/// The offsets of the second and third potentials of curl_noise() (in units of p).
-extern const Vec3 kCurlOffset1, kCurlOffset2;
 
 }  // namespace simreel::sim::detail
