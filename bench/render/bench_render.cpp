@@ -1,6 +1,6 @@
 // simreel's renderer on the particle frame of raw_osmesa_baseline (100k soft sprites,
 // 1280x720, 4x MSAA, read back every frame), as a ratio of the baseline's frame time, plus
-// variants that show where the time goes. Usage: bench_render [particles] [frames]
+// variants that show where the time goes. Usage: bench_render [particles] [frames] [only cases naming this]
 // Runs ./raw_osmesa_baseline from its own directory for the reference figure.
 #include <algorithm>
 #include <chrono>
@@ -59,6 +59,7 @@ struct Case {
 int main(int argc, char** argv) {
   const std::size_t n = argc > 1 ? std::size_t(std::atol(argv[1])) : 100000;
   const int frames = argc > 2 ? std::atoi(argv[2]) : 20;
+  const char* only = argc > 3 ? argv[3] : nullptr;  // run only the cases whose name contains this
   const bench::ParticleCloud cloud = bench::make_particle_cloud(n);
   const auto context = create_context(Backend::osmesa);
 
@@ -77,6 +78,7 @@ int main(int argc, char** argv) {
                               Bloom{}.intensity, 0.f},
                          Case{"soft + moving box, shutter 180 (8 samples)", 4, ParticleStyle::soft, n, false,
                               ParticleTexture::none, Bloom{}.intensity, 180.f}}) {
+    if (only != nullptr && std::strstr(c.name, only) == nullptr) continue;
     RenderSettings s;
     s.width = 1280;
     s.height = 720;
@@ -99,7 +101,7 @@ int main(int argc, char** argv) {
     if (full == 0.0) full = ms;
     std::printf("simreel %-48s %8.2f ms CPU/frame %8.2f ms wall\n", c.name, ms, wall);
   }
-  {
+  if (only == nullptr || std::strstr("64x36", only) != nullptr) {
     RenderSettings s;
     s.width = 64;
     s.height = 36;
@@ -127,6 +129,6 @@ int main(int argc, char** argv) {
     if (const char* m = std::strstr(line, "median ")) base = std::atof(m + 7);
   }
   if (p != nullptr) pclose(p);
-  if (base > 0.0) std::printf("ratio simreel / raw baseline: %.2f\n", full / base);
+  if (base > 0.0 && only == nullptr) std::printf("ratio simreel / raw baseline: %.2f\n", full / base);
   return 0;
 }

@@ -31,8 +31,11 @@ struct ShadowView {
   GLuint texture = 0;  ///< the depth map (compare mode), bound on unit 1 by the renderer
 };
 
-/// Particles uploaded as indexed quads (four vertices each, ParticlePass): the vertex array
-/// and the number of particles.
+/// Vertices per sphere sprite: one triangle around the unit disc (kSpriteCornerGlsl).
+inline constexpr std::size_t kSpriteVertices = 3;
+
+/// Sphere sprites uploaded as one triangle each (kSpriteVertices vertices, ParticlePass), drawn
+/// with glDrawArrays: the vertex array and the number of particles.
 struct QuadBatch {
   GLuint vao = 0;
   std::size_t count = 0;

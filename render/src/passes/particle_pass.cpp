@@ -61,12 +61,14 @@ std::vector<std::uint8_t> make_noise() {
 
 void ParticlePass::create(const GlTable& gl) {
   gl_ = &gl;
-  // Particles are drawn as indexed quads, four vertices per particle each carrying the
-  // particle's data, not instanced: llvmpipe runs an instanced draw as one small draw per
-  // instance, several times slower for 100k sprites. The index buffer is shared.
+  // Particles are not instanced (llvmpipe runs an instanced draw as one small draw per
+  // instance, several times slower for 100k sprites): every vertex carries its particle's data.
+  // Sphere sprites are one triangle each (kSpriteCornerGlsl), streaks and trails indexed quads
+  // sharing one index buffer.
   gl.GenBuffers(1, &quad_ebo_);
   streaks_.floats = kStreakFloats;
   trails_.floats = kStreakFloats;
+  streaks_.vertices = trails_.vertices = 4;
   for (Stream* stream : {&soft_, &additive_, &droplets_, &streaks_, &trails_}) {
     gl.GenVertexArrays(1, &stream->vao);
     gl.BindVertexArray(stream->vao);
@@ -158,7 +160,8 @@ void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
   const GlTable& gl = *gl_;
   stream.count = stream.staging.size() / stream.floats;
   if (stream.count == 0) return;
-  if (stream.count > quad_capacity_) {
+  const bool quads = stream.vertices == 4;
+  if (quads && stream.count > quad_capacity_) {
     quad_capacity_ = std::max(stream.count, quad_capacity_ + quad_capacity_ / 2);
     std::vector<GLuint> indices(6 * quad_capacity_);
     for (std::size_t i = 0; i < quad_capacity_; ++i) {
@@ -170,20 +173,19 @@ void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
     gl.BufferData(GL_COPY_WRITE_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)), indices.data(),
                   GL_STATIC_DRAW);
   }
-  // Four copies of each particle's data, one per corner (the shader derives the corner from
-  // gl_VertexID).
-  const std::size_t f = stream.floats;
-  stream.expanded.resize(4 * stream.staging.size());
+  // A copy of each particle's data per corner (the shader derives the corner from gl_VertexID).
+  const std::size_t f = stream.floats, v = stream.vertices;
+  stream.expanded.resize(v * stream.staging.size());
   float* dst = stream.expanded.data();
   for (std::size_t i = 0; i < stream.count; ++i) {
     const float* src = &stream.staging[(order != nullptr ? order[i] : i) * f];
-    for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
+    for (std::size_t k = 0; k < v; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
   const GLsizeiptr bytes = GLsizeiptr(stream.expanded.size() * sizeof(float));
   if (stream.count > stream.capacity) {
     stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
-    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(4 * stream.capacity * f * sizeof(float)), nullptr,
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(v * stream.capacity * f * sizeof(float)), nullptr,
                   GL_STREAM_DRAW);
   }
   gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.expanded.data());
@@ -246,7 +248,7 @@ const Program& ParticlePass::program(Style style, const RenderSettings& settings
     const char* additive = style == trail_style ? "#define ADDITIVE 1\n" : "#define ADDITIVE 0\n";
     const char* spark = style == additive_style || style == flame_style ? "#define SPARK 1\n" : "#define SPARK 0\n";
     const std::string vs =
-        glsl_source({taps, textured, additive, spark, kShadowGlsl, streak ? kStreakVs : kParticleVs});
+        glsl_source({taps, textured, additive, spark, kShadowGlsl, kSpriteCornerGlsl, streak ? kStreakVs : kParticleVs});
     // Sprites stand for spheres and take their depth; a streak is a flat capsule.
     const std::string fs =
         streak ? glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, style == trail_style ? kTrailFs : kStreakFs})
@@ -265,7 +267,7 @@ void ParticlePass::draw_droplets(const FrameView& frame, const ShadowView& shado
   p.set("u_opaque", 1);
   if (samples > 0) gl.Enable(GL_SAMPLE_ALPHA_TO_COVERAGE);
   gl.BindVertexArray(droplets_.vao);
-  gl.DrawElements(GL_TRIANGLES, GLsizei(6 * droplets_.count), GL_UNSIGNED_INT, nullptr);
+  gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(kSpriteVertices * droplets_.count));
   gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
 }
 
@@ -297,7 +299,11 @@ void ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow
       gl.BlendFunc(GL_ONE, GL_ONE);
     }
     gl.BindVertexArray(layer.stream->vao);
-    gl.DrawElements(GL_TRIANGLES, GLsizei(6 * layer.stream->count), GL_UNSIGNED_INT, nullptr);
+    if (layer.stream->vertices == 4) {
+      gl.DrawElements(GL_TRIANGLES, GLsizei(6 * layer.stream->count), GL_UNSIGNED_INT, nullptr);
+    } else {
+      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(kSpriteVertices * layer.stream->count));
+    }
   }
   gl.DepthMask(GL_TRUE);
   gl.Disable(GL_BLEND);

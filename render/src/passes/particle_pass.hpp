@@ -1,7 +1,7 @@
 #pragma once
 // Private: the particle passes. Every batch's particles are merged by style into one stream
 // each (soft ones sorted back to front across batches, so overlapping batches blend correctly)
-// and drawn as indexed quads: droplets with the opaque geometry, then soft, streak and additive
+// and drawn as one triangle per sphere sprite (indexed quads for streaks): droplets with the opaque geometry, then soft, streak and additive
 // sprites (dots and trails) blended over it, faded against a copy of the opaque depth. Smoke and
 // flame textures read one seeded, tileable noise texture made in create().
 
@@ -19,7 +19,7 @@ namespace simreel::render::detail {
 
 class ParticlePass {
  public:
-  /// Creates the shared quad index buffer and one vertex array per stream.
+  /// Creates the streaks' quad index buffer and one vertex array per stream.
   void create(const GlTable& gl);
   void destroy() noexcept;
 
@@ -39,14 +39,16 @@ class ParticlePass {
                     bool opaque_drawables);
 
  private:
-  /// One particle stream: a growing vertex buffer of quads (four vertices per particle).
+  /// One particle stream: a growing vertex buffer, `vertices` per particle (one triangle for
+  /// sphere sprites, an indexed quad for streaks and trails).
   struct Stream {
     std::size_t floats = kInstanceFloats;  // per instance
+    std::size_t vertices = kSpriteVertices;
     GLuint vao = 0;
     GLuint instances = 0;
     std::size_t capacity = 0;     // particles the GL buffer holds
     std::vector<float> staging;   // per particle
-    std::vector<float> expanded;  // per vertex: four copies of each particle
+    std::vector<float> expanded;  // per vertex: `vertices` copies of each particle
     std::size_t count = 0;
   };
   // Particle programs by style and by sun taps per vertex (0: no shadow map this frame, 1, or
