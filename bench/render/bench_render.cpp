@@ -52,6 +52,7 @@ struct Case {
   ParticleTexture texture = ParticleTexture::none;
   float bloom = Bloom{}.intensity;  // the default look: bloom on
   float shutter_deg = 0.f;          // > 0: a box moves every frame, blurred by the shutter
+  float radius_scale = 1.f;         // > 1: big puffs (smoke): overdraw instead of many small sprites
 };
 
 }  // namespace
@@ -77,7 +78,9 @@ int main(int argc, char** argv) {
                          Case{"soft + moving box, shutter 0", 4, ParticleStyle::soft, n, false, ParticleTexture::none,
                               Bloom{}.intensity, 0.f},
                          Case{"soft + moving box, shutter 180 (8 samples)", 4, ParticleStyle::soft, n, false,
-                              ParticleTexture::none, Bloom{}.intensity, 180.f}}) {
+                              ParticleTexture::none, Bloom{}.intensity, 180.f},
+                         Case{"big smoke puffs (n/50, radius x20, ~30 px), msaa 4", 4, ParticleStyle::soft, n / 50, false,
+                              ParticleTexture::smoke, Bloom{}.intensity, 0.f, 20.f}}) {
     if (only != nullptr && std::strstr(c.name, only) == nullptr) continue;
     RenderSettings s;
     s.width = 1280;
@@ -90,7 +93,9 @@ int main(int argc, char** argv) {
     const bool box = std::strstr(c.name, "moving box") != nullptr;
     if (box) r.add_box(2, BoxDesc{});
     int frame = 0;
-    ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
+    std::vector<float> radius = cloud.radius;
+    for (float& r : radius) r *= c.radius_scale;
+    ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), radius.data(), c.style};
     batch.texture = c.texture;
     double wall = 0.0;
     const double ms = median_ms(frames, [&] {

@@ -24,11 +24,12 @@ class ParticlePass {
   void destroy() noexcept;
 
   /// Merges the particle drawables of `table` by style (in key order), sorts the soft ones back
-  /// to front as seen from `camera` and uploads all five streams.
-  void gather(const DrawableTable& table, const Camera& camera);
+  /// to front as seen from `camera` and uploads all five streams (`height_px`: the frame's
+  /// height, for the sprites' size on screen).
+  void gather(const DrawableTable& table, const Camera& camera, int height_px);
   /// The uploaded soft and droplet particles (the shadow pass draws them as casters).
-  [[nodiscard]] QuadBatch soft() const { return {soft_.vao, soft_.count}; }
-  [[nodiscard]] QuadBatch droplets() const { return {droplets_.vao, droplets_.count}; }
+  [[nodiscard]] QuadBatch soft() const { return batch(soft_); }
+  [[nodiscard]] QuadBatch droplets() const { return batch(droplets_); }
 
   /// Draws the droplets (opaque lit spheres) into the bound scene framebuffer; `samples` > 0
   /// turns on alpha-to-coverage.
@@ -39,11 +40,11 @@ class ParticlePass {
                     bool opaque_drawables);
 
  private:
-  /// One particle stream: a growing vertex buffer, `vertices` per particle (one triangle for
-  /// sphere sprites, an indexed quad for streaks and trails).
+  /// One particle stream: a growing vertex buffer, `vertices` per particle (an indexed quad for
+  /// streaks and trails; sphere sprites choose per frame, see sprite_vertices()).
   struct Stream {
     std::size_t floats = kInstanceFloats;  // per instance
-    std::size_t vertices = kSpriteVertices;
+    std::size_t vertices = 4;
     GLuint vao = 0;
     GLuint instances = 0;
     std::size_t capacity = 0;     // particles the GL buffer holds
@@ -63,6 +64,10 @@ class ParticlePass {
   };
 
   void upload(Stream& stream, const std::uint32_t* order = nullptr);
+  /// 3 (one triangle each) when the stream's sprites are small on screen, 4 (quads) when big.
+  [[nodiscard]] static std::size_t sprite_vertices(const Stream& stream, const Camera& camera,
+                                                   float pixels_per_unit);
+  [[nodiscard]] static QuadBatch batch(const Stream& s) { return {s.vao, s.count, s.vertices}; }
   const Program& program(Style style, const RenderSettings& settings, const ShadowView& shadow);
   void set_uniforms(const Program& p, const FrameView& frame, const ShadowView& shadow) const;
 

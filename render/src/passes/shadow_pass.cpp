@@ -126,8 +126,7 @@ const ShadowView& ShadowPass::draw(const FrameView& frame, const DrawableTable& 
     for (const QuadBatch* batch : {&soft, &droplets}) {
       if (batch->count == 0) continue;
       p.set("u_opaque", batch == &droplets ? 1 : 0);
-      gl.BindVertexArray(batch->vao);
-      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(kSpriteVertices * batch->count));
+      batch->draw(gl, p);
     }
   }
   gl.Disable(GL_POLYGON_OFFSET_FILL);

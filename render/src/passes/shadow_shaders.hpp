@@ -83,7 +83,7 @@ void main() {
   vec3 w = a_center_radius.xyz + (u_light_right * a_corner.x + u_light_up * a_corner.y) * a_center_radius.w;
   v_corner = a_corner;
   v_alpha = u_opaque != 0 ? 1.0 : min(a_color.a, 0.999);
-  v_seed = float((gl_VertexID / k_sprite_vertices) & 15);  // the particle's index
+  v_seed = float((gl_VertexID / u_sprite_vertices) & 15);  // the particle's index
   gl_Position = u_light_view_proj * vec4(w, 1.0);
 }
 )";
