@@ -126,7 +126,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"jet_crates", 0xfc13fdd78ea3dbcdull},
       {"newtons_cradle", 0x1bcc256ac54446f1ull},
       {"pour", 0x7c754b765345a771ull},
-      {"rain", 0xb2c0900519690b5full},
+      {"rain", 0x7c6288ed62a9afcaull},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
       {"ragdolls_stairs", 0x261b76b5e3ca9235ull},
       {"rope_bridge", 0x0f4da7dafece3b50ull},
