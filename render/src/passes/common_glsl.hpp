@@ -13,7 +13,7 @@ vec3 hemisphere(float nz) { return mix(u_ground_ambient, u_ambient, 0.5 + 0.5 * 
 /// A sphere sprite's corners; each vertex carries its particle's data (ParticlePass). The
 /// shaders keep only the unit disc, so any shape around it draws the same sprite. Small sprites
 /// (u_sprite_vertices 3) are one triangle, the equilateral one whose inscribed circle is the
-/// disc: llvmpipe sets up and shades every triangle on its own, and a sprite of a few pixels
+/// disc (ParticlePass::sprite_vertices): llvmpipe sets up and shades every triangle on its own, and a sprite of a few pixels
 /// costs about a triangle's fixed cost, so a quad's two cost about twice as much. Big sprites
 /// (4) are an indexed quad [-1, 1]^2: the triangle's 30 % more area (3 sqrt(3) against 4) would
 /// cost more in fragments than the second triangle's set-up.
