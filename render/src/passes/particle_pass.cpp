@@ -209,9 +209,11 @@ void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
   const GLsizeiptr bytes = GLsizeiptr(stream.expanded.size() * sizeof(float));
-  if (stream.count > stream.capacity) {
-    stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
-    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(v * stream.capacity * f * sizeof(float)), nullptr,
+  // Counted in vertices: a stream that switches from triangles to quads needs more room for the
+  // same particles.
+  if (v * stream.count > stream.capacity) {
+    stream.capacity = std::max(v * stream.count, stream.capacity + stream.capacity / 2);
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(stream.capacity * f * sizeof(float)), nullptr,
                   GL_STREAM_DRAW);
   }
   gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.expanded.data());

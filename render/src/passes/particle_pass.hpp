@@ -47,7 +47,7 @@ class ParticlePass {
     std::size_t vertices = 4;
     GLuint vao = 0;
     GLuint instances = 0;
-    std::size_t capacity = 0;     // particles the GL buffer holds
+    std::size_t capacity = 0;     // vertices the GL buffer holds
     std::vector<float> staging;   // per particle
     std::vector<float> expanded;  // per vertex: `vertices` copies of each particle
     std::size_t count = 0;
