@@ -1,6 +1,6 @@
 // simreel's renderer on the particle frame of raw_osmesa_baseline (100k soft sprites,
 // 1280x720, 4x MSAA, read back every frame), as a ratio of the baseline's frame time, plus
-// variants that show where the time goes. Usage: bench_render [particles] [frames]
+// variants that show where the time goes. Usage: bench_render [particles] [frames] [only cases naming this]
 // Runs ./raw_osmesa_baseline from its own directory for the reference figure.
 #include <algorithm>
 #include <chrono>
@@ -52,6 +52,7 @@ struct Case {
   ParticleTexture texture = ParticleTexture::none;
   float bloom = Bloom{}.intensity;  // the default look: bloom on
   float shutter_deg = 0.f;          // > 0: a box moves every frame, blurred by the shutter
+  float radius_scale = 1.f;         // > 1: big puffs (smoke): overdraw instead of many small sprites
 };
 
 }  // namespace
@@ -59,6 +60,7 @@ struct Case {
 int main(int argc, char** argv) {
   const std::size_t n = argc > 1 ? std::size_t(std::atol(argv[1])) : 100000;
   const int frames = argc > 2 ? std::atoi(argv[2]) : 20;
+  const char* only = argc > 3 ? argv[3] : nullptr;  // run only the cases whose name contains this
   const bench::ParticleCloud cloud = bench::make_particle_cloud(n);
   const auto context = create_context(Backend::osmesa);
 
@@ -76,7 +78,10 @@ int main(int argc, char** argv) {
                          Case{"soft + moving box, shutter 0", 4, ParticleStyle::soft, n, false, ParticleTexture::none,
                               Bloom{}.intensity, 0.f},
                          Case{"soft + moving box, shutter 180 (8 samples)", 4, ParticleStyle::soft, n, false,
-                              ParticleTexture::none, Bloom{}.intensity, 180.f}}) {
+                              ParticleTexture::none, Bloom{}.intensity, 180.f},
+                         Case{"big smoke puffs (n/50, radius x20, ~30 px), msaa 4", 4, ParticleStyle::soft, n / 50, false,
+                              ParticleTexture::smoke, Bloom{}.intensity, 0.f, 20.f}}) {
+    if (only != nullptr && std::strstr(c.name, only) == nullptr) continue;
     RenderSettings s;
     s.width = 1280;
     s.height = 720;
@@ -88,7 +93,9 @@ int main(int argc, char** argv) {
     const bool box = std::strstr(c.name, "moving box") != nullptr;
     if (box) r.add_box(2, BoxDesc{});
     int frame = 0;
-    ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), cloud.radius.data(), c.style};
+    std::vector<float> radius = cloud.radius;
+    for (float& r : radius) r *= c.radius_scale;
+    ParticleBatch batch{c.particles, cloud.position.data(), cloud.color.data(), radius.data(), c.style};
     batch.texture = c.texture;
     double wall = 0.0;
     const double ms = median_ms(frames, [&] {
@@ -99,7 +106,7 @@ int main(int argc, char** argv) {
     if (full == 0.0) full = ms;
     std::printf("simreel %-48s %8.2f ms CPU/frame %8.2f ms wall\n", c.name, ms, wall);
   }
-  {
+  if (only == nullptr || std::strstr("64x36", only) != nullptr) {
     RenderSettings s;
     s.width = 64;
     s.height = 36;
@@ -127,6 +134,6 @@ int main(int argc, char** argv) {
     if (const char* m = std::strstr(line, "median ")) base = std::atof(m + 7);
   }
   if (p != nullptr) pclose(p);
-  if (base > 0.0) std::printf("ratio simreel / raw baseline: %.2f\n", full / base);
+  if (base > 0.0 && only == nullptr) std::printf("ratio simreel / raw baseline: %.2f\n", full / base);
   return 0;
 }

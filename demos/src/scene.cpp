@@ -3,6 +3,7 @@
 // registers everything with the engine.
 #include "scene.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <stdexcept>
 #include <utility>
@@ -233,7 +234,15 @@ SceneWorld build_world(const Scene& scene) {
       if (s.index_b != JointScene::kWorld) d.body_b = out.colliders.at(s.index_b);
       out.springs.push_back(out.world.add_body_spring(d));
     }
-    for (const auto& e : scene.emitters) out.systems.push_back(out.world.add_particle_system(e.system));
+    for (const auto& e : scene.emitters) {
+      if (!e.follow_camera) {
+        out.systems.push_back(out.world.add_particle_system(e.system));
+        continue;
+      }
+      sim::ParticleSystemDef def = e.system;
+      def.emitter.path = follow_camera_path(scene.camera_motion, scene.fps, scene.frames, def.emitter.transform);
+      out.systems.push_back(out.world.add_particle_system(def));
+    }
     for (const auto& f : scene.force_fields) {
       sim::ForceFieldDef def = f.def;
       for (const auto& name : f.systems) def.systems.push_back(out.systems.at(system_index(scene, name)));
@@ -249,6 +258,24 @@ SceneWorld build_world(const Scene& scene) {
     throw SceneError(scene.file + ": " + e.what());
   }
   return out;
+}
+
+sim::KeyframePath follow_camera_path(const render::CameraMotion& motion, double fps, int frames,
+                                     const sim::Transform& pose) {
+  sim::KeyframePath path;
+  path.smooth = false;
+  const bool moves = !motion.keys.empty() || motion.orbit.has_value();
+  const int last = moves ? std::max(frames, 1) : 0;
+  for (int k = 0; k <= last; ++k) {
+    const double t = double(k) / fps;
+    const render::Vec3f eye = render::camera_at(motion, t).position;
+    sim::Keyframe key;
+    key.time = t;
+    key.position = pose.translation + sim::Vec3(double(eye.x()), double(eye.y()), 0.0);
+    key.rotation = pose.rotation;
+    path.keys.push_back(key);
+  }
+  return path;
 }
 
 }  // namespace simreel::app

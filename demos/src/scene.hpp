@@ -87,7 +87,17 @@ struct EmitterScene {
   float trail_s = 0.f;     ///< (s) additive: glowing trail behind each particle, velocity x trail_s
   float emissive = 1.f;    ///< additive: colour multiplier (> 1 glows through the bloom pass)
   render::ParticleTexture texture = render::ParticleTexture::none;
+  /// The emitter moves with the camera: its `position` is an offset (world axes) from the
+  /// camera's eye projected on the ground, (eye_x, eye_y, 0); build_world turns it into a path
+  /// through the eye's ground point at every frame (follow_camera_path).
+  bool follow_camera = false;
 };
+
+/// The path of an emitter that follows the camera (EmitterScene::follow_camera): a key at every
+/// frame time k / fps, k = 0..frames (one key when the camera does not move), at
+/// `pose.translation` + (eye_x, eye_y, 0) with the rotation of `pose`, linear in between.
+sim::KeyframePath follow_camera_path(const render::CameraMotion& motion, double fps, int frames,
+                                     const sim::Transform& pose);
 
 /// A force field with the names of the systems (emitters) it acts on (empty = all).
 struct ForceFieldScene {

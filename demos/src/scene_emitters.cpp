@@ -173,6 +173,9 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
     }
   }
   em.path = keyframe_path(r, "path");
+  e.follow_camera = r.boolean("follow_camera", false);
+  if (e.follow_camera && !em.path.empty())
+    r.error_at(r.pointer("follow_camera"), "expected either \"follow_camera\": true or a \"path\", not both");
   emitter_extras(r, em);
   s.gravity = to_vec(r.vec3("gravity", {gravity.x(), gravity.y(), gravity.z()}));
   s.drag = r.number("drag", 0.0, ranges::kSystemDrag);

@@ -240,6 +240,9 @@ Derived rain(const json& k, const std::string& name, double g) {
             {"render_style", "streak"},
             {"streak_s", 0.045},
             {"max_particles", std::size_t(std::min(2e6, rate * (1.5 * fall_time + 0.5) + 1000))}};
+  // The area moves with the camera (its ground point): the rain fills the view as the camera
+  // travels, near drops streaking past the lens.
+  if (flag(k, "follow_camera")) e["follow_camera"] = true;
   if (flag(k, "splash")) {
     // Each drop that lands throws a few small droplets up and out (the §3.9.1 rain splash).
     e["on_hit"] = "split";

@@ -174,7 +174,7 @@ Image Renderer::render() {
   gl.Disable(GL_BLEND);
   gl.Disable(GL_CULL_FACE);
   gl.CullFace(GL_BACK);
-  r.particles.gather(r.table, cam);
+  r.particles.gather(r.table, cam, r.settings.height);
   auto draw_shadow = [&](const detail::FrameView& f) -> const detail::ShadowView& {
     return r.shadow.draw(f, r.table, r.meshes.cube(), r.particles.soft(), r.particles.droplets());
   };

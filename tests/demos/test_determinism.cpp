@@ -129,7 +129,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"jet_crates", 0xfc13fdd78ea3dbcdull},
       {"newtons_cradle", 0x1bcc256ac54446f1ull},
       {"pour", 0x7c754b765345a771ull},
-      {"rain", 0xb2c0900519690b5full},
+      {"rain", 0x7c6288ed62a9afcaull},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
       {"ragdolls_stairs", 0x261b76b5e3ca9235ull},
       {"ring_toss", 0x1d842fa4b7666922ull},  // convex decomposition (App. F); 1, 2 and 4 threads agreed

@@ -2,6 +2,9 @@
 // distributions, bursts, inherited velocity, size over lifetime and particle split.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "cli_util.hpp"
 #include "json_reader.hpp"
 #include "scene.hpp"
@@ -110,4 +113,46 @@ TEST(SceneEmitters, BadSplitValueExits2FromTheCli) {
   EXPECT_NE(r.err.find((d / "s.json").string() + ": /emitters/0/split/size_fraction: expected a number"),
             std::string::npos)
       << r.err;
+}
+
+TEST(SceneEmitters, RainFollowsTheCamera) {
+  // The rain preset's area follows the camera by default (`follow_camera`): a 1 m square rain
+  // area centred on the ground point of a camera orbiting at 6 m (a 4 s period, so 9.4 m/s).
+  // Drops born in the last frame (within 0.25 m of the release height) must lie in the square
+  // around the camera's ground point at that frame, plus the camera's travel over a frame; with
+  // "follow_camera": false they stay over the world origin.
+  auto scene_text = [](bool follow) {
+    return std::string(R"({"fps": 30, "frames": 60,
+      "camera": {"orbit": {"center": [0, 0, 0.5], "radius": 6, "height": 2, "period_s": 4}},
+      "emitters": [{"effect": "rain", "center": [0, 0, 0], "area_m": [1, 1], "height_m": 3,
+                    "intensity_mm_h": 8, "splash": false, "follow_camera": )") +
+           (follow ? "true" : "false") + R"(, "overrides": {"collide": false}}]})";
+  };
+  for (const bool follow : {true, false}) {
+    const auto scene = scene_from_json(json::parse(scene_text(follow)), "s.json");
+    ASSERT_EQ(scene.emitters.at(0).follow_camera, follow);
+    simreel::app::SceneWorld sw = simreel::app::build_world(scene);
+    double travelled = 0.0;
+    std::size_t checked = 0;
+    for (int f = 1; f <= 60; ++f) {
+      sw.world.advance(1.0 / 30);
+      if (f % 10 != 0) continue;
+      const auto eye = simreel::render::camera_at(scene.camera_motion, f / 30.0).position;
+      const double cx = follow ? eye.x() : 0.0, cy = follow ? eye.y() : 0.0;
+      travelled = std::max(travelled, std::hypot(eye.x(), eye.y() + 6.0));
+      const sim::ParticleView v = sw.world.particles(sw.systems.at(0));
+      for (std::size_t i = 0; i < v.count; ++i) {
+        if (v.position[3 * i + 2] < 3.0 - 0.25) continue;  // older than about a frame
+        EXPECT_LT(std::abs(v.position[3 * i] - cx), 0.5 + 0.35) << "frame " << f << " follow " << follow;
+        EXPECT_LT(std::abs(v.position[3 * i + 1] - cy), 0.5 + 0.35) << "frame " << f << " follow " << follow;
+        ++checked;
+      }
+    }
+    EXPECT_GT(travelled, 10.0);  // the camera went round: following is not trivially true
+    EXPECT_GT(checked, 100u);
+  }
+  // Either a path or following the camera, not both.
+  EXPECT_NE(errors_of(R"({"emitters": [{"follow_camera": true, "path": {"keys": [{"time": 0}]}}]})")
+                .find("/emitters/0/follow_camera: expected either"),
+            std::string::npos);
 }

@@ -29,7 +29,7 @@ void dump(const Image& img, const char* name) {
 // ---------------------------------------------------------------------------------------------
 // Bloom chain, in linear floats
 
-/// Runs the bloom chain on a w x h RGBA float image; returns up_1 (half size) as floats.
+/// Runs the bloom chain on a w x h RGBA float image; returns up_1 (quarter size) as floats.
 std::vector<float> bloom_chain(Context& ctx, int w, int h, const std::vector<float>& rgba, float radius,
                                int* out_w = nullptr, int* out_h = nullptr) {
   const GlTable& gl = ctx.gl();
@@ -88,11 +88,11 @@ TEST(Bloom, KeepsTheImagesEnergyWithinOnePercent) {
   for (const float radius : {0.f, 0.7f, 1.f}) {
     int rw = 0, rh = 0;
     const std::vector<float> up = bloom_chain(*ctx, w, h, img, radius, &rw, &rh);
-    ASSERT_EQ(rw, w / 2);
-    ASSERT_EQ(rh, h / 2);
+    ASSERT_EQ(rw, w / 4);
+    ASSERT_EQ(rh, h / 4);
     for (int c = 0; c < 3; ++c) {
-      // up_1 has a quarter of the pixels: four times its sum is the light it carries.
-      const double in = channel_sum(img, c), blurred = 4.0 * channel_sum(up, c);
+      // up_1 has a sixteenth of the pixels: 16 times its sum is the light it carries.
+      const double in = channel_sum(img, c), blurred = 16.0 * channel_sum(up, c);
       EXPECT_NEAR(blurred / in, 1.0, 0.01) << "radius " << radius << " channel " << c;
       // The frame the post pass tone-maps: (1 - intensity) frame + intensity blur.
       const double mixed = 0.96 * in + 0.04 * blurred;
@@ -111,14 +111,15 @@ TEST(Bloom, ABrightPixelSpreadsToItsNeighboursAndBlackStaysBlack) {
   int rw = 0;
   const std::vector<float> up = bloom_chain(*ctx, w, h, img, 0.7f, &rw);
   auto red = [&](int x, int y) { return up[(std::size_t(y) * rw + x) * 4]; };
-  // The pixel sits at (32, 16) of the half-size level; light reaches far beyond it, falling off.
-  EXPECT_GT(red(32, 16), red(36, 16));
-  EXPECT_GT(red(36, 16), red(44, 16));
-  EXPECT_GT(red(44, 16), 0.f);
-  EXPECT_GT(red(32, 28), 0.f);
-  // With radius 0 the glow stays within the 13-tap footprints (a few pixels).
+  // The pixel sits at (16, 8) of the quarter-size level; light reaches far beyond it, falling off.
+  EXPECT_GT(red(16, 8), red(18, 8));
+  EXPECT_GT(red(18, 8), red(22, 8));
+  EXPECT_GT(red(22, 8), 0.f);
+  EXPECT_GT(red(16, 14), 0.f);
+  // With radius 0 the glow stays within the first level's 4 x 4 box.
   const std::vector<float> tight = bloom_chain(*ctx, w, h, img, 0.f);
-  EXPECT_EQ(tight[(std::size_t(16) * rw + 44) * 4], 0.f);
+  EXPECT_EQ(tight[(std::size_t(8) * rw + 17) * 4], 0.f);
+  EXPECT_GT(tight[(std::size_t(8) * rw + 16) * 4], 0.f);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -11,7 +11,7 @@ namespace simreel::render::detail {
 
 namespace {
 
-constexpr int kMaxLevels = 7;  // 1280 x 720 -> 10 x 6: the widest glow spans the frame
+constexpr int kMaxLevels = 6;  // 1280 x 720 -> 320 x 180 ... 10 x 6: the widest glow spans the frame
 constexpr int kMinSize = 4;    // no level narrower than this
 
 GLuint make_fbo(const GlTable& gl, GLuint texture, int w, int h) {
@@ -29,10 +29,13 @@ void BloomPass::create(const GlTable& gl, int width, int height) {
   gl_ = &gl;
   down_ = Program(gl, "bloom downsample", glsl_source({kFullscreenVs}), glsl_source({kBloomDownFs}));
   up_ = Program(gl, "bloom upsample", glsl_source({kFullscreenVs}), glsl_source({kBloomUpFs}));
-  int w = width, h = height;
+  // The first level is a quarter of the frame's size (rounded up), the others halve it.
+  int w = (width + 3) / 4, h = (height + 3) / 4;
   for (int i = 0; i < kMaxLevels; ++i) {
-    w = (w + 1) / 2;
-    h = (h + 1) / 2;
+    if (i > 0) {
+      w = (w + 1) / 2;
+      h = (h + 1) / 2;
+    }
     if (std::min(w, h) < kMinSize && !levels_.empty()) break;
     Level level;
     level.width = w;
@@ -74,8 +77,8 @@ void BloomPass::draw(GLuint frame, float radius, GLuint empty_vao) {
   for (std::size_t i = 0; i < levels_.size(); ++i) {
     const Level& l = levels_[i];
     if (i == 0) {
-      src_w = 2 * l.width;  // the frame's texel: exact for even sizes, within a texel for odd
-      src_h = 2 * l.height;
+      src_w = 4 * l.width;  // the frame's texel (unused by the box)
+      src_h = 4 * l.height;
     }
     gl.BindFramebuffer(GL_FRAMEBUFFER, l.down_fbo);
     gl.Viewport(0, 0, l.width, l.height);
@@ -93,6 +96,8 @@ void BloomPass::draw(GLuint frame, float radius, GLuint empty_vao) {
   up_.set("u_coarse", 0);
   up_.set("u_down", 1);
   up_.set("u_radius", radius);
+  // Every level, the first included, takes the coarser one through the tent: the post pass
+  // magnifies the first four times, so it must be smooth.
   for (int i = int(levels_.size()) - 2; i >= 0; --i) {
     const Level& l = levels_[std::size_t(i)];
     const Level& coarse = levels_[std::size_t(i) + 1];
@@ -106,7 +111,6 @@ void BloomPass::draw(GLuint frame, float radius, GLuint empty_vao) {
     gl.BindTexture(GL_TEXTURE_2D, coarse_tex);
     up_.set("u_coarse_texel", 1.f / float(coarse.width), 1.f / float(coarse.height));
     up_.set("u_dst_size", float(l.width), float(l.height));
-    up_.set("u_tent", i == 0 ? 0 : 1);
     gl.DrawArrays(GL_TRIANGLES, 0, 3);
   }
   gl.BindVertexArray(0);

@@ -5,23 +5,28 @@ namespace simreel::render::detail {
 
 /// 13-tap downsample (Jimenez 2014, slide 153): five overlapping 2 x 2 boxes, the centre one
 /// weighted 0.5 and the four corner ones 0.125 each; the weights sum to 1.
-/// The first level (from the full frame, most of the pixels) takes the 2 x 2 box instead: a
-/// fraction of the cost, and the levels below blur it anyway.
+/// The first level (a quarter of the frame's size) takes the frame's 4 x 4 box instead, 16
+/// exact fetches: no half-size level to write and add back up (on llvmpipe that level's passes
+/// were half the chain's cost), and at the default intensity (0.04) the finest glow it held
+/// cannot be told from its 4 x 4 blur.
 inline constexpr char kBloomDownFs[] = R"(
 uniform sampler2D u_src;
 uniform vec2 u_src_texel;   // 1 / source size
 uniform vec2 u_dst_size;
-uniform int u_box;          // 1: the 4 x 4 box
+uniform int u_box;          // 1: the frame's 4 x 4 box
 out vec4 o_color;
 void main() {
   vec2 uv = gl_FragCoord.xy / u_dst_size;
   vec2 t = u_src_texel;
   if (u_box != 0) {
     // Exact integer fetches: llvmpipe filters half floats slowly, and the frame is half float.
-    ivec2 p = 2 * ivec2(gl_FragCoord.xy);
+    ivec2 p = 4 * ivec2(gl_FragCoord.xy);
     ivec2 m = textureSize(u_src, 0) - 1;
-    o_color = 0.25 * (texelFetch(u_src, p, 0) + texelFetch(u_src, min(p + ivec2(1, 0), m), 0) +
-                      texelFetch(u_src, min(p + ivec2(0, 1), m), 0) + texelFetch(u_src, min(p + ivec2(1, 1), m), 0));
+    vec4 sum = vec4(0.0);
+    for (int y = 0; y < 4; ++y) {
+      for (int x = 0; x < 4; ++x) sum += texelFetch(u_src, min(p + ivec2(x, y), m), 0);
+    }
+    o_color = sum * 0.0625;
     return;
   }
   vec4 a = texture(u_src, uv + t * vec2(-2.0, 2.0));
@@ -42,23 +47,17 @@ void main() {
 )";
 
 /// Upsample with a 3 x 3 tent (weights 1 2 1 / 2 4 2 / 1 2 1 over 16) of the coarser level,
-/// mixed with this level's downsample: (1 - radius) down + radius tent(coarser). Into the
-/// largest level (u_tent 0) one bilinear tap does: what it reads is already smooth.
+/// mixed with this level's downsample: (1 - radius) down + radius tent(coarser).
 inline constexpr char kBloomUpFs[] = R"(
 uniform sampler2D u_coarse;
 uniform sampler2D u_down;
 uniform vec2 u_coarse_texel;  // 1 / coarser level size
 uniform vec2 u_dst_size;
 uniform float u_radius;
-uniform int u_tent;
 out vec4 o_color;
 void main() {
   vec2 uv = gl_FragCoord.xy / u_dst_size;
   vec2 t = u_coarse_texel;
-  if (u_tent == 0) {
-    o_color = mix(texelFetch(u_down, ivec2(gl_FragCoord.xy), 0), texture(u_coarse, uv), u_radius);
-    return;
-  }
   vec4 s = texture(u_coarse, uv) * 4.0;
   s += (texture(u_coarse, uv + vec2(t.x, 0.0)) + texture(u_coarse, uv - vec2(t.x, 0.0)) +
         texture(u_coarse, uv + vec2(0.0, t.y)) + texture(u_coarse, uv - vec2(0.0, t.y))) * 2.0;

@@ -31,11 +31,24 @@ struct ShadowView {
   GLuint texture = 0;  ///< the depth map (compare mode), bound on unit 1 by the renderer
 };
 
-/// Particles uploaded as indexed quads (four vertices each, ParticlePass): the vertex array
-/// and the number of particles.
+/// Sphere sprites uploaded by ParticlePass: the vertex array, the number of particles and the
+/// vertices per particle (3: one triangle each, drawn with glDrawArrays; 4: indexed quads, the
+/// index buffer bound in the vertex array; kSpriteCornerGlsl).
 struct QuadBatch {
   GLuint vao = 0;
   std::size_t count = 0;
+  std::size_t vertices = 3;
+  /// Sets kSpriteCornerGlsl's uniform of the bound program `p` and draws the batch.
+  template <class ProgramT>
+  void draw(const GlTable& gl, const ProgramT& p) const {
+    p.set("u_sprite_vertices", int(vertices));
+    gl.BindVertexArray(vao);
+    if (vertices == 4) {
+      gl.DrawElements(GL_TRIANGLES, GLsizei(6 * count), GL_UNSIGNED_INT, nullptr);
+    } else {
+      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(vertices * count));
+    }
+  }
 };
 
 }  // namespace simreel::render::detail

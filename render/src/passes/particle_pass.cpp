@@ -3,7 +3,9 @@
 
 #include <initializer_list>
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <numbers>
 #include <string>
 
 #include "common_glsl.hpp"
@@ -61,9 +63,10 @@ std::vector<std::uint8_t> make_noise() {
 
 void ParticlePass::create(const GlTable& gl) {
   gl_ = &gl;
-  // Particles are drawn as indexed quads, four vertices per particle each carrying the
-  // particle's data, not instanced: llvmpipe runs an instanced draw as one small draw per
-  // instance, several times slower for 100k sprites. The index buffer is shared.
+  // Particles are not instanced (llvmpipe runs an instanced draw as one small draw per
+  // instance, several times slower for 100k sprites): every vertex carries its particle's data.
+  // Sphere sprites are one triangle each (kSpriteCornerGlsl), streaks and trails indexed quads
+  // sharing one index buffer.
   gl.GenBuffers(1, &quad_ebo_);
   streaks_.floats = kStreakFloats;
   trails_.floats = kStreakFloats;
@@ -118,7 +121,27 @@ void ParticlePass::destroy() noexcept {
   }
 }
 
-void ParticlePass::gather(const DrawableTable& table, const Camera& camera) {
+std::size_t ParticlePass::sprite_vertices(const Stream& stream, const Camera& camera, float pixels_per_unit) {
+  // A triangle saves a triangle's set-up per sprite and costs 30 % more fragments (3 sqrt(3)
+  // against 4 radii squared): the mean squared radius on screen (pixels^2) decides, so a few
+  // big puffs among many sparks (the explosion's fireball) count by their area. At the
+  // 100k-sprite benchmark's 1-2 px one triangle costs about 0.7 of a quad, at ~30 px smoke puffs
+  // about 1.2 (bench/render); the two break even near 4 px.
+  constexpr double kQuadFromPx2 = 16.0;
+  const std::size_t n = stream.staging.size() / stream.floats;
+  if (n == 0) return 3;
+  const Vec3f forward = (camera.target - camera.position).normalized();
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* c = &stream.staging[i * stream.floats];
+    const float depth = (Vec3f(c[0], c[1], c[2]) - camera.position).dot(forward);
+    const double px = double(c[3]) / double(std::max(depth, camera.near_m)) * double(pixels_per_unit);
+    sum += px * px;
+  }
+  return sum / double(n) >= kQuadFromPx2 ? 4 : 3;
+}
+
+void ParticlePass::gather(const DrawableTable& table, const Camera& camera, int height_px) {
   // Soft particles of every batch are merged and sorted back to front, so two overlapping
   // batches blend correctly; additive ones, droplets (opaque) and thin streaks need no order.
   soft_.staging.clear();  // unsorted; upload() takes the particles in sorted order
@@ -150,6 +173,11 @@ void ParticlePass::gather(const DrawableTable& table, const Camera& camera) {
     }
     order = sort_.sort(sort_depth_).data();
   }
+  const float pixels_per_unit =
+      0.5f * float(height_px) / std::tan(0.5f * camera.fov_deg * std::numbers::pi_v<float> / 180.f);
+  for (Stream* stream : {&soft_, &additive_, &droplets_}) {
+    stream->vertices = sprite_vertices(*stream, camera, pixels_per_unit);
+  }
   upload(soft_, order);
   for (Stream* stream : {&additive_, &droplets_, &streaks_, &trails_}) upload(*stream);
 }
@@ -158,7 +186,8 @@ void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
   const GlTable& gl = *gl_;
   stream.count = stream.staging.size() / stream.floats;
   if (stream.count == 0) return;
-  if (stream.count > quad_capacity_) {
+  const bool quads = stream.vertices == 4;
+  if (quads && stream.count > quad_capacity_) {
     quad_capacity_ = std::max(stream.count, quad_capacity_ + quad_capacity_ / 2);
     std::vector<GLuint> indices(6 * quad_capacity_);
     for (std::size_t i = 0; i < quad_capacity_; ++i) {
@@ -170,20 +199,21 @@ void ParticlePass::upload(Stream& stream, const std::uint32_t* order) {
     gl.BufferData(GL_COPY_WRITE_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)), indices.data(),
                   GL_STATIC_DRAW);
   }
-  // Four copies of each particle's data, one per corner (the shader derives the corner from
-  // gl_VertexID).
-  const std::size_t f = stream.floats;
-  stream.expanded.resize(4 * stream.staging.size());
+  // A copy of each particle's data per corner (the shader derives the corner from gl_VertexID).
+  const std::size_t f = stream.floats, v = stream.vertices;
+  stream.expanded.resize(v * stream.staging.size());
   float* dst = stream.expanded.data();
   for (std::size_t i = 0; i < stream.count; ++i) {
     const float* src = &stream.staging[(order != nullptr ? order[i] : i) * f];
-    for (int k = 0; k < 4; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
+    for (std::size_t k = 0; k < v; ++k, dst += f) std::memcpy(dst, src, f * sizeof(float));
   }
   gl.BindBuffer(GL_ARRAY_BUFFER, stream.instances);
   const GLsizeiptr bytes = GLsizeiptr(stream.expanded.size() * sizeof(float));
-  if (stream.count > stream.capacity) {
-    stream.capacity = std::max(stream.count, stream.capacity + stream.capacity / 2);
-    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(4 * stream.capacity * f * sizeof(float)), nullptr,
+  // Counted in vertices: a stream that switches from triangles to quads needs more room for the
+  // same particles.
+  if (v * stream.count > stream.capacity) {
+    stream.capacity = std::max(v * stream.count, stream.capacity + stream.capacity / 2);
+    gl.BufferData(GL_ARRAY_BUFFER, GLsizeiptr(stream.capacity * f * sizeof(float)), nullptr,
                   GL_STREAM_DRAW);
   }
   gl.BufferSubData(GL_ARRAY_BUFFER, 0, bytes, stream.expanded.data());
@@ -246,7 +276,7 @@ const Program& ParticlePass::program(Style style, const RenderSettings& settings
     const char* additive = style == trail_style ? "#define ADDITIVE 1\n" : "#define ADDITIVE 0\n";
     const char* spark = style == additive_style || style == flame_style ? "#define SPARK 1\n" : "#define SPARK 0\n";
     const std::string vs =
-        glsl_source({taps, textured, additive, spark, kShadowGlsl, streak ? kStreakVs : kParticleVs});
+        glsl_source({taps, textured, additive, spark, kShadowGlsl, kSpriteCornerGlsl, streak ? kStreakVs : kParticleVs});
     // Sprites stand for spheres and take their depth; a streak is a flat capsule.
     const std::string fs =
         streak ? glsl_source({taps, kAmbientGlsl, kSceneDepthGlsl, style == trail_style ? kTrailFs : kStreakFs})
@@ -264,8 +294,7 @@ void ParticlePass::draw_droplets(const FrameView& frame, const ShadowView& shado
   set_uniforms(p, frame, shadow);
   p.set("u_opaque", 1);
   if (samples > 0) gl.Enable(GL_SAMPLE_ALPHA_TO_COVERAGE);
-  gl.BindVertexArray(droplets_.vao);
-  gl.DrawElements(GL_TRIANGLES, GLsizei(6 * droplets_.count), GL_UNSIGNED_INT, nullptr);
+  batch(droplets_).draw(gl, p);
   gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
 }
 
@@ -296,8 +325,7 @@ void ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow
     } else {
       gl.BlendFunc(GL_ONE, GL_ONE);
     }
-    gl.BindVertexArray(layer.stream->vao);
-    gl.DrawElements(GL_TRIANGLES, GLsizei(6 * layer.stream->count), GL_UNSIGNED_INT, nullptr);
+    batch(*layer.stream).draw(gl, *layer.program);
   }
   gl.DepthMask(GL_TRUE);
   gl.Disable(GL_BLEND);

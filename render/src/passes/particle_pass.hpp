@@ -1,7 +1,7 @@
 #pragma once
 // Private: the particle passes. Every batch's particles are merged by style into one stream
 // each (soft ones sorted back to front across batches, so overlapping batches blend correctly)
-// and drawn as indexed quads: droplets with the opaque geometry, then soft, streak and additive
+// and drawn as one triangle per sphere sprite (indexed quads for streaks): droplets with the opaque geometry, then soft, streak and additive
 // sprites (dots and trails) blended over it, faded against a copy of the opaque depth. Smoke and
 // flame textures read one seeded, tileable noise texture made in create().
 
@@ -19,16 +19,17 @@ namespace simreel::render::detail {
 
 class ParticlePass {
  public:
-  /// Creates the shared quad index buffer and one vertex array per stream.
+  /// Creates the streaks' quad index buffer and one vertex array per stream.
   void create(const GlTable& gl);
   void destroy() noexcept;
 
   /// Merges the particle drawables of `table` by style (in key order), sorts the soft ones back
-  /// to front as seen from `camera` and uploads all five streams.
-  void gather(const DrawableTable& table, const Camera& camera);
+  /// to front as seen from `camera` and uploads all five streams (`height_px`: the frame's
+  /// height, for the sprites' size on screen).
+  void gather(const DrawableTable& table, const Camera& camera, int height_px);
   /// The uploaded soft and droplet particles (the shadow pass draws them as casters).
-  [[nodiscard]] QuadBatch soft() const { return {soft_.vao, soft_.count}; }
-  [[nodiscard]] QuadBatch droplets() const { return {droplets_.vao, droplets_.count}; }
+  [[nodiscard]] QuadBatch soft() const { return batch(soft_); }
+  [[nodiscard]] QuadBatch droplets() const { return batch(droplets_); }
 
   /// Draws the droplets (opaque lit spheres) into the bound scene framebuffer; `samples` > 0
   /// turns on alpha-to-coverage.
@@ -39,14 +40,16 @@ class ParticlePass {
                     bool opaque_drawables);
 
  private:
-  /// One particle stream: a growing vertex buffer of quads (four vertices per particle).
+  /// One particle stream: a growing vertex buffer, `vertices` per particle (an indexed quad for
+  /// streaks and trails; sphere sprites choose per frame, see sprite_vertices()).
   struct Stream {
     std::size_t floats = kInstanceFloats;  // per instance
+    std::size_t vertices = 4;
     GLuint vao = 0;
     GLuint instances = 0;
-    std::size_t capacity = 0;     // particles the GL buffer holds
+    std::size_t capacity = 0;     // vertices the GL buffer holds
     std::vector<float> staging;   // per particle
-    std::vector<float> expanded;  // per vertex: four copies of each particle
+    std::vector<float> expanded;  // per vertex: `vertices` copies of each particle
     std::size_t count = 0;
   };
   // Particle programs by style and by sun taps per vertex (0: no shadow map this frame, 1, or
@@ -61,6 +64,10 @@ class ParticlePass {
   };
 
   void upload(Stream& stream, const std::uint32_t* order = nullptr);
+  /// 3 (one triangle each) when the stream's sprites are small on screen, 4 (quads) when big.
+  [[nodiscard]] static std::size_t sprite_vertices(const Stream& stream, const Camera& camera,
+                                                   float pixels_per_unit);
+  [[nodiscard]] static QuadBatch batch(const Stream& s) { return {s.vao, s.count, s.vertices}; }
   const Program& program(Style style, const RenderSettings& settings, const ShadowView& shadow);
   void set_uniforms(const Program& p, const FrameView& frame, const ShadowView& shadow) const;
 

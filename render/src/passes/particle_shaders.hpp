@@ -33,9 +33,7 @@ flat out vec4 v_center_view;  // sprite centre, view frame (m), and drawn radius
 flat out vec4 v_spark;
 #endif
 void main() {
-  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
-  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
-  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
+  vec2 a_corner = sprite_corner();  // the triangle around the unit disc (kSpriteCornerGlsl)
   vec4 c = u_view * vec4(a_center_radius.xyz, 1.0);
   float depth = max(-c.z, 1e-4);
   // A sprite under a pixel would flicker in and out of the sample grid: draw it one pixel
@@ -222,7 +220,7 @@ out float v_distance;            // view distance (m)
 flat out float v_radius;
 void main() {
   // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
-  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
+  // ParticlePass::upload): (-1, -1), (1, -1), (-1, 1), (1, 1).
   vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
   vec3 head = (u_view * vec4(a_center_radius.xyz, 1.0)).xyz;
   vec3 tail = head + mat3(u_view) * a_trail;

@@ -36,7 +36,7 @@ void main() {
 inline constexpr char kPostFs[] = R"(
 uniform sampler2D u_hdr;
 uniform sampler2D u_tone_lut;  // kToneLutFs
-uniform sampler2D u_bloom;     // BloomPass::result(), half size, linear filtering
+uniform sampler2D u_bloom;     // BloomPass::result(), quarter size, linear filtering
 uniform float u_bloom_intensity;
 uniform vec2 u_size;           // the frame (pixels)
 uniform int u_transparent;     // Background::transparent: keep alpha, un-premultiply

@@ -4,6 +4,7 @@
 #include <initializer_list>
 #include <algorithm>
 
+#include "common_glsl.hpp"
 #include "gl/targets.hpp"
 #include "shadow_shaders.hpp"
 #include "transforms.hpp"
@@ -13,7 +14,7 @@ namespace simreel::render::detail {
 void ShadowPass::create(const GlTable& gl, const RenderSettings& settings) {
   gl_ = &gl;
   depth_program_ = Program(gl, "shadow depth", glsl_source({kDepthVs}), glsl_source({kDepthFs}));
-  particle_depth_program_ = Program(gl, "particle shadow depth", glsl_source({kParticleDepthVs}),
+  particle_depth_program_ = Program(gl, "particle shadow depth", glsl_source({kSpriteCornerGlsl, kParticleDepthVs}),
                                     glsl_source({kParticleDepthFs}));
   gl.GenTextures(1, &texture_);
   gl.BindTexture(GL_TEXTURE_2D, texture_);
@@ -125,8 +126,7 @@ const ShadowView& ShadowPass::draw(const FrameView& frame, const DrawableTable& 
     for (const QuadBatch* batch : {&soft, &droplets}) {
       if (batch->count == 0) continue;
       p.set("u_opaque", batch == &droplets ? 1 : 0);
-      gl.BindVertexArray(batch->vao);
-      gl.DrawElements(GL_TRIANGLES, GLsizei(6 * batch->count), GL_UNSIGNED_INT, nullptr);
+      batch->draw(gl, p);
     }
   }
   gl.Disable(GL_POLYGON_OFFSET_FILL);

@@ -79,13 +79,11 @@ out vec2 v_corner;
 flat out float v_alpha;
 flat out float v_seed;
 void main() {
-  // Quad corner in [-1, 1]^2 from the vertex's place in its particle's four (see
-  // upload_stream): (-1, -1), (1, -1), (-1, 1), (1, 1).
-  vec2 a_corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
+  vec2 a_corner = sprite_corner();  // the triangle around the unit disc (kSpriteCornerGlsl)
   vec3 w = a_center_radius.xyz + (u_light_right * a_corner.x + u_light_up * a_corner.y) * a_center_radius.w;
   v_corner = a_corner;
   v_alpha = u_opaque != 0 ? 1.0 : min(a_color.a, 0.999);
-  v_seed = float((gl_VertexID >> 2) & 15);
+  v_seed = float((gl_VertexID / u_sprite_vertices) & 15);  // the particle's index
   gl_Position = u_light_view_proj * vec4(w, 1.0);
 }
 )";
