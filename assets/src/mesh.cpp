@@ -98,7 +98,11 @@ class AddressSpaceBudget {
 
 }  // namespace
 
-TriangleMesh load_mesh(const std::filesystem::path& path) {
+/// Checks the file and reads it with `importer` (the steps of load_mesh; with `keep_groups`, the
+/// node hierarchy is kept so meshes are not joined by material). Returns the scene.
+/// @throws AssetError as load_mesh.
+static const aiScene* import_scene(Assimp::Importer& importer, const std::filesystem::path& path,
+                                   bool keep_groups) {
   const std::string file = path.string();
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
@@ -110,7 +114,7 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
   if (ec || bytes > kMaxMeshFileBytes)
     throw AssetError(file + ": cannot import mesh: " + (ec ? ec.message() : std::to_string(bytes) + " bytes") +
                      ", expected at most " + std::to_string(kMaxMeshFileBytes) + " (the mesh file size limit)");
-  Assimp::Importer importer;
+  if (keep_groups) importer.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
   // Points and lines are removed rather than imported as degenerate triangles.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // ValidateDataStructure first: a malformed file (assimp's own corpus has some) becomes an error
@@ -131,6 +135,13 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
     if (reason.empty()) reason = "unknown assimp error";
     throw AssetError(file + ": cannot import mesh: " + reason);
   }
+  return scene;
+}
+
+TriangleMesh load_mesh(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  Assimp::Importer importer;
+  const aiScene* scene = import_scene(importer, path, false);
   const bool y_up = is_y_up(path, *scene);
   auto to_z_up = [y_up](const aiVector3D& p) {
     return y_up ? Eigen::Vector3f(p.x, -p.z, p.y) : Eigen::Vector3f(p.x, p.y, p.z);
@@ -172,6 +183,35 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
   }
   if (mesh.triangles.empty()) throw AssetError(file + ": cannot import mesh: the file has no triangles");
   return mesh;
+}
+
+std::vector<MeshGroup> load_mesh_groups(const std::filesystem::path& path) {
+  Assimp::Importer importer;
+  const aiScene* scene = import_scene(importer, path, true);
+  const bool y_up = is_y_up(path, *scene);
+  std::vector<MeshGroup> groups;
+  const auto add = [&](const std::string& name, const aiMesh& am) {
+    if (name.empty() || !(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) return;
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const MeshGroup& g) { return g.name == name; });
+    if (it == groups.end()) it = groups.insert(groups.end(), MeshGroup{name, {}});
+    for (unsigned v = 0; v < am.mNumVertices; ++v) {
+      const aiVector3D& p = am.mVertices[v];
+      it->positions.push_back(y_up ? Eigen::Vector3f(p.x, -p.z, p.y) : Eigen::Vector3f(p.x, p.y, p.z));
+    }
+  };
+  // Node names (OBJ "o"/"g", glTF nodes) and mesh names (glTF meshes), depth first in file order.
+  std::vector<const aiNode*> stack{scene->mRootNode};
+  while (!stack.empty()) {
+    const aiNode* node = stack.back();
+    stack.pop_back();
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+      const aiMesh& am = *scene->mMeshes[node->mMeshes[k]];
+      if (node != scene->mRootNode) add(node->mName.C_Str(), am);
+      if (std::string(am.mName.C_Str()) != node->mName.C_Str()) add(am.mName.C_Str(), am);
+    }
+    for (unsigned c = node->mNumChildren; c-- > 0;) stack.push_back(node->mChildren[c]);
+  }
+  return groups;
 }
 
 }  // namespace simreel::assets

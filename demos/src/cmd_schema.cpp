@@ -58,7 +58,7 @@ const char* kProbe = R"({
                    {"type": "blast"}],
   "attractor_springs": [{"path": {"keys": [{"time": 0}]}}],
   "cloths": [{"pins": [{"path": {"keys": [{"time": 0}]}}], "wind": {}, "aero": {}},
-             {"mesh": "probe.obj", "scale": 1, "pins": [{"vertex": 0}, {"box_min": [0, 0, 0], "box_max": [0, 0, 0]}]},
+             {"mesh": "probe.obj", "scale": 1, "pins": [{"vertex": 0}, {"box_min": [0, 0, 0], "box_max": [0, 0, 0]}, {"group": "probe"}]},
              {"mesh": "probe.obj", "scale": [1, 1, 1]},
              {"pins": "top_edge", "areal_density": 1}]
 })";

@@ -23,15 +23,18 @@ sim::SpringParams spring_params(ObjectReader& r, const std::string& key, sim::Sp
 
 /// "mesh": a triangle mesh file (relative to the scene file) as the cloth (issue 16). Vertices at
 /// the same place are welded (a file's UV or normal seams would otherwise cut the cloth); "scale"
-/// (one number or [sx, sy, sz]) multiplies them. Returns the mesh area (m²) for "areal_density".
-double cloth_mesh(ObjectReader& r, sim::ClothMesh& mesh) {
-  const std::array<double, 3> scale = mesh_scale(r);
+/// (one number or [sx, sy, sz]) multiplies them. Returns the mesh area (m²) for "areal_density";
+/// `file` and `scale` get the mesh file and the scale (for pins by group).
+double cloth_mesh(ObjectReader& r, sim::ClothMesh& mesh, std::filesystem::path& file,
+                  std::array<double, 3>& scale) {
+  scale = mesh_scale(r);
   const std::string name = r.string("mesh", "");
   if (name.empty()) {
     r.error_at(r.pointer("mesh"), "expected a mesh file name (OBJ, PLY, glTF, ...)");
     return 0.0;
   }
   const std::filesystem::path path = std::filesystem::path(r.file()).parent_path() / name;
+  file = path;
   assets::TriangleMesh m;
   try {
     m = assets::load_mesh(path);
@@ -69,14 +72,19 @@ double cloth_mesh(ObjectReader& r, sim::ClothMesh& mesh) {
   return area;
 }
 
-/// Pins of a mesh cloth: {"vertex": i} or {"box_min": [x, y, z], "box_max": [x, y, z]} (every
-/// vertex inside the box, mesh coordinates after "scale"), each with an optional "path".
-void mesh_pins(ObjectReader& r, const json& pins, sim::ClothDef& d) {
+/// Pins of a mesh cloth: {"vertex": i}, {"box_min": [x, y, z], "box_max": [x, y, z]} (every
+/// vertex inside the box, mesh coordinates after "scale") or {"group": name} (every vertex of the
+/// faces of a named part of the file: an OBJ "g"/"o", a glTF node or mesh; assets::MeshGroup),
+/// each with an optional "path".
+void mesh_pins(ObjectReader& r, const json& pins, sim::ClothDef& d, const std::filesystem::path& file,
+               const std::array<double, 3>& scale) {
   const std::size_t n = d.mesh.vertices.size();
+  std::vector<assets::MeshGroup> groups;
+  bool groups_read = false;
   for (std::size_t i = 0; i < pins.size(); ++i) {
     const std::string pp = r.pointer("pins") + "/" + std::to_string(i);
     if (!pins[i].is_object()) {
-      r.error_at(pp, "expected an object {\"vertex\"} or {\"box_min\", \"box_max\"}, found " + describe(pins[i]));
+      r.error_at(pp, "expected an object {\"vertex\"}, {\"group\"} or {\"box_min\", \"box_max\"}, found " + describe(pins[i]));
       continue;
     }
     ObjectReader pr(pins[i], pp, r.file(), r.errors());
@@ -96,8 +104,39 @@ void mesh_pins(ObjectReader& r, const json& pins, sim::ClothDef& d) {
         ++found;
       }
       if (found == 0 && n > 0) pr.error_at(pp, "expected the box to hold some vertex of the mesh, found none");
+    } else if (pr.has("group")) {
+      const std::string name = pr.string("group", "");
+      if (!groups_read) {
+        groups_read = true;
+        try {
+          groups = assets::load_mesh_groups(file);
+        } catch (const assets::AssetError& e) {
+          pr.error_at(pr.pointer("group"), e.what());
+        }
+      }
+      const auto g = std::find_if(groups.begin(), groups.end(), [&](const auto& x) { return x.name == name; });
+      if (g == groups.end()) {
+        std::string names;
+        for (const auto& x : groups) names += (names.empty() ? "\"" : ", \"") + x.name + "\"";
+        pr.error_at(pr.pointer("group"), "expected a group of " + file.filename().string() + " (" +
+                                             (names.empty() ? std::string("it has none") : "it has " + names) +
+                                             "), found \"" + name + "\"");
+      } else {
+        // The cloth's vertices are the file's welded by position, scaled (cloth_mesh): the same
+        // arithmetic on a group's positions finds them exactly.
+        std::map<std::array<double, 3>, std::size_t> at;
+        for (std::size_t v = 0; v < n; ++v)
+          at.emplace(std::array<double, 3>{d.mesh.vertices[v].x(), d.mesh.vertices[v].y(), d.mesh.vertices[v].z()}, v);
+        std::vector<std::uint8_t> taken(n, 0);
+        for (const auto& p : g->positions) {
+          const auto it = at.find({double(p.x()) * scale[0], double(p.y()) * scale[1], double(p.z()) * scale[2]});
+          if (it == at.end() || taken[it->second]) continue;
+          taken[it->second] = 1;
+          d.pins.push_back({0, it->second, path});
+        }
+      }
     } else {
-      pr.error_at(pp, "expected \"vertex\" or both \"box_min\" and \"box_max\"");
+      pr.error_at(pp, "expected \"vertex\", \"group\" or both \"box_min\" and \"box_max\"");
     }
     pr.finish();
   }
@@ -112,10 +151,12 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   ObjectReader r(j, ptr, file, errors);
   d.name = r.string("name", "cloth" + std::to_string(index));
   double mesh_area = 0.0;
+  std::filesystem::path mesh_file;
+  std::array<double, 3> scale{1, 1, 1};
   if (r.has("mesh")) {
     for (const char* key : {"rows", "columns", "size_m"})
       if (r.has(key)) r.error_at(r.pointer(key), std::string("expected either \"mesh\" or \"") + key + "\", not both");
-    mesh_area = cloth_mesh(r, d.mesh);
+    mesh_area = cloth_mesh(r, d.mesh, mesh_file, scale);
   }
   if (r.has("mesh")) {  // one row of vertices (sim::ClothDef::mesh)
     d.rows = 1;
@@ -138,9 +179,9 @@ ClothScene cloth(const json& j, const std::string& ptr, const std::string& file,
   d.transform.translation = to_vec(r.vec3("position", {0, 0, 1}));
   d.transform.rotation = rotation_from_deg(r.vec3("rotation_deg", {0, 0, 0}));
   if (const json* pins = r.get("pins"); pins && r.has("mesh")) {
-    if (pins->is_array()) mesh_pins(r, *pins, d);
+    if (pins->is_array()) mesh_pins(r, *pins, d, mesh_file, scale);
     else if (!(pins->is_string() && pins->get<std::string>() == "none"))
-      r.error("pins", "for a mesh cloth an array of {\"vertex\"} or {\"box_min\", \"box_max\"} or \"none\"", *pins);
+      r.error("pins", "for a mesh cloth an array of {\"vertex\"}, {\"group\"} or {\"box_min\", \"box_max\"} or \"none\"", *pins);
   } else if (pins) {
     if (pins->is_string()) {
       const std::string preset = r.choice("pins", "", {"top_edge", "two_corners", "left_edge", "none"});

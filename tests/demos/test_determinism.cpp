@@ -134,6 +134,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"ragdolls_stairs", 0x261b76b5e3ca9235ull},
       {"ring_toss", 0x1d842fa4b7666922ull},  // convex decomposition (App. F); 1, 2 and 4 threads agreed
       {"rope_bridge", 0x0f4da7dafece3b50ull},
+      {"sheet_ball", 0xcc19d9ef985c276dull},  // issue 16; 1, 2 and 4 threads agreed
       {"shells", 0x7d0ae63ec5578a8bull},
       {"smoke", 0xc05cc11e2bb86b08ull},
       {"sprinkler", 0x814394ec7ebc467bull},

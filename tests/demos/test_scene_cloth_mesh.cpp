@@ -24,7 +24,42 @@ const char* kFlagObj =
     "vt 0 0\nvt 0.5 0\nvt 0 1\nvt 0.5 1\nvt 0.6 0\nvt 1 0\nvt 0.6 1\nvt 1 1\n"
     "f 1/1 2/2 4/4\nf 1/1 4/4 3/3\nf 5/5 6/6 8/8\nf 5/5 8/8 7/7\n";
 
+/// A 1 m x 1 m flag in two OBJ groups: "hoist", the 10 cm strip at x <= 0.1, and "fly", the rest.
+const char* kGroupedFlagObj =
+    "v 0 0 0\nv 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0.1 1 0\nv 1 1 0\n"
+    "g hoist\nf 1 2 5\nf 1 5 4\ng fly\nf 2 3 6\nf 2 6 5\n";
+
 }  // namespace
+
+// Pins by group name (issue 16): every vertex of the named OBJ group's faces is pinned, once,
+// and the others are free: the flag, lying level, keeps its hoist strip where it was and its fly
+// end swings down about it. A name the file lacks is refused naming the groups it has.
+TEST(SceneClothMesh, PinsByGroupNameHoldThatGroupsVertices) {
+  TempDir d;
+  write_file(d / "flag.obj", kGroupedFlagObj);
+  write_file(d / "s.json", R"({"cloths":[{"mesh":"flag.obj","scale":2,"position":[0,0,2],
+      "pins":[{"group":"hoist"}]}]})");
+  const auto s = load_scene(d / "s.json");
+  const sim::ClothDef& c = s.cloths.at(0).def;
+  ASSERT_EQ(c.mesh.vertices.size(), 6u);
+  ASSERT_EQ(c.pins.size(), 4u);  // x = 0 and x = 0.1 (m in the file), top and bottom
+  for (const auto& p : c.pins) EXPECT_LE(c.mesh.vertices[p.column].x(), 0.2 + 1e-6);  // after scale 2
+  auto sw = simreel::app::build_world(s);
+  for (int f = 0; f < 30; ++f) sw.world.advance(1.0 / 30);
+  const sim::ClothView v = sw.world.cloth(sw.cloths.at(0));
+  for (const auto& p : c.pins) EXPECT_EQ(v.positions[3 * p.column + 2], 2.0f);  // where they were
+  std::size_t corner = 0;  // the fly end's bottom corner, (2, 0) m in the cloth's frame
+  for (std::size_t k = 0; k < 6; ++k)
+    if (c.mesh.vertices[k].x() == 2.0 && c.mesh.vertices[k].y() == 0.0) corner = k;
+  EXPECT_LT(v.positions[3 * corner + 2], 1.0f);  // it swung down (it started at z = 2)
+
+  write_file(d / "bad.json", R"({"cloths":[{"mesh":"flag.obj","pins":[{"group":"top"}]}]})");
+  const auto r = run_simreel("validate " + (d / "bad.json").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find((d / "bad.json").string() +
+                       ": /cloths/0/pins/0/group: expected a group of flag.obj (it has \"hoist\", \"fly\"), found \"top\""),
+            std::string::npos) << r.err;
+}
 
 TEST(SceneClothMesh, MeshFileWeldedPinnedByBoxAndWeighedByArea) {
   TempDir d;

@@ -171,6 +171,8 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
   S.t_next.assign(n, 1.0);
   S.changed_in.assign(n, -1);
   S.hit.assign(n, 0);
+  S.held.assign(n, 0);
+  S.pushed_normal.assign(n, Vec3::Zero());
   S.fpos.assign(3 * n, 0.0f);
   S.fnor.assign(3 * n, 0.0f);
   S.fvel.assign(3 * n, 0.0f);
@@ -186,6 +188,7 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
   State& S = *s_;
   S.threads = std::max(1, threads);
   const double h = t1 - t0;
+  S.step_h = h;
   S.x_start = S.x;
   S.forces(t0);
   switch (S.def.integrator) {
@@ -197,7 +200,7 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
   if (collide) {
     std::fill(S.hit.begin(), S.hit.end(), std::uint8_t(0));
     detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
-                          S.def.friction, S.hit, S.vertex_mass, impulses);
+                          S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal);
   }
   S.strain_passes = 0;
   S.max_deformation_pass();
@@ -206,9 +209,10 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     // Triangles and edges against collider corners, edges and axes (cloth_contacts.hpp); a
     // correction is followed by the vertex pass and the maximum-deformation pass again, so the
     // step ends within the strain limit and clear of the colliders when both can hold (a few
-    // rounds). When they cannot, the strain limit has the last word against static colliders
-    // and dynamic bodies, and the collision against a kinematic body (pushing a pinned sheet):
-    // nothing passes through it, the sheet stretches. (A dynamic body does not feel the strain
+    // rounds). A vertex a kinematic body pushed is held by the pass (max_deformation.cpp): the
+    // sheet around it follows, and when the sheet cannot (pinned elsewhere) the body wins and
+    // the sheet stretches; nothing passes through it. Against static colliders and dynamic
+    // bodies the strain limit has the last word. (A dynamic body does not feel the strain
     // limit's tension: letting it win would drag the sheet along without end, so a heavy fast
     // body can still pass through a pinned sheet. Known limit.)
     S.contact_views.assign(1, S.contact_view());
@@ -219,8 +223,8 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
       S.contact_stats.contacts += st.contacts;
       if (st.contacts == 0) break;
       detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
-                            S.def.friction, S.hit, S.vertex_mass, impulses);
-      if ((round == kFeatureRounds && st.kinematic) || !S.max_deformation_pass()) break;
+                            S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal);
+      if (!S.max_deformation_pass()) break;
     }
   }
   bool finite = true;

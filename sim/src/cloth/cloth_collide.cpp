@@ -166,7 +166,7 @@ bool solid(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Ve
 void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
                    const std::vector<std::uint8_t>& free, const std::vector<Collider>& colliders,
                    double thickness, double friction, std::vector<std::uint8_t>& hit,
-                   double vertex_mass, BodyImpulses* impulses) {
+                   double vertex_mass, BodyImpulses* impulses, std::vector<Vec3>* pushed_normal) {
   const std::size_t n = x.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (!free[i]) continue;
@@ -197,7 +197,10 @@ void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector
           // Two-way (§3.7): the body takes the momentum the vertex lost, at the surface point.
           if (impulses != nullptr && v[i] != v_in)
             impulses->add(c, vertex_mass * (v_in - v[i]), x[i] - thickness * normal);
-          hit[i] = 1;
+          // 2: pushed by a kinematic body (the maximum-deformation pass then holds the vertex).
+          const bool pushed = c.moving && (impulses == nullptr || !impulses->logs(c));
+          hit[i] = std::max(hit[i], std::uint8_t(pushed ? 2 : 1));
+          if (pushed && pushed_normal != nullptr) (*pushed_normal)[i] = normal;
           moved = true;
         }
       }

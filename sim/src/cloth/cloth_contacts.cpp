@@ -278,6 +278,8 @@ double resolve(const Contact& k, ContactScratch& S, double h, std::vector<Contac
   const double dt = Dt.norm();
   if (dt > 0.0) corr -= std::min(1.0, k.friction * push / dt) * Dt;
   Vec3 momentum = Vec3::Zero();
+  const bool kinematic = k.collider >= 0 && (*colliders)[std::size_t(k.collider)].moving &&
+                         !dynamic_shape((*colliders)[std::size_t(k.collider)], impulses);
   for (int j = 0; j < k.count; ++j) {
     const std::uint32_t i = k.id[j];
     if (S.winv[i] == 0.0) continue;
@@ -286,6 +288,10 @@ double resolve(const Contact& k, ContactScratch& S, double h, std::vector<Contac
     const ContactCloth& C = cloths[std::size_t(S.cloth_of[i])];
     const std::uint32_t vi = i - S.offset[std::size_t(S.cloth_of[i])];
     (*C.v)[vi] += dx / h;
+    if (kinematic && C.hit != nullptr) {
+      (*C.hit)[vi] = 2;
+      (*C.pushed_normal)[vi] = k.w[j] > 0.0 ? k.n : Vec3(-k.n);
+    }
     momentum += C.vertex_mass * dx / h;
   }
   if (impulses != nullptr && k.collider >= 0) {

@@ -47,6 +47,10 @@ struct ContactCloth {
   double friction = 0.0;
   bool self = false;         ///< test this cloth against itself
   bool others = false;       ///< test this cloth against other cloths (both must allow it)
+  /// When set (n each): a vertex a kinematic body's feature pushed gets hit = 2 and the push's
+  /// direction in pushed_normal, as the vertex pass does (cloth_collide.hpp).
+  std::vector<std::uint8_t>* hit = nullptr;
+  std::vector<Vec3>* pushed_normal = nullptr;
 };
 
 /// Counters of one pass.

@@ -48,7 +48,9 @@ struct Cloth::State {
   std::vector<double> t, t_next;
   std::vector<std::int32_t> changed_in;  // per vertex: last pass that changed its t (-1: none)
   std::vector<Vec3> origin, path;
-  std::vector<std::uint8_t> hit;
+  std::vector<std::uint8_t> hit;     // per vertex: 1 touched a collider this step, 2 a kinematic one
+  std::vector<std::uint8_t> held;    // per vertex: the pass does not move it (pinned or hit == 2)
+  std::vector<Vec3> pushed_normal;   // per vertex with hit == 2: the kinematic body's outward normal
   std::vector<Vec3> nacc;            // vertex normal accumulator
   // Float copies for views.
   std::vector<float> fpos, fnor, fvel;
@@ -59,7 +61,7 @@ struct Cloth::State {
 
   [[nodiscard]] detail::ContactCloth contact_view() {
     return {&x, &v, &x_start, &free, topo.get(), vertex_mass, def.thickness, def.friction,
-            def.self_collision, def.collide_cloths};
+            def.self_collision, def.collide_cloths, &hit, &pushed_normal};
   }
 
   [[nodiscard]] double k_of(std::size_t s) const {
@@ -88,6 +90,9 @@ struct Cloth::State {
   void integrate_explicit(double h, double t1, bool semi);
   /// Returns true if it moved a vertex; adds its passes to strain_passes.
   bool max_deformation_pass();
+  /// Brings the pass's start positions (origin) within `scale` × rest length (Provot 1995).
+  bool project_origin(double scale);
+  double step_h = 0.0;  ///< (s) the current step, set by Cloth::step
   void refresh_views();
   Vec3 wind(const Vec3& p, double t) const;
 };

@@ -59,4 +59,16 @@ inline constexpr std::uint64_t kMaxMeshImportBytes = 4ull << 30;
 ///         has no triangles.
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
+/// A named part of a mesh file: an OBJ object or group ("o name", "g name"), a glTF node or
+/// mesh, ... as assimp names them, with the positions of its vertices (m, z up, as load_mesh
+/// gives them; a vertex on the border of two groups is in both).
+struct MeshGroup {
+  std::string name;
+  std::vector<Eigen::Vector3f> positions;
+};
+
+/// The named groups of a mesh file, in file order (a name given twice is one group). Parts
+/// without a name are left out. Same checks and errors as load_mesh.
+std::vector<MeshGroup> load_mesh_groups(const std::filesystem::path& path);
+
 }  // namespace simreel::assets
