@@ -346,7 +346,7 @@ std::optional<std::vector<Part>> cut(const Part& p, const Vec3& n, double off, s
   for (std::uint32_t g = 0; g < groups.size(); ++g)
     for (const Tri& t : groups[g])
       for (std::uint32_t id : t) {
-        if (!open_vertex[id]) continue;
+        if (id >= open_vertex.size() || !open_vertex[id]) continue;  // a cut face's twin corner is never open
         const auto [it, fresh] = group_at.emplace(id, g);
         if (!fresh) {
           const std::uint32_t x = find(it->second), y = find(g);
