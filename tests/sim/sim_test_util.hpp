@@ -1,5 +1,5 @@
 #pragma once
-// Helpers shared by the sim tests: single-particle worlds and view accessors.
+// Helpers shared by the sim tests: single-particle worlds, view accessors, one-shape bodies.
 
 #include <cstddef>
 
@@ -21,6 +21,25 @@ inline Vec3 position_of(const ParticleView& v, std::size_t i) {
 }
 inline Vec3 velocity_of(const ParticleView& v, std::size_t i) {
   return {v.velocity[3 * i], v.velocity[3 * i + 1], v.velocity[3 * i + 2]};
+}
+
+/// A dynamic body of one shape at `position` (identity rotation) with material m.
+inline BodyDef dynamic_body(ShapeDef shape, const Vec3& position, const Material& m = {0.0, 0.5}) {
+  BodyDef b;
+  b.type = BodyType::dynamic;
+  b.pose.translation = position;
+  shape.material = m;
+  b.shapes.push_back(shape);
+  return b;
+}
+
+/// A static ground: the plane z = 0 with material m.
+inline BodyDef ground_plane(const Material& m = {0.0, 0.5}) {
+  BodyDef g;
+  ShapeDef p = ShapeDef::plane();
+  p.material = m;
+  g.shapes.push_back(p);
+  return g;
 }
 
 }  // namespace simreel::sim::test

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "sim_test_util.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace simreel::sim {
@@ -23,22 +24,8 @@ WorldDef def_with_step(double h, int threads = 1) {
   return d;
 }
 
-BodyDef dynamic_body(ShapeDef shape, const Vec3& position, const Material& m = {0.0, 0.5}) {
-  BodyDef b;
-  b.type = BodyType::dynamic;
-  b.pose.translation = position;
-  shape.material = m;
-  b.shapes.push_back(shape);
-  return b;
-}
-
-BodyDef ground_plane(const Material& m = {0.0, 0.5}) {
-  BodyDef g;
-  ShapeDef p = ShapeDef::plane();
-  p.material = m;
-  g.shapes.push_back(p);
-  return g;
-}
+using test::dynamic_body;
+using test::ground_plane;
 
 TEST(DynamicBodies, FreeFallMatchesSemiImplicitEulerClosedForm) {
   // Semi-implicit Euler under constant g: z_n = z0 + v0 t - g t²/2 - g h t/2 (exactly), so the

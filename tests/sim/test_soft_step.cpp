@@ -11,6 +11,7 @@
 #include <numbers>
 #include <vector>
 
+#include "sim_test_util.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace simreel::sim {
@@ -28,22 +29,8 @@ WorldDef soft_def(int substeps = 4, bool sleeping = true, int threads = 1) {
   return d;
 }
 
-BodyDef dynamic_body(ShapeDef shape, const Vec3& position, const Material& m = {0.0, 0.5}) {
-  BodyDef b;
-  b.type = BodyType::dynamic;
-  b.pose.translation = position;
-  shape.material = m;
-  b.shapes.push_back(shape);
-  return b;
-}
-
-BodyDef ground_plane(const Material& m = {0.0, 0.5}) {
-  BodyDef g;
-  ShapeDef p = ShapeDef::plane();
-  p.material = m;
-  g.shapes.push_back(p);
-  return g;
-}
+using test::dynamic_body;
+using test::ground_plane;
 
 /// Top-box drift (m) of a stack of n 0.5 m boxes after `seconds`, and whether it fell asleep.
 std::pair<double, bool> stack(int n, int substeps, double seconds, bool sleeping) {
