@@ -148,29 +148,39 @@ bool ear_clip(std::vector<Eigen::Vector2d> q, std::vector<std::uint32_t> ids, st
   return true;
 }
 
+/// Disjoint sets over 0..n-1; a set is named by its smallest member, so groupings come out in a
+/// fixed order.
+struct DisjointSets {
+  std::vector<std::uint32_t> parent;
+  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void join(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
 /// Connected pieces of a closed triangle soup (its triangles grouped). Triangles join across an edge only
 /// when exactly two hold it: two solids touching along an edge or at a corner (a cut through a
 /// reflex edge can leave such) are two pieces, each closed.
 std::vector<std::vector<Tri>> components(const std::vector<Tri>& t) {
-  std::vector<std::uint32_t> parent(t.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  const auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets sets(t.size());
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> faces_at;
   for (std::uint32_t f = 0; f < t.size(); ++f)
     for (int k = 0; k < 3; ++k)
       faces_at[std::minmax(t[f][std::size_t(k)], t[f][std::size_t((k + 1) % 3)])].push_back(f);
   for (const auto& [e, fs] : faces_at)
     if (fs.size() == 2) {
-      const std::uint32_t a = find(fs[0]), b = find(fs[1]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      sets.join(fs[0], fs[1]);
     }
   std::map<std::uint32_t, std::size_t> group_of;
   std::vector<std::vector<Tri>> groups;
   for (std::uint32_t f = 0; f < t.size(); ++f) {
-    const auto [it, fresh] = group_of.emplace(find(f), groups.size());
+    const auto [it, fresh] = group_of.emplace(sets.find(f), groups.size());
     if (fresh) groups.emplace_back();
     groups[it->second].push_back(t[f]);
   }
@@ -336,27 +346,19 @@ std::optional<std::vector<Part>> cut(const Part& p, const Vec3& n, double off, s
   // Each side's pieces; those sharing a loop left open are one part again.
   std::vector<std::vector<Tri>> groups = components(tris[0]);
   for (auto& g : components(tris[1])) groups.push_back(std::move(g));
-  std::vector<std::uint32_t> parent(groups.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  const auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets sets(groups.size());
   std::map<std::uint32_t, std::uint32_t> group_at;  // an open-loop vertex → the first group using it
   for (std::uint32_t g = 0; g < groups.size(); ++g)
     for (const Tri& t : groups[g])
       for (std::uint32_t id : t) {
         if (id >= open_vertex.size() || !open_vertex[id]) continue;  // a cut face's twin corner is never open
         const auto [it, fresh] = group_at.emplace(id, g);
-        if (!fresh) {
-          const std::uint32_t x = find(it->second), y = find(g);
-          if (x != y) parent[std::max(x, y)] = std::min(x, y);
-        }
+        if (!fresh) sets.join(it->second, g);
       }
   std::map<std::uint32_t, std::size_t> part_of;
   std::vector<std::vector<Tri>> merged;
   for (std::uint32_t g = 0; g < groups.size(); ++g) {
-    const auto [it, fresh] = part_of.emplace(find(g), merged.size());
+    const auto [it, fresh] = part_of.emplace(sets.find(g), merged.size());
     if (fresh) merged.emplace_back();
     merged[it->second].insert(merged[it->second].end(), groups[g].begin(), groups[g].end());
   }
