@@ -1,0 +1,283 @@
+// Particle–particle contacts: the cell size, the grid (a counting sort over linear cell indices,
+// or hashed cells at several levels for very different radii; Coutinho §2.3.1–2.3.2) and the
+// candidate pairs within reach, in a fixed order. The solve is in particle_collisions.cpp.
+#include "collision/particle_collisions.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/vector_clones.hpp"
+#include "particles/forces.hpp"  // kParallelMin
+
+namespace simreel::sim::detail {
+
+namespace {
+
+std::uint32_t hash_cell(std::int64_t x, std::int64_t y, std::int64_t z, std::uint32_t level,
+                        std::uint32_t mask) {
+  // Teschner et al. 2003 spatial hash primes; the level (§2.3.2) is one more coordinate.
+  const auto h = std::uint64_t(x) * 73856093ull ^ std::uint64_t(y) * 19349663ull ^
+                 std::uint64_t(z) * 83492791ull ^ std::uint64_t(level) * 2654435761ull;
+  return std::uint32_t(h ^ (h >> 29)) & mask;
+}
+
+/// d2[k] = the squared distance from (xi, yi, zi) to candidate k when it is within reach
+/// (ri + r_k + margin min(ri, r_k)) and not coincident, else 0; element-wise (the scalar
+/// arithmetic in every lane), so the AVX2 clone gives the same bits.
+SIMREEL_VECTOR_CLONES
+void within_reach(double xi, double yi, double zi, double ri, double margin,
+                  const double* __restrict cx, const double* __restrict cy,
+                  const double* __restrict cz, const double* __restrict cr, std::size_t m,
+                  double* __restrict d2) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const double dx = cx[k] - xi, dy = cy[k] - yi, dz = cz[k] - zi;
+    const double e = dx * dx + dy * dy + dz * dz;
+    const double rj = cr[k];
+    const double reach = ri + rj + margin * (rj < ri ? rj : ri);
+    d2[k] = e < reach * reach && e > 0.0 ? e : 0.0;
+  }
+}
+
+}  // namespace
+
+void ParticleCollider::choose_cells(double h) {
+  const std::size_t n = x.size();
+  double sum_r = 0.0, max_r = 0.0, min_r = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    sum_r += radius[i];
+    max_r = std::max(max_r, radius[i]);
+    min_r = std::min(min_r, radius[i]);
+  }
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const double reach_d = 2.0 + 2.0 * margin;  // a sphere's reach, times its radius
+  // Uniform grid (§2.3.1) unless sizes differ by about an order of magnitude or more; then the
+  // multi-level grid (§2.3.2): level l has cells 2 x 2^l the smallest reach, each particle
+  // lives in the finest level whose cells hold its reach.
+  levels = 1;
+  if (max_r > 8.0 * min_r) {
+    cell_size = 2.0 * reach_d * min_r;
+    while (std::ldexp(cell_size, levels - 1) < reach_d * max_r) ++levels;
+  } else {
+    cell_size = std::max(4.0 * sum_r / double(n), reach_d * max_r);
+  }
+}
+
+void ParticleCollider::find_contacts(double contact_speed, double h) {
+  contacts.clear();
+  bands_.clear();
+  if (x.size() < 2) return;
+  choose_cells(h);
+  if (levels == 1 && build_grid()) {
+    find_pairs(contact_speed, h);
+  } else {
+    find_contacts_hashed(contact_speed, h);
+  }
+}
+
+bool ParticleCollider::build_grid() {
+  const std::size_t n = x.size();
+  const double inv = 1.0 / cell_size;
+  Vec3 lo = x[0];
+  for (std::size_t i = 1; i < n; ++i) lo = lo.cwiseMin(x[i]);
+  // Cell coordinates from 1 (a neighbour at -1 stays >= 0), and one spare cell past the largest.
+  constexpr double kMaxCells = double(1 << 21);
+  std::int64_t dim[3] = {0, 0, 0};
+  cell_key_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::floor((x[i][a] - lo[a]) * inv) + 1.0;
+      if (!(c < kMaxCells - 2.0)) return false;  // too wide for 21 bits (or not finite)
+      dim[a] = std::max(dim[a], std::int64_t(c) + 2);
+    }
+  stride_y_ = std::uint64_t(dim[2]);
+  stride_x_ = std::uint64_t(dim[1]) * stride_y_;
+  cells_x_ = std::uint64_t(dim[0]);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = [&](int a) { return std::uint64_t(std::floor((x[i][a] - lo[a]) * inv) + 1.0); };
+    cell_key_[i] = c(0) * stride_x_ + c(1) * stride_y_ + c(2);
+  }
+  // Particles by (cell key, index): a counting sort when the box has few cells per particle,
+  // else a comparison sort of the same keys (the same order either way).
+  order_.resize(n);
+  const std::uint64_t cells = std::uint64_t(dim[0]) * stride_x_;
+  if (cells <= 4 * std::uint64_t(n) + 4096) {
+    count_.assign(std::size_t(cells) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++count_[std::size_t(cell_key_[i]) + 1];
+    for (std::size_t c = 0; c < cells; ++c) count_[c + 1] += count_[c];
+    for (std::size_t i = 0; i < n; ++i) order_[count_[std::size_t(cell_key_[i])]++] = std::uint32_t(i);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) order_[i] = std::uint32_t(i);
+    std::sort(order_.begin(), order_.end(), [&](std::uint32_t p, std::uint32_t q) {
+      return cell_key_[p] != cell_key_[q] ? cell_key_[p] < cell_key_[q] : p < q;
+    });
+  }
+  sx_.resize(n);
+  sy_.resize(n);
+  sz_.resize(n);
+  sr_.resize(n);
+  occupied_.clear();
+  cell_first_.clear();
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::uint32_t i = order_[s];
+    sx_[s] = x[i][0];
+    sy_[s] = x[i][1];
+    sz_[s] = x[i][2];
+    sr_[s] = radius[i];
+    if (s == 0 || cell_key_[i] != occupied_.back()) {
+      occupied_.push_back(cell_key_[i]);
+      cell_first_.push_back(std::uint32_t(s));
+    }
+  }
+  cell_first_.push_back(std::uint32_t(n));
+  return true;
+}
+
+void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
+                                double contact_speed, double h) {
+  const Vec3 d = x[j] - x[i];
+  const double rr = radius[i] + radius[j];
+  const double dist = std::sqrt(d2);
+  const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
+  // Apart but within the margin: a speculative resting contact (it may close the gap this step,
+  // no more), so a pile's contacts hold without first overlapping. An impact is left until it
+  // overlaps, where it gets its restitution.
+  if (dist >= rr && -vn > contact_speed) return;
+  Contact c;
+  c.i = i;
+  c.j = j;
+  c.n = d / dist;
+  c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
+  c.depth = rr - dist;
+  const double e = 0.5 * (restitution[i] + restitution[j]);
+  c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
+  c.mu = 0.5 * (friction[i] + friction[j]);
+  contacts.push_back(c);
+}
+
+void ParticleCollider::find_pairs(double contact_speed, double h) {
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const std::size_t cells = occupied_.size();
+  const std::uint64_t* key_of = occupied_.data();
+  const std::uint32_t* first = cell_first_.data();
+  const double *px = sx_.data(), *py = sy_.data(), *pz = sz_.data(), *pr = sr_.data();
+  // Half stencil: the cell itself (later particles) and the cell above it (z + 1), then the
+  // columns (dx, dy) = (0, 1), (1, -1), (1, 0), (1, 1), three cells each (z - 1 .. z + 1), all
+  // later in key order. Cells are visited in key order, so each column's first occupied cell
+  // only moves forward: a cursor per column instead of a search.
+  const std::uint64_t off[4] = {stride_y_, stride_x_ - stride_y_, stride_x_, stride_x_ + stride_y_};
+  std::size_t cursor[4] = {0, 0, 0, 0};
+  std::uint32_t run_b[5], run_e[5];
+  for (std::size_t c = 0; c < cells; ++c) {
+    const std::uint64_t kc = key_of[c];
+    run_b[0] = first[c];
+    run_e[0] = c + 1 < cells && key_of[c + 1] == kc + 1 ? first[c + 2] : first[c + 1];
+    for (int col = 0; col < 4; ++col) {
+      const std::uint64_t lo = kc + off[col] - 1, hi = kc + off[col] + 1;
+      std::size_t& cur = cursor[col];
+      while (cur < cells && key_of[cur] < lo) ++cur;
+      std::size_t end = cur;
+      while (end < cells && key_of[end] <= hi) ++end;
+      run_b[col + 1] = first[cur];
+      run_e[col + 1] = first[end];
+    }
+    // The cell's candidates: its own run (the cell and the one above), then the four columns.
+    // Particle si of the cell takes those after its own position, in the same order as a loop
+    // over the runs: one vectorised pass for distances and reaches, a branch-free compaction of
+    // the pairs within reach, then try_pair() in order.
+    std::size_t m = 0;
+    for (int col = 0; col < 5; ++col) m += run_e[col] - run_b[col];
+    if (cand_s_.size() < m) {
+      cand_s_.resize(m);
+      cand_keep_.resize(m);
+      for (auto* a : {&cand_x_, &cand_y_, &cand_z_, &cand_r_, &cand_d2_}) a->resize(m);
+    }
+    std::size_t k = 0;
+    for (int col = 0; col < 5; ++col)
+      for (std::uint32_t sj = run_b[col]; sj < run_e[col]; ++sj, ++k) {
+        cand_s_[k] = sj;
+        cand_x_[k] = px[sj];
+        cand_y_[k] = py[sj];
+        cand_z_[k] = pz[sj];
+        cand_r_[k] = pr[sj];
+      }
+    for (std::uint32_t si = first[c]; si < first[c + 1]; ++si) {
+      const std::size_t from = si + 1 - first[c];
+      within_reach(px[si], py[si], pz[si], pr[si], margin, cand_x_.data() + from,
+                   cand_y_.data() + from, cand_z_.data() + from, cand_r_.data() + from, m - from,
+                   cand_d2_.data() + from);
+      std::size_t kept = 0;
+      for (std::size_t q = from; q < m; ++q) {
+        cand_keep_[kept] = std::uint32_t(q);
+        kept += std::size_t(cand_d2_[q] > 0.0);
+      }
+      for (std::size_t u = 0; u < kept; ++u) {
+        const std::size_t q = cand_keep_[u];
+        try_pair(order_[si], order_[cand_s_[q]], cand_d2_[q], contact_speed, h);
+      }
+    }
+  }
+}
+
+void ParticleCollider::find_contacts_hashed(double contact_speed, double h) {
+  const std::size_t n = x.size();
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const double reach_d = 2.0 + 2.0 * margin;  // a sphere's reach, times its radius
+  std::uint32_t table = 1;
+  while (table < 2 * n) table <<= 1;
+  const std::uint32_t mask = table - 1;
+  cell_xyz_.resize(3 * n);
+  cell_hash_.resize(n);
+  level_.resize(n);
+  bucket_start_.assign(std::size_t(table) + 1, 0);
+  sorted_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t l = 0;
+    while (int(l) + 1 < levels && std::ldexp(cell_size, int(l)) < reach_d * radius[i]) ++l;
+    level_[i] = std::uint8_t(l);
+    const double inv_cell = 1.0 / std::ldexp(cell_size, int(l));
+    for (int a = 0; a < 3; ++a)
+      cell_xyz_[3 * i + std::size_t(a)] = std::int64_t(std::floor(x[i][a] * inv_cell));
+    cell_hash_[i] = hash_cell(cell_xyz_[3 * i], cell_xyz_[3 * i + 1], cell_xyz_[3 * i + 2], l, mask);
+    ++bucket_start_[cell_hash_[i] + 1];
+  }
+  for (std::uint32_t b = 0; b < table; ++b) bucket_start_[b + 1] += bucket_start_[b];
+  // Counting sort, stable: each bucket lists its particles in ascending index.
+  cursor_.assign(bucket_start_.begin(), bucket_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) sorted_[cursor_[cell_hash_[i]]++] = std::uint32_t(i);
+  for (std::size_t i = 0; i < n; ++i) {
+    // Own level (pairs j > i), then every coarser one: a pair of different levels is found once,
+    // from its smaller particle, in the 27 cells of the larger one's level (its cells are at
+    // least both reaches).
+    for (int l = level_[i]; l < levels; ++l) {
+      std::int64_t cx = cell_xyz_[3 * i], cy = cell_xyz_[3 * i + 1], cz = cell_xyz_[3 * i + 2];
+      if (l != level_[i]) {
+        const double inv_cell = 1.0 / std::ldexp(cell_size, l);
+        cx = std::int64_t(std::floor(x[i][0] * inv_cell));
+        cy = std::int64_t(std::floor(x[i][1] * inv_cell));
+        cz = std::int64_t(std::floor(x[i][2] * inv_cell));
+      }
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const std::int64_t nx = cx + dx, ny = cy + dy, nz = cz + dz;
+            const std::uint32_t b = hash_cell(nx, ny, nz, std::uint32_t(l), mask);
+            for (std::uint32_t q = bucket_start_[b]; q < bucket_start_[b + 1]; ++q) {
+              const std::uint32_t j = sorted_[q];
+              if ((levels > 1 && level_[j] != l) || (l == level_[i] && j <= i)) continue;
+              // Another cell hashed into the same bucket: it is visited from its own offset.
+              if (cell_xyz_[3 * j] != nx || cell_xyz_[3 * j + 1] != ny ||
+                  cell_xyz_[3 * j + 2] != nz)
+                continue;
+              const Vec3 d = x[j] - x[i];
+              const double reach = radius[i] + radius[j] + margin * std::min(radius[i], radius[j]);
+              const double d2 = d.squaredNorm();
+              if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
+              try_pair(std::uint32_t(i), j, d2, contact_speed, h);
+            }
+          }
+    }
+  }
+}
+
+}  // namespace simreel::sim::detail
