@@ -1,8 +1,10 @@
 // Both backends give an OpenGL 3.3+ core context, load the whole table, and draw the same frame.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -74,6 +76,60 @@ TEST(RenderBackend, OsmesaAndEglDrawTheSameFrame) {
   RecordProperty("byte_identical", identical ? "yes" : "no");
   EXPECT_LE(hamming(phash(a), phash(b)), 2);
   EXPECT_LE(hamming(dhash(a), dhash(b)), 2);
+}
+
+/// Sets an environment variable for one scope and restores it.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    setenv(name, value, 1);
+  }
+  ~ScopedEnv() {
+    if (old_) {
+      setenv(name_, old_->c_str(), 1);
+    } else {
+      unsetenv(name_);
+    }
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+TEST(RenderBackend, EglDeviceChoiceDrawsTheSameFrameAndATypoIsAnError) {
+  auto draw = [] {
+    const auto context = create_context(Backend::egl);
+    Renderer renderer(*context, test::small_settings());
+    test::build_small_scene(renderer);
+    return renderer.render();
+  };
+  const Image by_default = draw();
+  Image surfaceless;
+  {
+    const ScopedEnv env("SIMREEL_EGL_DEVICE", "surfaceless");
+    surfaceless = draw();
+  }
+  // Here (no hardware device) the default is the surfaceless platform: the same renderer.
+  EXPECT_EQ(by_default.rgba, surfaceless.rgba);
+  {
+    // Device 0 exists wherever EGL can enumerate devices (Mesa lists its software device).
+    const ScopedEnv env("SIMREEL_EGL_DEVICE", "0");
+    EXPECT_EQ(draw().rgba, by_default.rgba) << "device 0 (llvmpipe) draws what surfaceless draws";
+  }
+  for (const char* bad : {"99", "gpu", "-1", "1x"}) {
+    const ScopedEnv env("SIMREEL_EGL_DEVICE", bad);
+    try {
+      (void)create_context(Backend::egl);
+      FAIL() << "SIMREEL_EGL_DEVICE=" << bad << " was accepted";
+    } catch (const ContextError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("SIMREEL_EGL_DEVICE=") + bad), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // A fake loader that knows every entry point but one.

@@ -1,6 +1,7 @@
 // Frame sinks: PNG sequences, MP4/GIF through ffmpeg, and no partial files on failure or abort.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -433,15 +434,107 @@ TEST(RenderFrameWriter, DestroyedUnfinishedAbortsEverySink) {
   EXPECT_FALSE(log->finished);
 }
 
+/// A sink that lets `width` threads write at once and records how many did: each write() waits
+/// (up to 10 s once, so a broken writer fails the test instead of hanging it) until `width` writes
+/// are in progress, or the frames run out.
+class ConcurrentProbe final : public FrameSink {
+ public:
+  struct Log {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::vector<int> indices;
+    int active = 0;
+    int max_active = 0;
+    int finishes = 0;
+    int aborts = 0;
+    int frames_left = 0;
+    bool gave_up = false;
+  };
+  ConcurrentProbe(std::shared_ptr<Log> log, int width, int fail_at = -1)
+      : log_(std::move(log)), width_(width), fail_at_(fail_at) {}
+  void write(const Image&, int index) override {
+    std::unique_lock lock(log_->mutex);
+    ++log_->active;
+    log_->max_active = std::max(log_->max_active, log_->active);
+    log_->changed.notify_all();
+    if (!log_->gave_up &&
+        !log_->changed.wait_for(lock, std::chrono::seconds(10), [&] {
+          return log_->max_active >= width_ || log_->frames_left <= log_->active;
+        })) {
+      log_->gave_up = true;  // one timeout is enough to fail; the rest need not wait
+    }
+    --log_->active;
+    --log_->frames_left;
+    if (index == fail_at_) throw IoError("probe: disk full at frame " + std::to_string(index));
+    log_->indices.push_back(index);
+  }
+  void finish() override {
+    const std::lock_guard lock(log_->mutex);
+    ++log_->finishes;
+  }
+  void abort() noexcept override {
+    const std::lock_guard lock(log_->mutex);
+    ++log_->aborts;
+  }
+  [[nodiscard]] std::string describe() const override { return "concurrent probe"; }
+  [[nodiscard]] int concurrency() const override { return width_; }
+
+ private:
+  std::shared_ptr<Log> log_;
+  int width_;
+  int fail_at_;
+};
+
+TEST(RenderFrameWriter, AConcurrentSinkGetsEveryFrameOnceFromSeveralThreadsAndOneFinish) {
+  auto log = std::make_shared<ConcurrentProbe::Log>();
+  log->frames_left = 24;
+  auto order = std::make_shared<ProbeSink::Log>();
+  std::vector<std::unique_ptr<FrameSink>> sinks;
+  sinks.push_back(std::make_unique<ConcurrentProbe>(log, 3));
+  sinks.push_back(std::make_unique<ProbeSink>(order));
+  FrameWriter writer(std::move(sinks), 2);
+  for (int i = 0; i < 24; ++i) writer.write(frame(8, 8, i), i);
+  const auto done = writer.finish();
+  EXPECT_EQ(done.size(), 2u);
+  EXPECT_EQ(log->max_active, 3) << "three frames were being written at once";
+  std::vector<int> seen = log->indices;
+  std::sort(seen.begin(), seen.end());
+  std::vector<int> expected(24);
+  for (int i = 0; i < 24; ++i) expected[std::size_t(i)] = i;
+  EXPECT_EQ(seen, expected) << "every frame exactly once";
+  EXPECT_EQ(order->indices, expected) << "a concurrency-1 sink beside it still sees them in order";
+  EXPECT_EQ(log->finishes, 1);
+  EXPECT_EQ(log->aborts, 0);
+}
+
+TEST(RenderFrameWriter, AFailingConcurrentSinkIsAbortedOnceAndNeverFinished) {
+  auto log = std::make_shared<ConcurrentProbe::Log>();
+  log->frames_left = 16;
+  std::vector<std::unique_ptr<FrameSink>> sinks;
+  sinks.push_back(std::make_unique<ConcurrentProbe>(log, 3, 5));
+  FrameWriter writer(std::move(sinks), 2);
+  for (int i = 0; i < 16; ++i) writer.write(frame(8, 8, i), i);
+  const auto done = writer.finish();
+  EXPECT_TRUE(done.empty());
+  const auto failures = writer.take_failures();
+  ASSERT_EQ(failures.size(), 1u);
+  EXPECT_EQ(failures[0].message, "probe: disk full at frame 5");
+  EXPECT_EQ(log->aborts, 1);
+  EXPECT_EQ(log->finishes, 0);
+  EXPECT_LT(log->indices.size(), 16u);
+}
+
 TEST(RenderFrameWriter, PngBytesDoNotDependOnThreads) {
   const test::TempDir dir("det");
-  for (const std::size_t depth : {std::size_t{0}, std::size_t{4}}) {
+  // depth 0: on the caller's thread; 4: one writer thread; 5: four threads compressing at once.
+  for (const std::size_t depth : {std::size_t{0}, std::size_t{4}, std::size_t{5}}) {
+    const int threads = depth == 5 ? 4 : 1;
     std::vector<std::unique_ptr<FrameSink>> sinks;
-    sinks.push_back(make_png_sequence(dir.path() / std::to_string(depth), 1));
-    sinks.push_back(make_png_sequence(dir.path() / (std::to_string(depth) + "b"), 9));
+    sinks.push_back(make_png_sequence(dir.path() / std::to_string(depth), 1, threads));
+    sinks.push_back(make_png_sequence(dir.path() / (std::to_string(depth) + "b"), 9, threads));
     FrameWriter writer(std::move(sinks), depth);
     for (int i = 0; i < 6; ++i) writer.write(frame(64, 40, i), i);
-    writer.finish();
+    EXPECT_EQ(writer.finish().size(), 2u);
   }
   for (const char* name : {"frame_00000.png", "frame_00005.png"}) {
     const auto bytes = [&](const std::string& sub) {
@@ -450,6 +543,8 @@ TEST(RenderFrameWriter, PngBytesDoNotDependOnThreads) {
     };
     EXPECT_EQ(bytes("0"), bytes("4")) << name;
     EXPECT_EQ(bytes("0b"), bytes("4b")) << name;
+    EXPECT_EQ(bytes("0"), bytes("5")) << name;
+    EXPECT_EQ(bytes("0b"), bytes("5b")) << name;
     EXPECT_NE(bytes("0"), bytes("0b")) << "compression levels 1 and 9 differ";
   }
 }

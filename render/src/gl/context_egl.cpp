@@ -1,16 +1,23 @@
-// EGL surfaceless (EGL_PLATFORM_SURFACELESS_MESA): no window system, no pbuffer; uses a GPU
-// render node where one exists and falls back to llvmpipe otherwise.
+// EGL without a window system or pbuffer. A hardware EGLDevice (EGL_EXT_platform_device) is
+// preferred: it names the GPU rather than leaving the choice to whichever vendor library glvnd
+// asks first, and it is the platform NVIDIA documents for headless rendering (the 580 driver
+// checked on an H100 offers Mesa's surfaceless one too). Without a hardware device, Mesa's
+// EGL_PLATFORM_SURFACELESS_MESA is used: a GPU render node where one exists, llvmpipe otherwise.
+// SIMREEL_EGL_DEVICE=<n> picks the n-th EGLDevice (0-based, as eglQueryDevicesEXT lists them),
+// for a machine with several GPUs; SIMREEL_EGL_DEVICE=surfaceless forces Mesa's path.
 #include <GL/glcorearb.h>  // before any EGL/GL header, see gl_table.hpp
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "context_backends.hpp"
 
@@ -64,20 +71,75 @@ bool has_extension(const char* list, const char* name) {
 std::mutex display_mutex;
 int display_users = 0;
 
+// The display of the device SIMREEL_EGL_DEVICE names, else of the first hardware EGLDevice (one
+// without EGL_MESA_device_software), else EGL_NO_DISPLAY. Throws when the variable names a device
+// that does not exist, so a typo is not silently rendered on another device.
+EGLDisplay device_display(const char* client_extensions) {
+  const char* wanted = std::getenv("SIMREEL_EGL_DEVICE");
+  const bool forced = wanted != nullptr && *wanted != '\0';
+  if (forced && std::strcmp(wanted, "surfaceless") == 0) return EGL_NO_DISPLAY;
+  if (!has_extension(client_extensions, "EGL_EXT_platform_device") ||
+      !(has_extension(client_extensions, "EGL_EXT_device_enumeration") ||
+        has_extension(client_extensions, "EGL_EXT_device_base"))) {
+    if (forced) throw ContextError("egl: SIMREEL_EGL_DEVICE is set but this EGL cannot enumerate devices");
+    return EGL_NO_DISPLAY;
+  }
+  auto query_devices =
+      reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+  auto query_device_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
+      eglGetProcAddress("eglQueryDeviceStringEXT"));
+  auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+      eglGetProcAddress("eglGetPlatformDisplayEXT"));
+  if (query_devices == nullptr || get_platform_display == nullptr) return EGL_NO_DISPLAY;
+  EGLint count = 0;
+  if (query_devices(0, nullptr, &count) == EGL_FALSE || count <= 0) count = 0;
+  std::vector<EGLDeviceEXT> devices(static_cast<std::size_t>(count));
+  if (count > 0 && query_devices(count, devices.data(), &count) == EGL_FALSE) count = 0;
+  devices.resize(static_cast<std::size_t>(count));
+
+  if (forced) {
+    char* end = nullptr;
+    const long index = std::strtol(wanted, &end, 10);
+    if (end == wanted || *end != '\0' || index < 0 || index >= count) {
+      throw ContextError(std::string("egl: SIMREEL_EGL_DEVICE=") + wanted + ": expected 0.." +
+                         std::to_string(count - 1) + " or surfaceless (" + std::to_string(count) +
+                         " EGL devices found)");
+    }
+    EGLDisplay d = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[index], nullptr);
+    if (d == EGL_NO_DISPLAY) fail("eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT)");
+    return d;
+  }
+  for (EGLDeviceEXT device : devices) {
+    const char* extensions =
+        query_device_string != nullptr ? query_device_string(device, EGL_EXTENSIONS) : nullptr;
+    if (has_extension(extensions, "EGL_MESA_device_software")) continue;
+    EGLDisplay d = get_platform_display(EGL_PLATFORM_DEVICE_EXT, device, nullptr);
+    if (d != EGL_NO_DISPLAY) return d;
+  }
+  return EGL_NO_DISPLAY;
+}
+
 class EglContext final : public Context {
  public:
   EglContext() {
     const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    if (!has_extension(client_extensions, "EGL_MESA_platform_surfaceless")) {
-      throw ContextError("egl: EGL_MESA_platform_surfaceless is not supported by this EGL");
+    display_ = device_display(client_extensions);
+    if (display_ == EGL_NO_DISPLAY) {
+      if (!has_extension(client_extensions, "EGL_MESA_platform_surfaceless")) {
+        throw ContextError(
+            "egl: no hardware EGLDevice and EGL_MESA_platform_surfaceless is not supported by "
+            "this EGL");
+      }
+      auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+          eglGetProcAddress("eglGetPlatformDisplayEXT"));
+      if (get_platform_display == nullptr) {
+        throw ContextError("egl: eglGetPlatformDisplayEXT is not available");
+      }
+      display_ = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+      if (display_ == EGL_NO_DISPLAY) {
+        fail("eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA)");
+      }
     }
-    auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-        eglGetProcAddress("eglGetPlatformDisplayEXT"));
-    if (get_platform_display == nullptr) {
-      throw ContextError("egl: eglGetPlatformDisplayEXT is not available");
-    }
-    display_ = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (display_ == EGL_NO_DISPLAY) fail("eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA)");
     try {
       create();
     } catch (...) {

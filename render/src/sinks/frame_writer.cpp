@@ -15,7 +15,12 @@ FrameWriter::FrameWriter(std::vector<std::unique_ptr<FrameSink>> sinks, std::siz
   }
   if (depth_ == 0) return;
   // Threads start once every lane exists: run() never sees lanes_ change.
-  for (auto& lane : lanes_) lane->thread = std::thread([this, l = lane.get()] { run(*l); });
+  for (auto& lane : lanes_) {
+    const int threads = std::max(1, lane->sink->concurrency());
+    lane->capacity = depth_ + static_cast<std::size_t>(threads - 1);
+    lane->running = threads;
+    for (int t = 0; t < threads; ++t) lane->threads.emplace_back([this, l = lane.get()] { run(*l); });
+  }
 }
 
 FrameWriter::~FrameWriter() {
@@ -26,8 +31,10 @@ FrameWriter::~FrameWriter() {
   }
   work_.notify_all();
   for (auto& lane : lanes_) {
-    if (lane->thread.joinable()) {
-      lane->thread.join();
+    if (!lane->threads.empty()) {
+      for (auto& thread : lane->threads) {
+        if (thread.joinable()) thread.join();
+      }
     } else if (!lane->finished) {
       lane->sink->abort();
     }
@@ -39,10 +46,12 @@ void FrameWriter::run(Lane& lane) {
     Item item;
     {
       std::unique_lock lock(mutex_);
-      work_.wait(lock, [&] { return aborting_ || !lane.queue.empty() || closing_; });
+      work_.wait(lock, [&] { return aborting_ || lane.failed || !lane.queue.empty() || closing_; });
       if (aborting_ || lane.failed) break;
       if (lane.queue.empty()) break;  // closing and drained
       item = std::move(lane.queue.front());
+      lane.queue.pop_front();
+      ++lane.in_flight;
     }
     std::string error;
     try {
@@ -52,19 +61,24 @@ void FrameWriter::run(Lane& lane) {
     }
     {
       const std::lock_guard lock(mutex_);
-      lane.queue.pop_front();
-      if (!error.empty()) {
+      --lane.in_flight;
+      if (!error.empty() && !lane.failed) {
         lane.failed = true;
         lane.queue.clear();
         failures_.push_back({lane.sink->describe(), error});
       }
     }
     space_.notify_all();
-    if (!error.empty()) break;
+    if (!error.empty()) {
+      work_.notify_all();  // the lane's other threads stop too
+      break;
+    }
   }
+  // The last of the lane's threads to return closes the sink, after every write has ended.
   bool abort_sink = false;
   {
     const std::lock_guard lock(mutex_);
+    if (--lane.running > 0) return;
     abort_sink = aborting_ || lane.failed;
   }
   if (abort_sink) {
@@ -109,8 +123,9 @@ void FrameWriter::write(std::shared_ptr<const Image> shared, int index) {
   {
     std::unique_lock lock(mutex_);
     space_.wait(lock, [&] {
-      return std::all_of(lanes_.begin(), lanes_.end(),
-                         [&](const auto& l) { return l->failed || l->queue.size() < depth_; });
+      return std::all_of(lanes_.begin(), lanes_.end(), [&](const auto& l) {
+        return l->failed || l->queue.size() + l->in_flight < l->capacity;
+      });
     });
     for (auto& lane : lanes_) {
       if (!lane->failed) lane->queue.push_back({shared, index});
@@ -127,8 +142,10 @@ std::vector<std::string> FrameWriter::finish() {
   work_.notify_all();
   std::vector<std::string> done;
   for (auto& lane : lanes_) {
-    if (lane->thread.joinable()) {
-      lane->thread.join();
+    if (!lane->threads.empty()) {
+      for (auto& thread : lane->threads) {
+        if (thread.joinable()) thread.join();
+      }
     } else if (depth_ == 0 && !lane->failed && !lane->finished) {
       try {
         lane->sink->finish();

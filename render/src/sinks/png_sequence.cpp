@@ -1,7 +1,9 @@
 // The PNG-sequence sink (frame_sink.hpp): one PNG per frame, each written atomically.
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <system_error>
+#include <thread>
 
 #include "simreel/render/frame_sink.hpp"
 
@@ -13,7 +15,8 @@ namespace {
 
 class PngSequenceSink final : public FrameSink {
  public:
-  PngSequenceSink(fs::path dir, int compression) : dir_(std::move(dir)), compression_(compression) {
+  PngSequenceSink(fs::path dir, int compression, int threads)
+      : dir_(std::move(dir)), compression_(compression), threads_(threads) {
     std::error_code ec;
     fs::create_directories(dir_, ec);
     if (ec) throw IoError("cannot create directory " + dir_.string() + ": " + ec.message());
@@ -31,16 +34,23 @@ class PngSequenceSink final : public FrameSink {
   [[nodiscard]] std::string describe() const override {
     return (dir_ / "frame_%05d.png").string();
   }
+  // Each frame is its own file, written through its own temporary: frames compress in parallel.
+  [[nodiscard]] int concurrency() const override { return threads_; }
 
  private:
   fs::path dir_;
   int compression_;
+  int threads_;
 };
 
 }  // namespace
 
-std::unique_ptr<FrameSink> make_png_sequence(const fs::path& dir, int compression) {
-  return std::make_unique<PngSequenceSink>(dir, compression);
+std::unique_ptr<FrameSink> make_png_sequence(const fs::path& dir, int compression, int threads) {
+  if (threads <= 0) {
+    const unsigned cores = std::thread::hardware_concurrency();
+    threads = static_cast<int>(std::clamp(cores, 1u, 4u));
+  }
+  return std::make_unique<PngSequenceSink>(dir, compression, threads);
 }
 
 }  // namespace simreel::render

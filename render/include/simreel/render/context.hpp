@@ -1,7 +1,9 @@
 #pragma once
 /// @file context.hpp
-/// Offscreen OpenGL contexts (core profile >= 3.3): OSMesa (default) and EGL surfaceless
-/// (Mesa's EGL_PLATFORM_SURFACELESS_MESA; a GPU where one is present).
+/// Offscreen OpenGL contexts (core profile >= 3.3): OSMesa (default) and EGL without a window
+/// system: the first hardware EGLDevice (EGL_EXT_platform_device, as NVIDIA's driver offers),
+/// else Mesa's EGL_PLATFORM_SURFACELESS_MESA (a GPU render node, else llvmpipe). The environment
+/// variable SIMREEL_EGL_DEVICE=<n> picks the n-th EGLDevice, =surfaceless forces Mesa's path.
 
 #include <memory>
 #include <stdexcept>
