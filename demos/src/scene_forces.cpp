@@ -141,6 +141,7 @@ ForceFieldScene force_field(const json& j, const std::string& ptr, const std::st
       break;
   }
   d.bodies = r.boolean("bodies", true);
+  d.particles = r.boolean("particles", true);
   f.systems = system_names(r, "systems");
   r.finish();
   return f;

@@ -10,12 +10,56 @@
 
 namespace simreel::sim::detail {
 
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kAirDensity = 1.225;  ///< (kg/m³) ρ_air at sea level, 15 °C (body_coupling.cpp)
+
+/// Blast fields whose pulse passes in [t0, t1) push the particles of system `index` alive at t0
+/// and born before the pulse (forces.hpp FieldKind::blast): Δv = J / (m + ½ ρ_air V) outward,
+/// J = w Π π r² / (4π max(d, r)²), with x at t0. Fields in table order, particles in array
+/// order: serial and deterministic; a blast happens once, so it needs no threads.
+void apply_blasts(WorldState& w, std::size_t index, double t0, double t1) {
+  ParticleSystemState& ps = w.systems.at(index);
+  ParticleStore& st = ps.store;
+  const ParticleSystemHandle self{w.systems.handle(index)};
+  for (FieldEntry& e : w.fields.dense()) {
+    FieldState& f = *e.state;
+    const ForceFieldDef& d = f.def;
+    if (d.kind != FieldKind::blast || !d.particles || !(t0 <= d.time && d.time < t1)) continue;
+    if (!e.all_systems && std::find(d.systems.begin(), d.systems.end(), self) == d.systems.end())
+      continue;
+    f.pose_at(t0);
+    // Born at or after the pulse (to within float ages): the blast's own products.
+    const double born_before = d.time - 1e-6;
+    for (std::size_t i = 0; i < ps.n_old; ++i) {
+      if (!(t0 - double(st.age[i]) < born_before)) continue;
+      const Vec3 x(st.position[3 * i], st.position[3 * i + 1], st.position[3 * i + 2]);
+      const double weight = f.weight(x);
+      if (weight == 0.0) continue;
+      const Vec3 off = x - f.centre;
+      const double dist = off.norm();
+      if (!(dist > 0.0)) continue;  // no outward direction
+      const double r = st.radius[i];
+      const double reach = std::max(dist, r);
+      const double J = weight * d.impulse * r * r / (4.0 * reach * reach);  // Π π r² / (4π reach²)
+      const double m_eff = double(st.mass[i]) + 0.5 * kAirDensity * (4.0 / 3.0) * kPi * r * r * r;
+      const Vec3 dv = (J / m_eff / dist) * off;
+      for (int k = 0; k < 3; ++k)
+        st.velocity[3 * i + std::size_t(k)] = float(double(st.velocity[3 * i + std::size_t(k)]) + dv[k]);
+    }
+  }
+}
+
+}  // namespace
+
 void stage_particle_integration(WorldState& w, double t0, double t1) {
   const double h = t1 - t0;
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
     ParticleStore& st = ps.store;
     ps.n_old = st.count;
+    if (ps.n_old > 0 && w.fields.size() > 0) apply_blasts(w, index, t0, t1);
     ps.general = w.general(index);
     if (ps.general) {
       w.build_dynamics(index, true);

@@ -106,7 +106,8 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   // Fields for every system, in registration order (the order their forces are summed in).
   std::vector<std::pair<std::uint64_t, detail::FieldState*>> all;
   for (std::size_t f = 0; f < impl_->fields.size(); ++f)
-    if (impl_->fields.at(f).all_systems && impl_->fields.at(f).state->def.kind != FieldKind::blast)
+    if (impl_->fields.at(f).all_systems && impl_->fields.at(f).state->def.particles &&
+        impl_->fields.at(f).state->def.kind != FieldKind::blast)
       all.emplace_back(impl_->fields.serial(f), impl_->fields.at(f).state.get());
   std::sort(all.begin(), all.end());
   for (const auto& [serial, f] : all) ps.dynamics.fields.push_back(f);
@@ -155,9 +156,12 @@ ForceFieldHandle World::add_force_field(const ForceFieldDef& def) {
                                    (0x9E3779B97F4A7C15ULL * (impl_->fields.next_serial() + 1)));
   f->pose_at(impl_->time);
   for (std::size_t s = 0; s < impl_->systems.size(); ++s) {
-    bool applies = def.systems.empty() && def.kind != FieldKind::blast;  // blast: bodies only
+    // A blast is not an acceleration: it is applied once, as an impulse, by the integration
+    // stage (stage_integrate.cpp), which finds it in the field table.
+    const bool accelerates = def.particles && def.kind != FieldKind::blast;
+    bool applies = def.systems.empty() && accelerates;
     for (const ParticleSystemHandle& h : def.systems)
-      applies = applies || (h.id == impl_->systems.handle(s) && def.kind != FieldKind::blast);
+      applies = applies || (h.id == impl_->systems.handle(s) && accelerates);
     if (applies) impl_->systems.at(s).dynamics.fields.push_back(f.get());
   }
   detail::FieldEntry e;

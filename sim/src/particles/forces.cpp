@@ -64,7 +64,7 @@ Vec3 FieldState::acceleration(const Vec3& x, const Vec3& v, double m, double t) 
       return a + (w * def.drag / m) * (rotation * def.wind - v);
     }
     case FieldKind::blast:
-      return Vec3::Zero();  // bodies only (body_coupling.cpp)
+      return Vec3::Zero();  // an impulse, not an acceleration (stage_integrate.cpp, body_coupling.cpp)
     case FieldKind::attractor: {
       const Vec3 d = centre - x;
       const double r = d.norm();

@@ -65,11 +65,17 @@ enum class FieldKind {
   vortex,      ///< a = strength (axis × ρ̂) - inward_strength ρ̂, ρ = the part of x - c normal
                ///< to the axis: orbit around the axis, optionally pulled in
   curl_noise,  ///< F = drag (u(x, t) - v): dragged toward a divergence-free velocity field
-  /// A pressure pulse at `time` from the region centre, on dynamic bodies only (particles are
-  /// not pushed: the explosion effect's fragments are): the momentum `impulse` Π (N s) leaves
-  /// the centre evenly in every direction, and a body whose centre of mass is at distance d
-  /// takes the share its mean projected area A intercepts, J = Π A / (4π max(d, √(A/π))²) along
-  /// the outward direction, times the drop-off weight (see world.hpp, bodies and fields).
+  /// A pressure pulse at `time` from the region centre: the momentum `impulse` Π (N s) leaves
+  /// the centre evenly in every direction, and whatever is at distance d takes the share its
+  /// cross-section A intercepts, J = w Π A / (4π max(d, √(A/π))²) along the outward direction
+  /// (w the drop-off weight), once, in the internal step holding `time`.
+  ///  - A dynamic body: A its mean projected area, at its centre of mass (world.hpp, bodies and
+  ///    fields).
+  ///  - A particle of radius r and mass m alive before the pulse: A = π r², and the velocity
+  ///    change is J / (m + ½ ρ_air (4/3)π r³): the added mass of a sphere in air (potential
+  ///    flow), which keeps a light, large smoke puff from being thrown faster than the air that
+  ///    carries it. Particles born at or after `time` (the explosion's own products, whose
+  ///    velocities already are the blast) are not pushed. Cloth is not pushed.
   blast,
 };
 
@@ -106,6 +112,8 @@ struct ForceFieldDef {
   double time = 0.0;                   ///< (s) >= 0: when the pulse passes (one step takes it)
   /// Whether the field also pushes dynamic bodies (at their centre of mass; world.hpp).
   bool bodies = true;
+  /// Whether the field acts on particles (those of `systems`); false: bodies only.
+  bool particles = true;
   /// Systems the field acts on; empty = every system.
   std::vector<ParticleSystemHandle> systems;
 };
