@@ -180,7 +180,8 @@ TEST(SceneBodies, BoxFallsOntoThePlaneAndRests) {
 
 TEST(SceneBodies, CouplingKeysReachTheDefinitions) {
   // Air drag of bodies (drag_coefficient, drag_area_m2), a uniform field's wind, a blast field,
-  // and a field kept off bodies ("bodies": false). README "Rigid bodies", body_coupling.cpp.
+  // a field kept off bodies ("bodies": false) and a blast kept off particles ("particles": false).
+  // README "Rigid bodies" and "force_fields[i]", body_coupling.cpp, stage_integrate.cpp.
   const Scene s = scene_from_json(json::parse(R"({
     "colliders": [
       {"type": "box", "motion": "dynamic", "half_extents": [0.1, 0.1, 0.1],
@@ -188,7 +189,7 @@ TEST(SceneBodies, CouplingKeysReachTheDefinitions) {
     ],
     "force_fields": [
       {"type": "uniform", "wind": [3, 0, 0], "drag": 0.002},
-      {"type": "blast", "impulse": 50, "time": 0.4, "region": {"center": [1, 2, 0]}},
+      {"type": "blast", "impulse": 50, "time": 0.4, "region": {"center": [1, 2, 0]}, "particles": false},
       {"type": "vortex", "bodies": false}
     ]})"),
                                   "s.json");
@@ -202,7 +203,12 @@ TEST(SceneBodies, CouplingKeysReachTheDefinitions) {
   EXPECT_EQ(s.force_fields[1].def.kind, sim::FieldKind::blast);
   EXPECT_EQ(s.force_fields[1].def.impulse, 50.0);
   EXPECT_EQ(s.force_fields[1].def.time, 0.4);
+  EXPECT_FALSE(s.force_fields[1].def.particles);
+  EXPECT_TRUE(s.force_fields[1].def.bodies);
   EXPECT_FALSE(s.force_fields[2].def.bodies);
+  EXPECT_TRUE(s.force_fields[2].def.particles);
+  const std::string bad_flag = errors_of(R"({"force_fields": [{"type": "blast", "particles": 1}]})");
+  EXPECT_NE(bad_flag.find("/force_fields/0/particles"), std::string::npos) << bad_flag;
   EXPECT_NE(collider_errors(R"({"type": "box", "motion": "dynamic", "drag_coefficient": -1})"), "");
   EXPECT_NE(collider_errors(R"({"type": "box", "drag_area_m2": 0.1})"), "");  // not dynamic
   EXPECT_NE(errors_of(R"({"force_fields": [{"type": "blast", "impulse": -1}]})"), "");
