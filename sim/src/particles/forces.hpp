@@ -86,24 +86,24 @@ struct Dynamics {
   void add_pair_forces(const double* x, double* a);
 
   // grid scratch (reused; no allocation once grown)
-  std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle
+  std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle (sparse grids)
   std::vector<std::uint32_t> order_;        // (n) particle indices sorted by (cell key, index)
   std::vector<std::uint32_t> rank_;         // (n) particle index -> sorted position
-  std::vector<std::uint64_t> sorted_key_;   // (n) cell keys in sorted order
   std::vector<double> sorted_;              // (5 x n) x, then y, z, q, m, each in cell order
   std::vector<double> accel_;               // (n x 3) pair accelerations in sorted order
-  std::vector<std::uint64_t> cell_keys_;    // occupied cells' keys, increasing
-  std::vector<std::uint32_t> cell_start_;   // first particle (in order_) of each cell, + n
-  std::vector<std::uint32_t> cell_count_;   // counting-sort scratch (cells of the bounding box)
+  std::vector<std::uint64_t> cell_keys_;    // sparse grids: occupied cells' keys, increasing
+  std::vector<std::uint32_t> cell_start_;   // sparse grids: first particle of each cell, + n
+  std::vector<std::uint32_t> cell_count_;   // dense grids: run start of every bounding-box cell
   std::vector<std::int64_t> cell_xyz_;      // (n x 3) integer cell coordinates
   /// One thread's candidates of a cell (the particles of its 27 neighbour cells, in run order):
-  /// positions, sorted index, squared distances to the current particle, the ones kept.
+  /// positions, sorted index, squared distances to the current particle; then the ones kept
+  /// (candidate index, squared distance, charge, mass) and their force coefficients.
   struct PairGather {
-    std::vector<double> x, y, z, r2;
+    std::vector<double> x, y, z, r2, kr2, kq, km, coef;
     std::vector<std::uint32_t> s, keep;
     void resize(std::size_t m) {
       if (x.size() >= m) return;
-      for (auto* a : {&x, &y, &z, &r2}) a->resize(m);
+      for (auto* a : {&x, &y, &z, &r2, &kr2, &kq, &km, &coef}) a->resize(m);
       s.resize(m);
       keep.resize(m);
     }

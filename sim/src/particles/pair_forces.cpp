@@ -1,6 +1,7 @@
 // Gravitational and Coulomb pair forces between the particles of one system (Coutinho §3.3.4)
 // over a grid of cut-off cells; each particle gathers its own force in a fixed order.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -10,6 +11,9 @@
 
 #ifdef _OPENMP
 #include <omp.h>
+#endif
+#if defined(__SSE2__)
+#include <emmintrin.h>
 #endif
 
 namespace simreel::sim::detail {
@@ -40,14 +44,43 @@ void squared_distances(double xi, double yi, double zi, const double* __restrict
   }
 }
 
+/// coef[u] = (kq q[u] - gm m[u]) / s³, s = √(r2[u] + ε²), for u < len: the pair force over the
+/// distance, F / r = (K q_i q_j - G m_i m_j) / s³ (kq = K q_i, gm = G m_i; Coutinho §3.3.4, with
+/// Plummer softening ε). Element-wise and in the scalar form's order ((K q_i) q_j, the square
+/// root taken once), so every lane gives the scalar bits; the divide and square root are what
+/// a neighbour costs, four at a time here instead of one.
+SIMREEL_VECTOR_CLONES
+void pair_coefficients(double kq, double gm, double eps2, const double* __restrict r2,
+                       const double* __restrict q, const double* __restrict m, std::size_t len,
+                       double* __restrict coef) {
+  for (std::size_t u = 0; u < len; ++u) {
+    const double s2 = r2[u] + eps2;
+    coef[u] = (kq * q[u] - gm * m[u]) / (s2 * std::sqrt(s2));
+  }
+}
+
+/// Bit k set when r2[k] < cut2 (false for NaN, as the scalar test), k < len <= 64. Two lanes a
+/// compare on SSE2 (every x86-64): the kept neighbours (~15% of a 27-cell stencil's candidates)
+/// are then visited by their set bits instead of testing each candidate in a scalar loop.
+std::uint64_t inside_mask(const double* r2, std::size_t len, double cut2) {
+  std::uint64_t bits = 0;
+  std::size_t k = 0;
+#if defined(__SSE2__)
+  const __m128d c = _mm_set1_pd(cut2);
+  for (; k + 2 <= len; k += 2)
+    bits |= std::uint64_t(_mm_movemask_pd(_mm_cmplt_pd(_mm_loadu_pd(r2 + k), c))) << k;
+#endif
+  for (; k < len; ++k) bits |= std::uint64_t(r2[k] < cut2) << k;
+  return bits;
+}
+
 }  // namespace
 
 void Dynamics::add_pair_forces(const double* x, double* a) {
   const double cut = pair.cutoff, cut2 = cut * cut, eps2 = pair.softening * pair.softening;
   const double inv = 1.0 / cut;
-  // Build: each particle's cell key, sorted with its index (a total order, so the layout is
-  // independent of the thread count), then a hash of occupied cells -> run in the sorted array.
-  cell_key_.resize(n);
+  // Build: each particle's cell, the particles sorted by (cell key, index) (a total order, so the
+  // layout is independent of the thread count), then where each cell's run starts.
   cell_xyz_.resize(3 * n);
   std::int64_t lo[3], hi[3];
   for (int d = 0; d < 3; ++d) {
@@ -56,92 +89,144 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   }
   bool finite = true;
   for (std::size_t i = 0; i < n; ++i) {
-    std::int64_t c[3];
     for (int d = 0; d < 3; ++d) {
       const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
       finite = finite && std::abs(f) < double(kCellBias);
       // (a cast of a value beyond +-2^40 would gain nothing: cell_key() clamps it anyway)
       constexpr double kFar = double(std::int64_t{1} << 40);
-      c[d] = f >= kFar ? std::int64_t{1} << 40 : f <= -kFar ? -(std::int64_t{1} << 40)
-             : f == f ? std::int64_t(f) : 0;
-      cell_xyz_[3 * i + std::size_t(d)] = c[d];
-      lo[d] = std::min(lo[d], c[d]);
-      hi[d] = std::max(hi[d], c[d]);
+      const std::int64_t c = f >= kFar ? std::int64_t{1} << 40 : f <= -kFar ? -(std::int64_t{1} << 40)
+                             : f == f ? std::int64_t(f) : 0;
+      cell_xyz_[3 * i + std::size_t(d)] = c;
+      lo[d] = std::min(lo[d], c);
+      hi[d] = std::max(hi[d], c);
     }
-    cell_key_[i] = cell_key(c[0], c[1], c[2]);
   }
-  std::vector<std::uint64_t>& keys = cell_key_;
   std::vector<std::uint32_t>& order = order_;
   order.resize(n);
   rank_.resize(n);
   // (key, index) order. Within +-kCellBias cells (no clamping) the key orders cells as the
   // linear index over the particles' bounding box does, so when that box has few cells per
   // particle a counting sort (stable: indices ascending within a cell) gives the same order in
-  // O(n) instead of a comparison sort's O(n log n) random reads.
+  // O(n) instead of a comparison sort's O(n log n) random reads, and its prefix sums are a
+  // dense table of where every cell's run starts: a neighbour column is then two reads.
   const std::uint64_t ny = finite ? std::uint64_t(hi[1] - lo[1] + 1) : 0,
                       nz = finite ? std::uint64_t(hi[2] - lo[2] + 1) : 0,
                       nx = finite ? std::uint64_t(hi[0] - lo[0] + 1) : 0;
-  if (finite && nx * ny * nz <= 4 * std::uint64_t(n) + 4096) {
-    const std::size_t cells = std::size_t(nx * ny * nz);
-    cell_count_.assign(cells + 1, 0);
+  const bool dense = finite && nx * ny * nz <= 4 * std::uint64_t(n) + 4096;
+  std::size_t cells = 0;  // dense: cells of the bounding box; else occupied cells
+  if (dense) {
+    cells = std::size_t(nx * ny * nz);
+    // cnt[c + 2] counts cell c; after the prefix sums cnt[c + 1] is its start, and the scatter
+    // advances that to its end, leaving start(c) = cnt[c] and end(c) = cnt[c + 1].
+    cell_count_.assign(cells + 2, 0);
+    std::uint32_t* cnt = cell_count_.data();
     const auto lin = [&](std::size_t i) {
       const std::int64_t* c = &cell_xyz_[3 * i];
       return std::size_t((std::uint64_t(c[0] - lo[0]) * ny + std::uint64_t(c[1] - lo[1])) * nz +
                          std::uint64_t(c[2] - lo[2]));
     };
-    for (std::size_t i = 0; i < n; ++i) ++cell_count_[lin(i) + 1];
-    for (std::size_t c = 0; c < cells; ++c) cell_count_[c + 1] += cell_count_[c];
+    for (std::size_t i = 0; i < n; ++i) ++cnt[lin(i) + 2];
+    for (std::size_t c = 1; c < cells + 2; ++c) cnt[c] += cnt[c - 1];
     for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t s = cell_count_[lin(i)]++;
+      const std::uint32_t s = cnt[lin(i) + 1]++;
       order[s] = std::uint32_t(i);
       rank_[i] = s;
     }
   } else {
+    std::vector<std::uint64_t>& keys = cell_key_;
+    keys.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      keys[i] = cell_key(cell_xyz_[3 * i], cell_xyz_[3 * i + 1], cell_xyz_[3 * i + 2]);
     for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
     std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
       return keys[p] != keys[q] ? keys[p] < keys[q] : p < q;
     });
     for (std::size_t s = 0; s < n; ++s) rank_[order[s]] = std::uint32_t(s);
+    // Occupied cells in key order: key and first particle of each run.
+    cell_keys_.clear();
+    cell_start_.clear();
+    for (std::size_t s = 0; s < n; ++s)
+      if (s == 0 || keys[order[s]] != keys[order[s - 1]]) {
+        cell_keys_.push_back(keys[order[s]]);
+        cell_start_.push_back(std::uint32_t(s));
+      }
+    cell_start_.push_back(std::uint32_t(n));
+    cells = cell_keys_.size();
   }
-  // Copy key, x, y, z, q, m into cell order, one array each: a neighbour cell's particles are
-  // then contiguous, and the distance pass over a cell's candidates reads them as vectors. The
+  // Copy x, y, z, q, m into cell order, one array each: a neighbour cell's particles are then
+  // contiguous, and the distance pass over a cell's candidates reads them as vectors. The
   // particles are read in their own order and written to their ranks (a scatter: the random
   // accesses are independent stores, not loads the copy waits for).
   sorted_.resize(5 * n);
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
-  sorted_key_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t s = rank_[i];
-    sorted_key_[s] = keys[i];
     sx[s] = x[3 * i];
     sy[s] = x[3 * i + 1];
     sz[s] = x[3 * i + 2];
     sq[s] = charge ? charge[i] : 0.0;
     sm[s] = mass[i];
   }
-  // Occupied cells in key order: key and first particle of each run.
-  cell_keys_.clear();
-  cell_start_.clear();
-  for (std::size_t s = 0; s < n; ++s)
-    if (s == 0 || sorted_key_[s] != sorted_key_[s - 1]) {
-      cell_keys_.push_back(sorted_key_[s]);
-      cell_start_.push_back(std::uint32_t(s));
-    }
-  cell_start_.push_back(std::uint32_t(n));
   const double G = pair.gravitational_G, K = pair.coulomb_K;
   accel_.resize(3 * n);
   double* sacc = accel_.data();  // (n x 3) each particle's pair acceleration, in cell order
-  const std::size_t cells = cell_keys_.size();
-  const std::uint64_t* ck = cell_keys_.data();
-  const std::uint32_t* cs = cell_start_.data();
-  // Gather, one occupied cell at a time. Keys order cells by (x, y, z), so the three cells of a
-  // neighbour column (dx, dy, dz = -1..1) are one contiguous run of particles, and as the cells
-  // are visited in key order each column's start only moves forward: nine cursors replace 27
-  // lookups. The nine runs are copied once per cell into a candidate list shared by the cell's
-  // particles; each particle then takes the squared distances to all candidates in one
-  // vectorised pass, keeps those within the cut-off (branch-free), and sums their forces in
-  // candidate order: the same neighbours in the same order as a scalar loop over the runs, so
-  // the same bits, whichever thread computes it.
+  // One occupied cell: particles [first, last) in cell order, its nine neighbour columns
+  // (dx, dy = -1..1, x-major; each column's three cells dz = -1..1 one contiguous run, in key
+  // order). The runs are copied once into a candidate list shared by the cell's particles;
+  // each particle takes the squared distances to all candidates in one vectorised pass, visits
+  // those within the cut-off by the set bits of a mask (itself excluded by its place in the
+  // list), computes their coefficients in one vectorised pass, and sums their forces in
+  // candidate order: ascending (cell, index), the same neighbours in the same order as a scalar
+  // loop over the runs, so the same bits, whichever thread computes it.
+  const auto cell_forces = [&](PairGather& g, std::uint32_t first, std::uint32_t last,
+                               const std::uint32_t* run_b, const std::uint32_t* run_e) {
+    std::size_t m = 0, self0 = 0;
+    for (int r = 0; r < 9; ++r) {
+      if (r == 4) self0 = m + (first - run_b[4]);  // the centre column holds the cell itself
+      m += run_e[r] - run_b[r];
+    }
+    g.resize(m);
+    std::size_t k = 0;
+    for (int r = 0; r < 9; ++r)
+      for (std::uint32_t s = run_b[r]; s < run_e[r]; ++s, ++k) {
+        g.x[k] = sx[s];
+        g.y[k] = sy[s];
+        g.z[k] = sz[s];
+        g.s[k] = s;
+      }
+    for (std::uint32_t si = first; si < last; ++si) {
+      const double xi = sx[si], yi = sy[si], zi = sz[si];
+      const double qi = sq[si], mi = sm[si];
+      squared_distances(xi, yi, zi, g.x.data(), g.y.data(), g.z.data(), m, g.r2.data());
+      const std::size_t self = self0 + (si - first);
+      std::size_t kept = 0;
+      for (std::size_t w = 0; w < m; w += 64) {
+        std::uint64_t bits = inside_mask(g.r2.data() + w, std::min<std::size_t>(64, m - w), cut2);
+        if (self >= w && self - w < 64) bits &= ~(std::uint64_t{1} << (self - w));
+        for (; bits != 0; bits &= bits - 1, ++kept) {
+          const std::size_t q = w + std::size_t(std::countr_zero(bits));
+          const std::uint32_t s = g.s[q];
+          g.keep[kept] = std::uint32_t(q);
+          g.kr2[kept] = g.r2[q];
+          g.kq[kept] = sq[s];
+          g.km[kept] = sm[s];
+        }
+      }
+      pair_coefficients(K * qi, G * mi, eps2, g.kr2.data(), g.kq.data(), g.km.data(), kept,
+                        g.coef.data());
+      double ax = 0, ay = 0, az = 0;
+      for (std::size_t u = 0; u < kept; ++u) {
+        const std::size_t q = g.keep[u];
+        const double c = g.coef[u];
+        ax += c * (xi - g.x[q]);
+        ay += c * (yi - g.y[q]);
+        az += c * (zi - g.z[q]);
+      }
+      sacc[3 * si] = ax / mi;
+      sacc[3 * si + 1] = ay / mi;
+      sacc[3 * si + 2] = az / mi;
+    }
+  };
   const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
   if (gather_.size() < std::size_t(parts)) gather_.resize(std::size_t(parts));
 #pragma omp parallel num_threads(parts) if (parts > 1)
@@ -152,62 +237,60 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     const std::size_t t = 0, nt = 1;
 #endif
     PairGather& g = gather_[t];
-    const std::size_t c_begin = cells * t / nt, c_end = cells * (t + 1) / nt;
-    std::size_t cursor[9];
-    for (std::size_t c = c_begin; c < c_end; ++c) {
-      const std::size_t s0 = cs[c];
-      const std::int64_t cx = std::int64_t(std::floor(sx[s0] * inv)),
-                         cy = std::int64_t(std::floor(sy[s0] * inv)),
-                         cz = std::int64_t(std::floor(sz[s0] * inv));
-      std::uint32_t run_b[9], run_e[9];
-      std::size_t m = 0;
-      for (int col = 0; col < 9; ++col) {
-        const std::int64_t dx = col / 3 - 1, dy = col % 3 - 1;
-        const std::uint64_t lo = cell_key(cx + dx, cy + dy, cz - 1);
-        const std::uint64_t hi = cell_key(cx + dx, cy + dy, cz + 1);
-        std::size_t& cur = cursor[col];
-        if (c == c_begin)
-          cur = std::size_t(std::lower_bound(ck, ck + cells, lo) - ck);
-        else
-          while (cur < cells && ck[cur] < lo) ++cur;
-        std::size_t end = cur;
-        while (end < cells && ck[end] <= hi) ++end;
-        run_b[col] = cs[cur];
-        run_e[col] = cs[end];
-        m += run_e[col] - run_b[col];
+    std::uint32_t run_b[9], run_e[9];
+    if (dense) {
+      // Cells split where the particles do (a part = the cells whose run starts in its share of
+      // [0, n)), so the parts hold about equal particle counts however the cells are filled.
+      const std::uint32_t* cnt = cell_count_.data();
+      const auto part_begin = [&](std::size_t p) {
+        return p == 0    ? std::size_t(0)
+               : p == nt ? cells
+                         : std::size_t(std::lower_bound(cnt, cnt + cells, std::uint32_t(n * p / nt)) - cnt);
+      };
+      const std::size_t c_end = part_begin(t + 1), nyz = std::size_t(ny * nz);
+      for (std::size_t c = part_begin(t); c < c_end; ++c) {
+        if (cnt[c] == cnt[c + 1]) continue;
+        const std::size_t ix = c / nyz, iy = c % nyz / std::size_t(nz), iz = c % std::size_t(nz);
+        const std::size_t z0 = iz > 0 ? iz - 1 : iz, z1 = iz + 1 < nz ? iz + 1 : iz;
+        for (int col = 0; col < 9; ++col) {
+          const std::size_t cx = ix + std::size_t(col / 3) - 1, cy = iy + std::size_t(col % 3) - 1;
+          if (cx >= nx || cy >= ny) {  // (below 0 wraps to a huge value)
+            run_b[col] = run_e[col] = 0;
+            continue;
+          }
+          const std::size_t base = (cx * std::size_t(ny) + cy) * std::size_t(nz);
+          run_b[col] = cnt[base + z0];
+          run_e[col] = cnt[base + z1 + 1];
+        }
+        cell_forces(g, cnt[c], cnt[c + 1], run_b, run_e);
       }
-      g.resize(m);
-      std::size_t k = 0;
-      for (int r = 0; r < 9; ++r)
-        for (std::uint32_t s = run_b[r]; s < run_e[r]; ++s, ++k) {
-          g.x[k] = sx[s];
-          g.y[k] = sy[s];
-          g.z[k] = sz[s];
-          g.s[k] = s;
+    } else {
+      // Keys order cells by (x, y, z), and as the cells are visited in key order each column's
+      // start only moves forward: nine cursors replace 27 lookups.
+      const std::uint64_t* ck = cell_keys_.data();
+      const std::uint32_t* cs = cell_start_.data();
+      const std::size_t c_begin = cells * t / nt, c_end = cells * (t + 1) / nt;
+      std::size_t cursor[9];
+      for (std::size_t c = c_begin; c < c_end; ++c) {
+        const std::size_t s0 = cs[c];
+        const std::int64_t cx = std::int64_t(std::floor(sx[s0] * inv)),
+                           cy = std::int64_t(std::floor(sy[s0] * inv)),
+                           cz = std::int64_t(std::floor(sz[s0] * inv));
+        for (int col = 0; col < 9; ++col) {
+          const std::int64_t dx = col / 3 - 1, dy = col % 3 - 1;
+          const std::uint64_t lo_key = cell_key(cx + dx, cy + dy, cz - 1);
+          const std::uint64_t hi_key = cell_key(cx + dx, cy + dy, cz + 1);
+          std::size_t& cur = cursor[col];
+          if (c == c_begin)
+            cur = std::size_t(std::lower_bound(ck, ck + cells, lo_key) - ck);
+          else
+            while (cur < cells && ck[cur] < lo_key) ++cur;
+          std::size_t end = cur;
+          while (end < cells && ck[end] <= hi_key) ++end;
+          run_b[col] = cs[cur];
+          run_e[col] = cs[end];
         }
-      for (std::uint32_t si = cs[c]; si < cs[c + 1]; ++si) {
-        const double xi = sx[si], yi = sy[si], zi = sz[si];
-        const double qi = sq[si], mi = sm[si];
-        squared_distances(xi, yi, zi, g.x.data(), g.y.data(), g.z.data(), m, g.r2.data());
-        std::size_t kept = 0;
-        for (std::size_t q = 0; q < m; ++q) {
-          g.keep[kept] = std::uint32_t(q);
-          kept += std::size_t((g.r2[q] < cut2) & (g.s[q] != si));
-        }
-        double ax = 0, ay = 0, az = 0;
-        for (std::size_t u = 0; u < kept; ++u) {
-          const std::size_t q = g.keep[u];
-          const std::uint32_t s = g.s[q];
-          const double ddx = xi - g.x[q], ddy = yi - g.y[q], ddz = zi - g.z[q];
-          const double s2 = g.r2[q] + eps2;
-          const double coef = (K * qi * sq[s] - G * mi * sm[s]) / (s2 * std::sqrt(s2));
-          ax += coef * ddx;
-          ay += coef * ddy;
-          az += coef * ddz;
-        }
-        sacc[3 * si] = ax / mi;
-        sacc[3 * si + 1] = ay / mi;
-        sacc[3 * si + 2] = az / mi;
+        cell_forces(g, cs[c], cs[c + 1], run_b, run_e);
       }
     }
   }
