@@ -177,6 +177,17 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
   sim::ShapeDef s;
   s.offset = offset;
   s.material = material;
+  if (type_key == "type") {
+    // A shapes[k] object may have its own contact material (a rubber grip on a steel handle):
+    // the body's, with the keys it gives replaced. Colour and texture stay the body's.
+    if (const json* mj = object_member(r, "material")) {
+      ObjectReader o(*mj, r.pointer("material"), r.file(), r.errors());
+      s.material.restitution = o.number("restitution", material.restitution, ranges::kRestitution);
+      s.material.friction = o.number("friction", material.friction, ranges::kFriction);
+      if (o.has("static_friction")) s.material.static_friction = o.number("static_friction", 0.0, 0.0, kInf);
+      o.finish();
+    }
+  }
   s.density = r.number("density", density, ranges::kBodyDensity);
   BodyShapeDraw draw;
   if (type == "sphere") {

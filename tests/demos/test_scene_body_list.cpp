@@ -141,6 +141,32 @@ TEST(SceneBodyList, BodyBoxFollowsTheSameTrajectoryAsADynamicCollider) {
   EXPECT_NEAR(c.translation.z(), 0.1, 2e-3);  // it fell and lies on its largest face
 }
 
+TEST(SceneBodyList, AShapeOfACompoundHasItsOwnContactMaterial) {
+  // A box sliding on the ground (friction 1) under a sphere riding on it, not touching the
+  // ground. The box's own friction 0.16 gives the pair mu = sqrt(0.16 * 1) = 0.4 and the
+  // deceleration mu g; the body's (the sphere's) 0.5 would give 0.71 g.
+  const Scene s = scene_from_json(json::parse(R"({"colliders": [{"type": "plane", "friction": 1.0}],
+      "bodies": [{"position": [0, 0, 0.1], "velocity": [3, 0, 0], "material": {"friction": 0.5, "restitution": 0.3},
+        "shapes": [{"type": "box", "half_extents": [0.2, 0.2, 0.1], "material": {"friction": 0.16}},
+                   {"type": "sphere", "radius": 0.1, "position": [0, 0, 0.25]}]}]})"),
+                                  "s.json");
+  const sim::BodyDef& b = s.colliders[1].body;
+  ASSERT_EQ(b.shapes.size(), 2u);
+  EXPECT_EQ(b.shapes[0].material.friction, 0.16);
+  EXPECT_EQ(b.shapes[0].material.restitution, 0.3) << "the keys it does not give are the body's";
+  EXPECT_EQ(b.shapes[1].material.friction, 0.5);
+  SceneWorld sw = build_world(s);
+  const double h = 1.0 / 240.0, T = 0.5;
+  for (int i = 0; i < 12; ++i) sw.world.advance(h);  // settle the contact
+  const double v0 = sw.world.motion(sw.colliders[1]).linear_velocity.x();
+  for (int i = 0; i < int(T / h + 0.5); ++i) sw.world.advance(h);
+  const double v1 = sw.world.motion(sw.colliders[1]).linear_velocity.x();
+  EXPECT_NEAR((v0 - v1) / T, 0.4 * 9.81, 0.03 * 0.4 * 9.81);
+  EXPECT_NE(body_errors(R"({"shapes": [{"type": "box", "material": {"friction": -1}}]})"), "");
+  const std::string colour = body_errors(R"({"shapes": [{"type": "box", "material": {"color": [1, 0, 0]}}]})");
+  EXPECT_NE(colour.find("/bodies/0/shapes/0/material/color"), std::string::npos) << colour;
+}
+
 TEST(SceneBodyList, MeshFilesGiveHullsAndDynamicCompoundsOfTheirClosedParts) {
   const auto dir = mesh_folder();
   const std::string file = (dir / "s.json").string();
