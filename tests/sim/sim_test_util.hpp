@@ -16,6 +16,17 @@ inline ParticleSystemDef spawn_only_system(const char* name = "probe") {
   return def;
 }
 
+/// A blast field (forces.hpp FieldKind::blast) of momentum Pi (N s) from `centre` at `time` (s),
+/// everywhere, on bodies and every particle system.
+inline ForceFieldDef blast_field(const Vec3& centre, double Pi, double time) {
+  ForceFieldDef f;
+  f.kind = FieldKind::blast;
+  f.transform.translation = centre;
+  f.impulse = Pi;
+  f.time = time;
+  return f;
+}
+
 inline Vec3 position_of(const ParticleView& v, std::size_t i) {
   return {v.position[3 * i], v.position[3 * i + 1], v.position[3 * i + 2]};
 }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "sim_test_util.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace simreel::sim {
@@ -213,12 +214,7 @@ TEST(BodyCoupling, BlastPushesBodiesRadiallyWithTheOneOverDSquaredShare) {
   std::vector<BodyHandle> bodies;
   std::vector<Vec3> at = {{2.0, 0.0, 1.0}, {0.0, -4.0, 1.0}, {1.0, 1.0, 2.0}};
   for (const Vec3& p : at) bodies.push_back(w.add_body(floating_box(e, p, 1.0, Material{})));
-  ForceFieldDef blast;
-  blast.kind = FieldKind::blast;
-  blast.transform.translation = centre;
-  blast.impulse = Pi;
-  blast.time = 0.05;
-  w.add_force_field(blast);
+  w.add_force_field(test::blast_field(centre, Pi, 0.05));
   for (int i = 0; i < 6; ++i) w.advance(h);  // before the blast
   for (const BodyHandle b : bodies) EXPECT_EQ(w.motion(b).linear_momentum.norm(), 0.0);
   for (int i = 0; i < 12; ++i) w.advance(h);

@@ -338,12 +338,7 @@ TEST(SimForces, BlastPushesParticlesOnceWithTheirShareOfThePulseAtAnyStep) {
       d.initial_particles.push_back(p);
     }
     const auto ps = world.add_particle_system(d);
-    ForceFieldDef blast;
-    blast.kind = FieldKind::blast;
-    blast.transform.translation = centre;
-    blast.impulse = Pi;
-    blast.time = 0.1;
-    world.add_force_field(blast);
+    world.add_force_field(test::blast_field(centre, Pi, 0.1));
     world.advance(0.09);
     for (std::size_t k = 0; k < at.size(); ++k)
       EXPECT_EQ(velocity_of(world.particles(ps), k).norm(), 0.0) << "before the blast, h " << h;
@@ -384,11 +379,7 @@ TEST(SimForces, BlastLeavesItsOwnProductsOtherSystemsAndParticlesFalseAlone) {
     d.initial_particles = {particle(Vec3(1.0, 0.0, 1.0), 1e-3)};
     const auto dust = world.add_particle_system(d);
     if (with_blast) {
-      ForceFieldDef blast;
-      blast.kind = FieldKind::blast;
-      blast.transform.translation = Vec3(0.0, 0.0, 1.0);
-      blast.impulse = 20.0;
-      blast.time = 0.25;
+      ForceFieldDef blast = test::blast_field(Vec3(0.0, 0.0, 1.0), 20.0, 0.25);
       blast.particles = particles_flag;
       if (list_other) blast.systems = {fragments};
       world.add_force_field(blast);
