@@ -503,6 +503,22 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     }
     return;
   }
+  // Particles share nothing here unless a hit splits them (droplets appended in particle order,
+  // splash draws from one generator) or a dynamic body logs their impulses (summed in particle
+  // order): otherwise each resolve() changes its own particle alone, and large systems split
+  // statically over ctx.threads with the same results; the removal count is an integer sum.
+  bool shared = false;
+  for (const Collider& c : colliders) {
+    const HitAction act = ctx.on_hit != nullptr ? *ctx.on_hit : c.material.on_hit;
+    shared = shared || act == HitAction::split || (ctx.impulses != nullptr && ctx.impulses->logs(c));
+  }
+  const bool par = !shared && ctx.threads > 1 && end - begin >= kParallelMin;
+  std::uint64_t removed = 0;
+#pragma omp parallel num_threads(ctx.threads) if (par) reduction(+ : removed)
+  {
+    CollisionContext local = ctx;
+    local.removed_inside = 0;
+#pragma omp for schedule(static)
   for (std::size_t i = begin; i < end; ++i) {
     // Fast rejection: end point clear of every plane, swept bounds clear of every solid.
     const Vec3 p1(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
@@ -522,8 +538,11 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       }
       if (near) break;
     }
-    if (near) resolve(s, i, dt, colliders, ctx, f);
+    if (near) resolve(s, i, dt, colliders, local, f);
   }
+    removed += local.removed_inside;
+  }
+  ctx.removed_inside += removed;
 }
 
 void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
