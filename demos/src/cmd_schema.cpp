@@ -36,7 +36,7 @@ const char* kProbe = R"({
   ],
   "bodies": [
     {"shape": "sphere", "mass": 1, "material": {"texture": "t.png", "static_friction": 1}},
-    {"shapes": [{"type": "sphere", "material": {"static_friction": 1}}, {"type": "box"}, {"type": "capsule"}, {"type": "cylinder"},
+    {"shapes": [{"type": "sphere", "material": {"static_friction": 1, "color": [1, 0, 0], "texture": "t.png"}}, {"type": "box"}, {"type": "capsule"}, {"type": "cylinder"},
                 {"type": "convex_hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]},
                 {"type": "convex_hull", "mesh": "m.obj", "scale": 1},
                 {"type": "mesh", "mesh": "m.obj", "scale": [1, 1, 1]}]},

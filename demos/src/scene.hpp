@@ -3,12 +3,14 @@
 /// Scene files: JSON -> checked definitions -> a sim::World and the renderer's drawables.
 /// The format is documented key by key in README.md ("Scene format").
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "simreel/assets/mesh.hpp"
@@ -51,6 +53,10 @@ struct BodyShapeDraw {
   /// Draws nothing: the later parts of a dynamic mesh (its file is drawn once, with the first
   /// part's shape; all parts share the shape frame).
   bool skip = false;
+  /// shapes[k].material's drawing keys, when given: the shape is drawn in its own linear RGBA
+  /// colour and/or texture (a path) instead of the body's.
+  std::optional<std::array<float, 4>> color;
+  std::string texture;
 };
 
 struct ColliderScene {

@@ -159,10 +159,25 @@ std::shared_ptr<const assets::TriangleMesh> mesh_file(ObjectReader& r, const std
   return nullptr;
 }
 
+/// A material's "texture": an image file named relative to the scene file, as its full path;
+/// "" when the key is absent (or wrong: the error is recorded with its pointer).
+std::string texture_file(ObjectReader& o) {
+  if (!o.has("texture")) return {};
+  const std::string tex = o.string("texture", "");
+  const std::filesystem::path path = std::filesystem::path(o.file()).parent_path() / tex;
+  std::error_code ec;
+  if (tex.empty() || !std::filesystem::is_regular_file(path, ec)) {
+    o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" +
+                                         path.string() + " is not a file)");
+    return {};
+  }
+  return path.string();
+}
+
 /// One shape's keys (from a shapes[k] object, or inline in the body with `type_key` "shape"):
 /// appended to body.shapes (several for a dynamic mesh: the hulls of its closed parts).
 void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type, double density,
-           const sim::Material& material, ColliderScene& c) {
+           const sim::Material& material, const std::array<double, 4>& body_color, ColliderScene& c) {
   const std::string type = r.choice(type_key, "", kShapeTypes);
   if (!r.has(type_key)) {
     r.error_at(r.pointer(), "expected a \"" + type_key + "\": one of \"sphere\", \"box\", \"capsule\", \"cylinder\", "
@@ -177,14 +192,21 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
   sim::ShapeDef s;
   s.offset = offset;
   s.material = material;
+  std::optional<std::array<float, 4>> own_color;
+  std::string own_texture;
   if (type_key == "type") {
-    // A shapes[k] object may have its own contact material (a rubber grip on a steel handle):
-    // the body's, with the keys it gives replaced. Colour and texture stay the body's.
+    // A shapes[k] object may have its own material (a rubber grip on a steel handle, a red
+    // head on a wooden hammer): the body's, with the keys it gives replaced.
     if (const json* mj = object_member(r, "material")) {
       ObjectReader o(*mj, r.pointer("material"), r.file(), r.errors());
       s.material.restitution = o.number("restitution", material.restitution, ranges::kRestitution);
       s.material.friction = o.number("friction", material.friction, ranges::kFriction);
       if (o.has("static_friction")) s.material.static_friction = o.number("static_friction", 0.0, 0.0, kInf);
+      if (o.has("color")) {
+        const auto rgba = o.color("color", body_color);
+        own_color = std::array<float, 4>{float(rgba[0]), float(rgba[1]), float(rgba[2]), float(rgba[3])};
+      }
+      own_texture = texture_file(o);
       o.finish();
     }
   }
@@ -264,6 +286,8 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
           c.body.shapes.push_back(std::move(hull));
           BodyShapeDraw d;  // the file is drawn once, with the first piece
           d.scale = scale;
+          d.color = own_color;
+          d.texture = own_texture;
           if (first) d.asset = asset;
           else d.skip = true;
           first = false;
@@ -287,6 +311,8 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
     }
   }
   c.body.shapes.push_back(std::move(s));
+  draw.color = own_color;
+  draw.texture = own_texture;
   c.body_draw.push_back(draw);
 }
 
@@ -322,16 +348,7 @@ ColliderScene body(const json& j, const std::string& ptr, const std::string& fil
     m.friction = o.number("friction", m.friction, ranges::kFriction);
     if (o.has("static_friction")) m.static_friction = o.number("static_friction", 0.0, 0.0, kInf);
     color = o.color("color", color);
-    if (o.has("texture")) {
-      const std::string tex = o.string("texture", "");
-      const std::filesystem::path path = std::filesystem::path(file).parent_path() / tex;
-      std::error_code ec;
-      if (tex.empty() || !std::filesystem::is_regular_file(path, ec))
-        o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" +
-                                             path.string() + " is not a file)");
-      else
-        c.texture = path.string();
-    }
+    c.texture = texture_file(o);
     o.finish();
   }
   c.color = {float(color[0]), float(color[1]), float(color[2]), float(color[3])};
@@ -365,14 +382,14 @@ ColliderScene body(const json& j, const std::string& ptr, const std::string& fil
     if (!a->is_array() || a->empty()) r.error("shapes", "a non-empty array of shape objects", *a);
     object_array(r, "shapes", [&](const json& sj, const std::string& sp, std::size_t) {
       ObjectReader o(sj, sp, file, errors);
-      shape(o, "type", b.type, density, m, c);
+      shape(o, "type", b.type, density, m, color, c);
       o.finish();
     });
   } else if (!r.has("shape")) {
     r.error_at(ptr, "expected \"shapes\": [...] or an inline \"shape\": one of \"sphere\", \"box\", \"capsule\", "
                     "\"cylinder\", \"convex_hull\", \"mesh\"");
   } else {
-    shape(r, "shape", b.type, density, m, c);
+    shape(r, "shape", b.type, density, m, color, c);
   }
   r.finish();
   // The engine's own checks (shape sizes, mass properties of closed hulls), with the pointer.

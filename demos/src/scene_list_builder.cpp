@@ -1,5 +1,7 @@
 #include "scene_list_builder.hpp"
 
+#include <algorithm>
+
 #include "simreel/render/camera_path.hpp"
 #include "simreel/render/mesh.hpp"
 #include "simreel/sim/hull_mesh.hpp"
@@ -112,9 +114,12 @@ void append_at(const render::MeshDesc& m, const sim::Transform& offset, render::
 }
 
 /// A bodies[i] body as one mesh in its body frame: every shape's mesh at its offset (primitives
-/// tessellated, hulls as their flat faces, mesh files as imported).
+/// tessellated, hulls as their flat faces, mesh files as imported). When a shape has its own
+/// colour or texture, every shape's triangles are a part with its own material.
 render::MeshDesc body_desc(const ColliderScene& c) {
   render::MeshDesc d;
+  const bool own = std::any_of(c.body_draw.begin(), c.body_draw.end(),
+                               [](const BodyShapeDraw& b) { return b.color || !b.texture.empty(); });
   for (std::size_t i = 0; i < c.body.shapes.size(); ++i) {
     const sim::ShapeDef& s = c.body.shapes[i];
     const BodyShapeDraw& draw = c.body_draw[i];
@@ -125,7 +130,7 @@ render::MeshDesc body_desc(const ColliderScene& c) {
       as_mesh.mesh_asset = draw.asset;
       as_mesh.mesh_scale = draw.scale;
       m = mesh_desc(as_mesh);
-      if (c.texture.empty() && !m.material.texture_path.empty()) d.material.texture_path = m.material.texture_path;
+      if (c.texture.empty() && !m.material.texture_path.empty() && !own) d.material.texture_path = m.material.texture_path;
     } else {
       switch (s.type) {
         case sim::ShapeType::sphere: m = render::make_sphere_mesh(float(s.radius), 48); break;
@@ -140,7 +145,19 @@ render::MeshDesc body_desc(const ColliderScene& c) {
         default: break;
       }
     }
+    const auto first = std::uint32_t(d.indices.size() / 3);
     append_at(m, s.offset, d);
+    if (own && d.indices.size() / 3 > first) {
+      render::MeshPart& part = d.parts.emplace_back();
+      part.first_triangle = first;
+      part.triangle_count = std::uint32_t(d.indices.size() / 3) - first;
+      part.material = collider_material(c);
+      if (draw.color) part.material.base_color = render::Vec4f((*draw.color)[0], (*draw.color)[1], (*draw.color)[2], (*draw.color)[3]);
+      // The shape's texture, else the body's, else the one its mesh file names.
+      part.material.texture_path = !draw.texture.empty() ? draw.texture
+                                   : !c.texture.empty()  ? c.texture
+                                                         : m.material.texture_path;
+    }
   }
   const std::string file_texture = d.material.texture_path;
   d.material = collider_material(c);

@@ -37,9 +37,15 @@ struct Drawable {
   Vec3f half_extents = Vec3f::Ones();  // box
   PlaneDesc plane;                     // plane
   GpuMesh mesh;                        // plane and mesh (boxes share the unit cube)
-  // Mesh: material, texture, vertex data kept for update_mesh, local bounds for the shadow fit.
-  Material material;
-  GLuint texture = 0;
+  // Mesh: its parts (one when the MeshDesc had none), vertex data kept for update_mesh, local
+  // bounds for the shadow fit.
+  struct Part {
+    GLsizei first_index = 0;
+    GLsizei index_count = 0;
+    Material material;  // texture_rgba dropped once uploaded
+    GLuint texture = 0;
+  };
+  std::vector<Part> parts;
   std::vector<Vertex> vertices;  // CPU copy for update_mesh (keeps the UVs)
   std::vector<std::uint32_t> indices;
   Eigen::AlignedBox3f local_bounds;

@@ -99,8 +99,10 @@ void Renderer::Impl::create() {
 
 void Renderer::Impl::destroy_drawable(Drawable& d) noexcept {
   detail::destroy_mesh(gl, d.mesh);
-  if (d.texture != 0) gl.DeleteTextures(1, &d.texture);
-  d.texture = 0;
+  for (Drawable::Part& part : d.parts) {
+    if (part.texture != 0) gl.DeleteTextures(1, &part.texture);
+    part.texture = 0;
+  }
 }
 
 void Renderer::Impl::destroy() noexcept {
@@ -379,8 +381,31 @@ void Renderer::add_mesh(ObjectKey key, const MeshDesc& desc) {
   if (impl_->table.by_key.count(key) != 0) {
     throw std::invalid_argument("renderer: key " + std::to_string(key) + " is already used");
   }
-  int tex_w = 0, tex_h = 0;
-  const std::vector<std::uint8_t> tex = texture_rows(desc.material, tex_w, tex_h);
+  const std::size_t triangles = desc.indices.size() / 3;
+  std::size_t next = 0;
+  for (const MeshPart& part : desc.parts) {
+    if (part.first_triangle != next || part.triangle_count == 0 || part.triangle_count > triangles - next) {
+      throw std::invalid_argument("mesh parts must tile the " + std::to_string(triangles) +
+                                  " triangles in order; a part at triangle " +
+                                  std::to_string(part.first_triangle) + " with " +
+                                  std::to_string(part.triangle_count) + " triangles follows triangle " +
+                                  std::to_string(next));
+    }
+    next += part.triangle_count;
+  }
+  if (!desc.parts.empty() && next != triangles) {
+    throw std::invalid_argument("mesh parts cover " + std::to_string(next) + " of the " +
+                                std::to_string(triangles) + " triangles");
+  }
+  // Every texture is read and checked before any GL object is made.
+  std::vector<MeshPart> parts = desc.parts;
+  if (parts.empty()) parts.push_back({0, std::uint32_t(triangles), desc.material});
+  struct Rows {
+    std::vector<std::uint8_t> rgba;
+    int width = 0, height = 0;
+  };
+  std::vector<Rows> tex(parts.size());
+  for (std::size_t k = 0; k < parts.size(); ++k) tex[k].rgba = texture_rows(parts[k].material, tex[k].width, tex[k].height);
 
   std::vector<float> normals = desc.normals;
   if (normals.empty()) {
@@ -389,8 +414,6 @@ void Renderer::add_mesh(ObjectKey key, const MeshDesc& desc) {
   }
   const GlTable& gl = impl_->gl;
   Drawable& d = impl_->table.add(key, DrawableKind::mesh);
-  d.material = desc.material;
-  d.material.texture_rgba.clear();  // uploaded below; no second copy kept
   d.dynamic = desc.dynamic;
   d.vertices.assign(n, Vertex{});
   fill_vertices(d.vertices, desc.positions, normals);
@@ -401,13 +424,20 @@ void Renderer::add_mesh(ObjectKey key, const MeshDesc& desc) {
   for (const Vertex& v : d.vertices) d.local_bounds.extend(Vec3f(v.p[0], v.p[1], v.p[2]));
   d.indices = desc.indices;
   d.mesh = detail::upload_mesh(gl, d.vertices, d.indices, desc.dynamic ? GL_DYNAMIC_DRAW : GL_STATIC_DRAW);
-  if (!tex.empty()) {
-    gl.GenTextures(1, &d.texture);
-    gl.BindTexture(GL_TEXTURE_2D, d.texture);
+  d.parts.resize(parts.size());
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    Drawable::Part& part = d.parts[k];
+    part.first_index = GLsizei(3 * parts[k].first_triangle);
+    part.index_count = GLsizei(3 * parts[k].triangle_count);
+    part.material = std::move(parts[k].material);
+    part.material.texture_rgba.clear();  // uploaded below; no second copy kept
+    if (tex[k].rgba.empty()) continue;
+    gl.GenTextures(1, &part.texture);
+    gl.BindTexture(GL_TEXTURE_2D, part.texture);
     gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
     // sRGB storage: the sampler returns linear colours, as the shading expects.
-    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, tex_w, tex_h, 0, GL_RGBA, GL_UNSIGNED_BYTE,
-                  tex.data());
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, tex[k].width, tex[k].height, 0, GL_RGBA,
+                  GL_UNSIGNED_BYTE, tex[k].rgba.data());
     gl.GenerateMipmap(GL_TEXTURE_2D);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);

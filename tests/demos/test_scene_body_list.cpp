@@ -17,6 +17,7 @@
 #include "json_reader.hpp"
 #include "scene.hpp"
 #include "scene_list_builder.hpp"
+#include "simreel/render/mesh.hpp"
 
 namespace {
 
@@ -163,8 +164,43 @@ TEST(SceneBodyList, AShapeOfACompoundHasItsOwnContactMaterial) {
   const double v1 = sw.world.motion(sw.colliders[1]).linear_velocity.x();
   EXPECT_NEAR((v0 - v1) / T, 0.4 * 9.81, 0.03 * 0.4 * 9.81);
   EXPECT_NE(body_errors(R"({"shapes": [{"type": "box", "material": {"friction": -1}}]})"), "");
-  const std::string colour = body_errors(R"({"shapes": [{"type": "box", "material": {"color": [1, 0, 0]}}]})");
+  const std::string colour = body_errors(R"({"shapes": [{"type": "box", "material": {"color": [1, 0]}}]})");
   EXPECT_NE(colour.find("/bodies/0/shapes/0/material/color"), std::string::npos) << colour;
+  const std::string texture = body_errors(R"({"shapes": [{"type": "box", "material": {"texture": "nope.png"}}]})");
+  EXPECT_NE(texture.find("/bodies/0/shapes/0/material/texture: expected an image file"), std::string::npos) << texture;
+}
+
+TEST(SceneBodyList, AShapeWithItsOwnColourIsDrawnInIt) {
+  // A mallet: a wooden handle (the body's colour) and a red head. The drawable gets one part per
+  // shape, each over exactly that shape's triangles (box 12, sphere 48 x 24 x 2 - 2 x 48).
+  const Scene s = scene_from_json(json::parse(R"({"bodies": [{"material": {"color": [0.6, 0.4, 0.2]}, "shapes": [
+      {"type": "box", "half_extents": [0.05, 0.05, 0.5]},
+      {"type": "sphere", "radius": 0.2, "position": [0, 0, 0.6], "material": {"color": [0.9, 0.1, 0.1]}}]},
+      {"shapes": [{"type": "box"}, {"type": "sphere", "position": [0, 0, 2]}]}]})"),
+                                  "s.json");
+  SceneWorld sw = build_world(s);
+  const render::SceneList list = simreel::app::initial_scene_list(s, sw);
+  const auto& d = std::get<render::MeshDesc>(list.added[0].desc);
+  ASSERT_EQ(d.parts.size(), 2u);
+  const render::MeshDesc sphere = render::make_sphere_mesh(0.2f, 48);
+  EXPECT_EQ(d.parts[0].first_triangle, 0u);
+  EXPECT_EQ(d.parts[0].triangle_count, 12u);
+  EXPECT_EQ(d.parts[1].first_triangle, 12u);
+  EXPECT_EQ(d.parts[1].triangle_count, sphere.indices.size() / 3);
+  EXPECT_EQ(d.indices.size(), 3 * std::size_t(d.parts[1].first_triangle + d.parts[1].triangle_count));
+  EXPECT_FLOAT_EQ(d.parts[0].material.base_color.x(), 0.6f);
+  EXPECT_FLOAT_EQ(d.parts[0].material.base_color.y(), 0.4f);
+  EXPECT_FLOAT_EQ(d.parts[1].material.base_color.x(), 0.9f);
+  EXPECT_FLOAT_EQ(d.parts[1].material.base_color.y(), 0.1f);
+  // Every triangle of the head part lies in the sphere around (0, 0, 0.6); the handle's not.
+  for (std::uint32_t t = d.parts[1].first_triangle; t < d.parts[1].first_triangle + d.parts[1].triangle_count; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = d.indices[3 * t + std::size_t(k)];
+      const Eigen::Vector3f p(d.positions[3 * v], d.positions[3 * v + 1], d.positions[3 * v + 2]);
+      ASSERT_NEAR((p - Eigen::Vector3f(0, 0, 0.6f)).norm(), 0.2f, 1e-5f);
+    }
+  // A body whose shapes keep the body's material stays one material, no parts.
+  EXPECT_TRUE(std::get<render::MeshDesc>(list.added[1].desc).parts.empty());
 }
 
 TEST(SceneBodyList, MeshFilesGiveHullsAndDynamicCompoundsOfTheirClosedParts) {

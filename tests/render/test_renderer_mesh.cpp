@@ -313,6 +313,44 @@ TEST_F(MeshScene, UpdateMeshMovesTheVertices) {
   EXPECT_NEAR(after.count, before.count, before.count / 5);
 }
 
+TEST_F(MeshScene, EachPartIsDrawnInItsOwnMaterial) {
+  // The quad's two triangles as two parts: the lower-right one red, the upper-left one blue
+  // (a compound body's shapes in their own colours), then the red one textured green.
+  MeshDesc m = quad_mesh(true);
+  Material red, blue;
+  red.base_color = Vec4f(0.9f, 0.05f, 0.05f, 1.f);
+  blue.base_color = Vec4f(0.05f, 0.1f, 0.9f, 1.f);
+  m.material.base_color = Vec4f(0.1f, 0.9f, 0.1f, 1.f);  // unused once there are parts
+  m.parts = {{0, 1, red}, {1, 1, blue}};
+  r().add_mesh(1, m);
+  const int cx = test::kWidth / 2, cy = test::kHeight / 2;
+  const auto check = [&](const Image& img, int x, int y, int channel) {
+    const auto* p = img.pixel(x, y);
+    for (int c = 0; c < 3; ++c)
+      if (c != channel) EXPECT_GT(int(p[channel]), int(p[c]) + 40) << "at " << x << "," << y << " channel " << c;
+  };
+  const Image a = r().render();
+  check(a, cx + 6, cy + 6, 0);  // below the diagonal, right: triangle 0
+  check(a, cx - 6, cy - 6, 2);  // above it, left: triangle 1
+  r().remove(1);
+  m.parts[0].material.base_color = Vec4f::Ones();
+  m.parts[0].material.texture_rgba = {0, 255, 0, 255};
+  m.parts[0].material.texture_width = m.parts[0].material.texture_height = 1;
+  r().add_mesh(1, m);
+  const Image b = r().render();
+  check(b, cx + 6, cy + 6, 1);
+  check(b, cx - 6, cy - 6, 2);
+  // Parts must tile the triangles in order.
+  for (const std::vector<MeshPart>& bad : {std::vector<MeshPart>{{0, 1, red}},
+                                           std::vector<MeshPart>{{1, 1, red}, {0, 1, blue}},
+                                           std::vector<MeshPart>{{0, 0, red}, {0, 2, blue}},
+                                           std::vector<MeshPart>{{0, 3, red}}}) {
+    MeshDesc q = quad_mesh(true);
+    q.parts = bad;
+    EXPECT_THROW(r().add_mesh(2, q), std::invalid_argument);
+  }
+}
+
 TEST_F(MeshScene, BadMeshesAreRejected) {
   MeshDesc m = quad_mesh(true);
   m.indices.push_back(0);

@@ -3,6 +3,7 @@
 
 #include <initializer_list>
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #include "common_glsl.hpp"
@@ -104,19 +105,23 @@ void MeshPass::draw(const FrameView& frame, const ShadowView& shadow, const Draw
     } else if (d.kind == DrawableKind::mesh) {
       p.set("u_model", affine(d.rotation, d.translation));
       p.set("u_normal_matrix", d.rotation);
-      p.set("u_color", d.material.base_color);
-      p.set("u_specular", std::clamp(d.material.specular, 0.f, 1.f));
-      p.set("u_checker_m", std::max(d.material.checker_m, 0.f));
       p.set("u_half_size", 0.f);
-      p.set("u_has_texture", d.texture != 0 ? 1 : 0);
-      if (d.texture != 0) {
-        gl.ActiveTexture(GL_TEXTURE2);
-        gl.BindTexture(GL_TEXTURE_2D, d.texture);
-      }
-      if (!d.material.double_sided) gl.Enable(GL_CULL_FACE);
       gl.BindVertexArray(d.mesh.vao);
-      gl.DrawElements(GL_TRIANGLES, d.mesh.index_count, GL_UNSIGNED_INT, nullptr);
-      gl.Disable(GL_CULL_FACE);
+      for (const Drawable::Part& part : d.parts) {
+        const Material& m = part.material;
+        p.set("u_color", m.base_color);
+        p.set("u_specular", std::clamp(m.specular, 0.f, 1.f));
+        p.set("u_checker_m", std::max(m.checker_m, 0.f));
+        p.set("u_has_texture", part.texture != 0 ? 1 : 0);
+        if (part.texture != 0) {
+          gl.ActiveTexture(GL_TEXTURE2);
+          gl.BindTexture(GL_TEXTURE_2D, part.texture);
+        }
+        if (!m.double_sided) gl.Enable(GL_CULL_FACE);
+        gl.DrawElements(GL_TRIANGLES, part.index_count, GL_UNSIGNED_INT,
+                        reinterpret_cast<const void*>(std::uintptr_t(part.first_index) * sizeof(std::uint32_t)));
+        gl.Disable(GL_CULL_FACE);
+      }
       p.set("u_has_texture", 0);
     }
   });

@@ -34,6 +34,15 @@ struct Material {
   float specular = 0.25f;  ///< Blinn-Phong highlight strength in [0, 1]
 };
 
+/// A run of a mesh's triangles drawn with its own material, sharing the mesh's vertices and
+/// transform: a compound body's shapes, each in its own colour (glTF's primitives, assimp's
+/// sub-meshes).
+struct MeshPart {
+  std::uint32_t first_triangle = 0;  ///< index of its first triangle (indices[3 * first_triangle])
+  std::uint32_t triangle_count = 0;  ///< triangles in the run, >= 1
+  Material material;
+};
+
 /// A static or deforming triangle mesh, in its local frame (set_transform places it).
 struct MeshDesc {
   std::vector<float> positions;        ///< (n x 3) vertex positions, local frame (m)
@@ -41,6 +50,10 @@ struct MeshDesc {
   std::vector<float> uvs;              ///< (n x 2) texture coordinates; empty: all zero
   std::vector<std::uint32_t> indices;  ///< (m x 3) vertex indices of triangles, CCW from outside
   Material material;
+  /// Empty: every triangle is drawn with `material`. Otherwise runs that tile the triangles in
+  /// order (the first starts at 0, each starts where the one before ends, the last ends at the
+  /// triangle count), each drawn with its own material; `material` is then unused.
+  std::vector<MeshPart> parts;
   /// Vertex data will be replaced with Renderer::update_mesh every frame (cloth): stored in a
   /// GL buffer meant for frequent uploads. Static meshes can be updated too, just slower.
   bool dynamic = false;

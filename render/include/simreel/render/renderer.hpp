@@ -197,9 +197,9 @@ class Renderer {
   void add_box(ObjectKey key, const BoxDesc& desc);
   /// Adds a triangle mesh (static, or dynamic for cloth) with its material; loads the texture.
   /// @throws std::invalid_argument if the key is used, positions are not n x 3 with n >= 1,
-  ///         normals or uvs have the wrong size, indices are not m x 3 or reach >= n, or the
-  ///         in-memory texture's size does not match; render::IoError if texture_path cannot be
-  ///         read.
+  ///         normals or uvs have the wrong size, indices are not m x 3 or reach >= n, the
+  ///         parts do not tile the triangles in order, or an in-memory texture's size does not
+  ///         match; render::IoError if a texture_path cannot be read.
   void add_mesh(ObjectKey key, const MeshDesc& desc);
   /// Replaces the vertex positions (n x 3, local frame, m) of a mesh, and its normals (n x 3);
   /// empty normals are recomputed with compute_vertex_normals. n must stay the same.
