@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim_test_util.hpp"
+#include "particles/particle_store.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace simreel::sim {
@@ -225,6 +226,58 @@ TEST(SimEmitter, ColorFollowsTheGradientOverLifetime) {
   EXPECT_NEAR(v.color[1], 0.5, 1e-4);
   EXPECT_NEAR(v.color[2], 0.5, 1e-4);
   EXPECT_NEAR(v.color[3], 0.5, 1e-4);
+}
+
+TEST(SimEmitter, TheOldestDyingAtTheFrontLeaveTheSurvivorsInOrder) {
+  // Lifetimes growing with the id: every step the oldest die at the front of the store (the
+  // usual case, dropped without moving anyone), sometimes with a later one dying too.
+  World world(WorldDef{1.0 / 240, 0, 0.05});
+  ParticleSystemDef def = test::spawn_only_system();
+  def.gravity = Vec3::Zero();
+  const auto ps = world.add_particle_system(def);
+  const auto lifetime = [](int k) { return k % 97 == 50 ? 0.02 : 0.00512 + 0.001 * k; };
+  for (int k = 0; k < 800; ++k) world.spawn_particle(ps, Vec3(k, 0, 0), Vec3::Zero(), 1.0, 0.01, lifetime(k));
+  double t = 0.0;
+  for (int step = 0; step < 240; ++step) {
+    world.advance(1.0 / 240);
+    t += 1.0 / 240;
+    // Newborns behind the survivors, as an emitter's: they land where the dropped ones were
+    // once the store's end is reached.
+    for (int k = 0; k < 3; ++k) world.spawn_particle(ps, Vec3(-1, 0, 0), Vec3::Zero(), 1.0, 0.01, 10.0);
+    const ParticleView v = world.particles(ps);
+    std::vector<std::uint64_t> expected;
+    for (int k = 0; k < 800; ++k)
+      if (lifetime(k) > t + 1e-9) expected.push_back(std::uint64_t(k));
+    ASSERT_EQ(v.count, expected.size() + 3 * std::size_t(step + 1)) << "step " << step;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      ASSERT_EQ(v.id[i], expected[i]) << "step " << step;
+      ASSERT_EQ(v.position[3 * i], float(expected[i]));  // attributes moved with their particle
+    }
+    for (std::size_t i = expected.size(); i < v.count; ++i) ASSERT_EQ(v.position[3 * i], -1.f);
+  }
+}
+
+TEST(SimEmitter, AColumnKeepsItsValuesThroughDropsShiftsAndGrowth) {
+  detail::Column<std::uint32_t> c;
+  c.reserve(8);
+  for (std::uint32_t k = 0; k < 6; ++k) c.push_back(k);
+  c.drop_front(4);  // live: 4 5 at slots 4, 5
+  EXPECT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0], 4u);
+  c.resize(5, 9);  // past the end: moved back to the start, no allocation
+  EXPECT_EQ(c.capacity(), 8u);
+  EXPECT_EQ(std::vector<std::uint32_t>(c.begin(), c.end()), (std::vector<std::uint32_t>{4, 5, 9, 9, 9}));
+  c.resize(20);  // beyond the capacity: grows, values kept, new ones value-initialised
+  EXPECT_GE(c.capacity(), 20u);
+  EXPECT_EQ(c[1], 5u);
+  EXPECT_EQ(c[4], 9u);
+  EXPECT_EQ(c[19], 0u);
+  const detail::Column<std::uint32_t> copy = c;
+  c[0] = 77;
+  EXPECT_EQ(copy[0], 4u);
+  EXPECT_EQ(copy.size(), 20u);
+  c.drop_front(20);
+  EXPECT_TRUE(c.empty());
 }
 
 TEST(SimEmitter, DeadParticlesAreCompactedKeepingIdOrder) {

@@ -21,10 +21,10 @@ class Fnv1a {
     bytes(&v, sizeof v);
   }
   /// The first n elements of an array (count included, so arrays cannot run into each other).
-  template <class T>
-  void array(const std::vector<T>& a, std::size_t n) {
+  template <class Array>
+  void array(const Array& a, std::size_t n) {
     value(std::uint64_t(n));
-    if (n > 0) bytes(a.data(), n * sizeof(T));
+    if (n > 0) bytes(a.data(), n * sizeof(typename Array::value_type));
   }
   void vec(const Vec3& v) {
     for (int k = 0; k < 3; ++k) value(v[k]);

@@ -47,13 +47,13 @@ class StateWriter {
     out_.append(reinterpret_cast<const char*>(&v), sizeof v);
   }
   /// The first n elements of an array (element type without padding), count first.
-  template <class T>
-  void array(const std::vector<T>& a, std::size_t n) {
+  template <class Array>
+  void array(const Array& a, std::size_t n) {
     value(std::uint64_t(n));
-    if (n > 0) out_.append(reinterpret_cast<const char*>(a.data()), n * sizeof(T));
+    if (n > 0) out_.append(reinterpret_cast<const char*>(a.data()), n * sizeof(typename Array::value_type));
   }
-  template <class T>
-  void array(const std::vector<T>& a) {
+  template <class Array>
+  void array(const Array& a) {
     array(a, a.size());
   }
   void rng(const Rng& r) {
@@ -110,8 +110,9 @@ class StateReader {
   }
   /// Reads an array into `a` (resized; within its capacity when reserved); more than `max`
   /// elements is an error naming `what`.
-  template <class T>
-  void array(std::vector<T>& a, std::size_t max, const char* what) {
+  template <class Array>
+  void array(Array& a, std::size_t max, const char* what) {
+    using T = typename Array::value_type;
     const auto n = value<std::uint64_t>();
     if (n > max)
       throw StateError(std::string("state: ") + what + " holds " + std::to_string(n) +

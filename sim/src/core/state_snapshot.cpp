@@ -308,7 +308,7 @@ void save_store(const detail::ParticleStore& st, StateWriter& out) {
 
 void load_store(detail::ParticleStore& st, StateReader& in, const std::string& name) {
   // The arrays were reserved for max_particles at registration: reading within that never
-  // reallocates (the views' pointers stay put).
+  // allocates.
   const std::size_t room = std::max(st.position.capacity() / 3, st.count);
   const auto n64 = in.value<std::uint64_t>();
   if (n64 > room)

@@ -50,7 +50,7 @@ void resize_all(ParticleStore& s, std::size_t n) {
 }
 
 template <class T>
-void move_run(std::vector<T>& a, std::size_t stride, std::size_t dst, std::size_t src,
+void move_run(Column<T>& a, std::size_t stride, std::size_t dst, std::size_t src,
               std::size_t n) {
   std::memmove(a.data() + stride * dst, a.data() + stride * src, sizeof(T) * stride * n);
 }
@@ -78,6 +78,22 @@ void ParticleStore::compact(std::size_t first) {
   }
   if (i >= n) return;  // the common case: nothing moves
   while (alive(i)) ++i;
+  if (i == 0) {
+    // The oldest died (emission order is age order): drop them from the front of every
+    // column, moving nobody, and compact what follows.
+    std::size_t k = 0;
+    while (k < n && !alive(k)) ++k;
+    for (auto* c : {&position, &velocity, &color}) c->drop_front((c == &color ? 4 : 3) * k);
+    if (track_prev) prev_position.drop_front(3 * k);
+    for (auto* c : {&radius, &mass, &age, &lifetime, &base_radius, &tint}) c->drop_front(k);
+    if (has_charge) charge.drop_front(k);
+    id.drop_front(k);
+    split_generation.drop_front(k);
+    split_countdown.drop_front(k);
+    count = n - k;
+    compact(0);
+    return;
+  }
   std::size_t w = i;
   while (i < n) {
     while (i < n && !alive(i)) ++i;

@@ -221,7 +221,8 @@ struct ParticleSystemDef {
   SplitOnHit on_hit_split;
 };
 
-/// Read-only view of a particle system's live particles, valid until the next World::advance().
+/// Read-only view of a particle system's live particles, valid until the next World::advance(),
+/// spawn_particle() or load_state().
 /// Arrays are structure-of-arrays of length `count`; xyz arrays are (count x 3) interleaved.
 struct ParticleView {
   std::size_t count = 0;
