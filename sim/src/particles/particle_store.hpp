@@ -37,6 +37,8 @@ struct ParticleStore {
   std::vector<float> tint;                    ///< (count) brightness factor on the gradient RGB
   std::vector<std::uint8_t> split_generation; ///< (count) splits in the lineage (0 = emitted)
   std::vector<std::uint32_t> split_countdown; ///< (count) steps left before a child splits
+  std::vector<std::uint8_t> from_split;       ///< (count) 1: created by a split (§3.9.1), 0:
+                                              ///< emitted or spawned (sub-emitter filter)
 
   void reserve(std::size_t capacity);
   /// Appends n zero-initialised particles; returns the index of the first.
