@@ -98,6 +98,9 @@ Scene scene_from_json(const json& doc, const std::string& file) {
                          emitter_pointers[b] + "), found \"" + scene.emitters[a].system.name + "\"");
         break;
       }
+  // Sub-emitters name the emitter their particles are born in.
+  for (const auto& e : scene.emitters)
+    for (const auto& se : e.sub_emitters) check_system_name(scene, se.emitter, se.pointer + "/emitter", errors);
   for (const auto& [f, p] : effect_fields) {
     scene.force_fields.push_back(force_field(f, p, file, errors));
     for (const auto& name : scene.force_fields.back().systems) check_system_name(scene, name, p, errors);
@@ -243,6 +246,12 @@ SceneWorld build_world(const Scene& scene) {
       def.emitter.path = follow_camera_path(scene.camera_motion, scene.fps, scene.frames, def.emitter.transform);
       out.systems.push_back(out.world.add_particle_system(def));
     }
+    for (std::size_t i = 0; i < scene.emitters.size(); ++i)
+      for (const auto& se : scene.emitters[i].sub_emitters) {
+        sim::SubEmitterDef def = se.def;
+        def.system = out.systems.at(system_index(scene, se.emitter));
+        out.world.add_sub_emitter(out.systems.at(i), def);
+      }
     for (const auto& f : scene.force_fields) {
       sim::ForceFieldDef def = f.def;
       for (const auto& name : f.systems) def.systems.push_back(out.systems.at(system_index(scene, name)));

@@ -86,12 +86,23 @@ struct ColliderScene {
   DynamicScene dynamic;
 };
 
+/// emitters[i].sub_emitters[k]: the engine definition without its target, which build_world
+/// resolves from the emitter name.
+struct SubEmitterScene {
+  sim::SubEmitterDef def;
+  std::string emitter;  ///< name of the target emitter (system)
+  std::string pointer;  ///< its JSON pointer, for messages
+};
+
 struct EmitterScene {
   sim::ParticleSystemDef system;
+  std::vector<SubEmitterScene> sub_emitters;
   render::ParticleStyle style = render::ParticleStyle::soft;
   float streak_s = 0.02f;  ///< (s) streak length per unit speed (render_style "streak")
   float trail_s = 0.f;     ///< (s) additive: glowing trail behind each particle, velocity x trail_s
   float emissive = 1.f;    ///< additive: colour multiplier (> 1 glows through the bloom pass)
+  float strobe_hz = 0.f;   ///< additive: on/off flashes per second of each particle; 0 = steady
+  float strobe_duty = 0.5f;  ///< additive: fraction of each strobe period a particle is lit
   render::ParticleTexture texture = render::ParticleTexture::none;
   /// The emitter moves with the camera: its `position` is an offset (world axes) from the
   /// camera's eye projected on the ground, (eye_x, eye_y, 0); build_world turns it into a path

@@ -115,6 +115,26 @@ void emitter_extras(ObjectReader& r, sim::EmitterDef& em) {
   }
 }
 
+/// sub_emitters[k] (Unity's sub-emitters): particles born in another emitter when one of this
+/// emitter's particles dies; the target's name is checked once every emitter is read (scene.cpp).
+void sub_emitters(ObjectReader& r, std::vector<SubEmitterScene>& out) {
+  object_array(r, "sub_emitters", [&](const json& j, const std::string& p, std::size_t) {
+    ObjectReader o(j, p, r.file(), r.errors());
+    SubEmitterScene se;
+    se.pointer = p;
+    if (!o.has("emitter")) o.error_at(p, "expected an \"emitter\" (the name of the emitter whose particles are born)");
+    se.emitter = o.string("emitter", "");
+    (void)o.choice("trigger", "death", {"death"});
+    se.def.trigger = sim::SubEmitterTrigger::death;
+    se.def.count = std::size_t(o.integer("count", 10, 1, 1'000'000));
+    se.def.probability = o.number("probability", 1.0, 0.0, 1.0);
+    se.def.inherit_velocity = o.number("inherit_velocity", 1.0, 0.0, 1.0);
+    se.def.split_children = o.boolean("split_children", true);
+    o.finish();
+    out.push_back(se);
+  });
+}
+
 }  // namespace
 
 EmitterScene emitter(const json& j, const std::string& ptr, const std::string& file,
@@ -177,6 +197,7 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   if (e.follow_camera && !em.path.empty())
     r.error_at(r.pointer("follow_camera"), "expected either \"follow_camera\": true or a \"path\", not both");
   emitter_extras(r, em);
+  sub_emitters(r, e.sub_emitters);
   s.gravity = to_vec(r.vec3("gravity", {gravity.x(), gravity.y(), gravity.z()}));
   s.drag = r.number("drag", 0.0, ranges::kSystemDrag);
   s.drag_quadratic = r.number("drag_quadratic", 0.0, ranges::kSystemDragQuadratic);
@@ -203,6 +224,11 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   e.streak_s = float(r.number("streak_s", 0.02, 0.0, 10.0));
   e.trail_s = float(r.number("trail_s", 0.0, 0.0, 10.0));
   e.emissive = float(r.number("emissive", 1.0, 0.0, 100.0));
+  e.strobe_hz = float(r.number("strobe_hz", 0.0, 0.0, 1000.0));
+  e.strobe_duty = float(r.number("strobe_duty", 0.5, 0.0, 1.0, true));
+  if ((r.has("strobe_hz") || r.has("strobe_duty")) && e.style != render::ParticleStyle::additive)
+    r.error_at(r.pointer(r.has("strobe_hz") ? "strobe_hz" : "strobe_duty"),
+               "expected \"strobe_hz\" and \"strobe_duty\" only with \"render_style\": \"additive\"");
   const std::string texture = r.choice("texture", "none", {"none", "smoke", "flame"});
   e.texture = texture == "smoke"   ? render::ParticleTexture::smoke
               : texture == "flame" ? render::ParticleTexture::flame

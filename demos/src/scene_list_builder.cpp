@@ -269,6 +269,8 @@ void append_frame(const Scene& scene, const SceneWorld& sw, double t, render::Sc
     // exposure, shutter_deg / 360 / fps; see particle_shutter_s.
     p.batch.trail_s = scene.emitters[i].trail_s + particle_shutter_s(scene);
     p.batch.emissive = scene.emitters[i].emissive;
+    p.batch.strobe_hz = scene.emitters[i].strobe_hz;
+    p.batch.strobe_duty = scene.emitters[i].strobe_duty;
     p.batch.texture = scene.emitters[i].texture;
   }
   for (const sim::ClothHandle& h : sw.cloths) {

@@ -475,6 +475,9 @@ std::array<double, 3> palette_color(const std::string& palette, long long shell)
   return festival[std::size_t(shell % 6)];
 }
 
+/// Flashes per crackling star: a dense enough cloud to read as crackle at video sizes.
+constexpr long long kCrackleFlashes = 30;
+
 Derived fireworks(const json& k, const std::string& name, double g) {
   Derived d;
   const auto launch = vec3(k, "launch_position");
@@ -545,6 +548,44 @@ Derived fireworks(const json& k, const std::string& name, double g) {
                     {"direction_deviation_deg", 40.0},
                     {"size_fraction", 0.7},
                     {"lifetime_deviation", 0.25}};
+    // Crackle: a star that burns out breaks into a cloud of tiny white-gold flashes popping on
+    // and off (a sub-emitter on death, Unity's "Sub Emitters"; Houdini's source from particles).
+    // The cloud starts at the dying star with its velocity and spreads at a few m/s, held by
+    // strong drag (0.3 s) so it stays a tight ball; each flash strobes at its own phase.
+    const double crackle = num(k, "crackle");
+    if (crackle > 0.0) {
+      const std::string cn = name + "/crackle" + std::to_string(s);
+      e["sub_emitters"] = json::array({{{"emitter", cn},
+                                        {"trigger", "death"},
+                                        {"count", kCrackleFlashes},
+                                        {"probability", crackle},
+                                        {"inherit_velocity", 1.0},
+                                        // a star's trail sparks die with it but do not crackle
+                                        {"split_children", false}}});
+      d.emitters.push_back(e);
+      d.emitters.push_back({{"name", cn},
+                            {"role", "crackle"},
+                            {"shape", "sphere"},
+                            {"sphere_radius", 0.05},
+                            {"position", json::array({p[0], p[1], p[2] + h})},
+                            {"rate", 0},
+                            {"lifetime", {{"min", 0.45}, {"max", 1.0}}},
+                            {"start_speed", dist(2.5, 1.0, 0.5, 5.0)},
+                            {"mass", dist(2e-4, 0.0)},
+                            {"particle_radius", dist(0.045, 0.012, 0.02, 0.07)},
+                            {"drag", 2e-4 / 0.3},
+                            {"collide", false},
+                            {"color_over_lifetime", json::array({key(0.0, rgba(1.0, 1.0, 0.95, 1.0)),
+                                                                  key(0.6, rgba(1.0, 0.85, 0.5, 1.0)),
+                                                                  key(1.0, rgba(1.0, 0.6, 0.25, 0.6))})},
+                            {"render_style", "additive"},
+                            {"emissive", 10.0},
+                            {"strobe_hz", 12.0},
+                            {"strobe_duty", 0.35},
+                            {"max_particles",
+                             (long long)(std::ceil(crackle * double(stars))) * kCrackleFlashes + 10}});
+      continue;
+    }
     d.emitters.push_back(e);
   }
   return d;

@@ -496,6 +496,9 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
   if (!(batch.trail_s >= 0.f) || !(batch.emissive >= 0.f)) {
     throw std::invalid_argument("renderer: particle batch trail_s and emissive must be >= 0");
   }
+  if (!(batch.strobe_hz >= 0.f) || !(batch.strobe_duty > 0.f && batch.strobe_duty <= 1.f)) {
+    throw std::invalid_argument("renderer: particle batch strobe_hz must be >= 0 and strobe_duty in (0, 1]");
+  }
   if (batch.count > 0 && batch.age != nullptr && batch.lifetime == nullptr) {
     throw std::invalid_argument("renderer: particle batch has ages but no lifetimes");
   }
@@ -533,7 +536,13 @@ void Renderer::set_particles(ObjectKey key, const ParticleBatch& batch) {
       if (flame) detail::flame_color(age01, age, rnd, out + 4);
     }
     if (additive) {
-      for (int k = 4; k < 7; ++k) out[k] *= batch.emissive;
+      float gain = batch.emissive;
+      if (batch.strobe_hz > 0.f) {
+        const float age = batch.age != nullptr ? batch.age[i] : 0.f;
+        const float rnd = detail::particle_random(batch.id != nullptr ? batch.id[i] : std::uint64_t(i));
+        gain *= detail::strobe(age, rnd, batch.strobe_hz, batch.strobe_duty);
+      }
+      for (int k = 4; k < 7; ++k) out[k] *= gain;
     }
     if (streak) {
       // The tail trails behind the head, against the velocity.

@@ -122,6 +122,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"explosion_wall", 0x6f77a6752b7321ecull},
       {"fire_smoke", 0x4c2dea80c2844da4ull},
       {"fireworks", 0xa843a276bd6be29eull},
+      {"fireworks_crackle", 0x42dfb68e402a735bull},  // issue 14 crackle (sub-emitters); 1, 2 and 4 threads agreed
       {"flag", 0x806e318803a6c5f0ull},
       {"flag_gale", 0x86c447d23f1e3a59ull},  // issue 16; 1, 2 and 4 threads agreed
       {"forces", 0x7ee14b658c96672dull},

@@ -154,6 +154,85 @@ TEST(EffectRecipes, SmokeRisesAtItsRiseSpeedAndSpreadsAsAWideningCone) {
   EXPECT_NEAR(vz / double(v.count), rise, 0.1 * rise);
 }
 
+// Crackle: every star (not its trail sparks) that dies gives birth to 30 flashes in
+// <name>/crackle0, born at the dying star (within its sphere_radius 5 cm plus what star and flash
+// travel in the rest of one internal step), never before the burst; with crackle 0 there is no
+// crackle system. One advance() per internal step, so "dying" = present before it, gone after.
+TEST(EffectRecipes, FireworksCrackleIsBornAtTheDyingStarsAfterTheBurst) {
+  const double h = 1.0 / 240.0;
+  const long long stars = 60;
+  const json fw = {{"effect", "fireworks"}, {"name", "fw"}, {"shells", 1}, {"stars", stars},
+                   {"burst_height_m", 8}, {"crackle", 1.0}};
+  auto sw = world_of(fw, h);
+  const auto star_sys = sw.systems[system_named(sw, "fw/stars0")];
+  const auto crackle_sys = sw.systems[system_named(sw, "fw/crackle0")];
+  struct Star {
+    std::uint64_t id;
+    sim::Vec3 x, v;
+  };
+  std::vector<Star> before;
+  auto snapshot = [&] {
+    const sim::ParticleView v = sw.world.particles(star_sys);
+    std::vector<Star> out;
+    for (std::size_t i = 0; i < v.count; ++i)
+      out.push_back({v.id[i], sim::Vec3(v.position[3 * i], v.position[3 * i + 1], v.position[3 * i + 2]),
+                     sim::Vec3(v.velocity[3 * i], v.velocity[3 * i + 1], v.velocity[3 * i + 2])});
+    return out;
+  };
+  double first_burst = -1.0, first_crackle = -1.0;
+  std::uint64_t checked = 0;
+  for (int step = 0; step < int(7.0 / h); ++step) {
+    before = snapshot();
+    const std::uint64_t born_before = sw.world.emitted_count(crackle_sys);
+    sw.world.advance(h);
+    if (first_burst < 0.0 && sw.world.emitted_count(star_sys) > 0) first_burst = sw.world.time();
+    const std::uint64_t born = sw.world.emitted_count(crackle_sys);
+    if (born == born_before) continue;
+    if (first_crackle < 0.0) first_crackle = sw.world.time();
+    ASSERT_GT(first_burst, 0.0) << "crackle before the burst";
+    // The stars that died in this step.
+    const std::vector<Star> after = snapshot();
+    std::vector<Star> died;
+    for (const Star& s : before)
+      if (std::none_of(after.begin(), after.end(), [&](const Star& a) { return a.id == s.id; })) died.push_back(s);
+    ASSERT_FALSE(died.empty()) << "crackle at t = " << sw.world.time() << " with no star dying";
+    const sim::ParticleView c = sw.world.particles(crackle_sys);
+    for (std::size_t i = 0; i < c.count; ++i) {
+      if (c.id[i] < born_before) continue;  // born earlier
+      const sim::Vec3 x(c.position[3 * i], c.position[3 * i + 1], c.position[3 * i + 2]);
+      double best = 1e9;
+      for (const Star& s : died) {
+        // flash: 5 cm sphere + at most 5 m/s of its own + the star's velocity, for under one step
+        const double reach = 0.05 + (5.0 + 2.0 * s.v.norm()) * h + 1e-3;
+        best = std::min(best, (x - s.x).norm() / reach);
+      }
+      EXPECT_LE(best, 1.0) << "flash id " << c.id[i] << " at t = " << sw.world.time() << " not at a dying star";
+      ++checked;
+    }
+  }
+  // Every star dies within 0.8..3.5 s of the burst (its lifetime); its trail sparks do not crackle.
+  EXPECT_GE(first_crackle - first_burst, 0.8 - 2 * h);
+  EXPECT_EQ(sw.world.emitted_count(crackle_sys), std::uint64_t(30 * stars));
+  EXPECT_EQ(checked, std::uint64_t(30 * stars));
+  EXPECT_GT(sw.world.emitted_count(star_sys), std::uint64_t(10 * stars)) << "trail sparks were made";
+
+  // A fraction: about that share of the stars crackle.
+  json half = fw;
+  half["crackle"] = 0.5;
+  half["stars"] = 400;
+  auto sw_half = world_of(half, 1.0 / 60.0);
+  for (int f = 0; f < 7 * 30; ++f) sw_half.world.advance(1.0 / 30);
+  const double crackling = double(sw_half.world.emitted_count(sw_half.systems[system_named(sw_half, "fw/crackle0")])) / 30.0;
+  EXPECT_NEAR(crackling, 200.0, 4 * std::sqrt(100.0)) << "binomial(400, 0.5) stars";
+
+  // Off: no crackle system at all.
+  json off = fw;
+  off["crackle"] = 0;
+  auto sw_off = world_of(off, h);
+  for (std::size_t i = 0; i < sw_off.systems.size(); ++i)
+    EXPECT_EQ(sw_off.world.definition(sw_off.systems[i]).name.find("crackle"), std::string::npos);
+}
+
 TEST(EffectRecipes, BadKnobsNameTheFileAndPointer) {
   auto errors_of = [](const json& emitter) {
     try {
@@ -178,4 +257,40 @@ TEST(EffectRecipes, BadKnobsNameTheFileAndPointer) {
   e = errors_of({{"effect", "fire_smoke"}, {"overrides", {{"rate", 5}}}});
   EXPECT_NE(e.find("expected a role name (smoke, core)"), std::string::npos) << e;
   EXPECT_EQ(errors_of({{"effect", "fire_smoke"}, {"overrides", {{"core", {{"rate", 5}}}}}}), "");
+  e = errors_of({{"effect", "fireworks"}, {"crackle", 1.5}});
+  EXPECT_NE(e.find("fx.json: /emitters/0/crackle: expected a number in [0, 1]"), std::string::npos) << e;
+  e = errors_of({{"effect", "fireworks"}, {"crackle", true}});
+  EXPECT_NE(e.find("fx.json: /emitters/0/crackle"), std::string::npos) << e;
+}
+
+TEST(EffectRecipes, BadSubEmittersAndStrobeNameTheirPointer) {
+  auto errors_of = [](const json& emitters) {
+    try {
+      app::scene_from_json(json{{"emitters", emitters}}, "fx.json");
+    } catch (const app::SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const json target = {{"name", "glitter"}, {"rate", 0}, {"render_style", "additive"}, {"strobe_hz", 10}};
+  auto with = [&](const json& sub) {
+    return json::array({{{"name", "stars"}, {"sub_emitters", json::array({sub})}}, target});
+  };
+  EXPECT_EQ(errors_of(with({{"emitter", "glitter"}, {"count", 5}})), "");
+  std::string e = errors_of(with({{"emitter", "gliter"}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/sub_emitters/0/emitter: expected the name of an emitter"), std::string::npos) << e;
+  e = errors_of(with({{"count", 5}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/sub_emitters/0: expected an \"emitter\""), std::string::npos) << e;
+  e = errors_of(with({{"emitter", "glitter"}, {"trigger", "birth"}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/sub_emitters/0/trigger"), std::string::npos) << e;
+  e = errors_of(with({{"emitter", "glitter"}, {"probability", 2}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/sub_emitters/0/probability: expected a number in [0, 1]"), std::string::npos) << e;
+  e = errors_of(with({{"emitter", "glitter"}, {"count", 0}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/sub_emitters/0/count"), std::string::npos) << e;
+  e = errors_of(json::array({{{"name", "a"}, {"sub_emitters", {{"emitter", "a"}}}}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/sub_emitters"), std::string::npos) << e;
+  e = errors_of(json::array({{{"name", "a"}, {"strobe_hz", 5}}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/strobe_hz: expected \"strobe_hz\" and \"strobe_duty\" only with"), std::string::npos) << e;
+  e = errors_of(json::array({{{"name", "a"}, {"render_style", "additive"}, {"strobe_duty", 0}}}));
+  EXPECT_NE(e.find("fx.json: /emitters/0/strobe_duty"), std::string::npos) << e;
 }

@@ -44,4 +44,14 @@ inline void flame_color(float age01, float age_s, float rnd, float* rgb) {
   rgb[2] = (a.b + f * (b.b - a.b)) * flicker;
 }
 
+/// On/off strobe (glitter, fireworks crackle): 1 while the particle's flash is lit, 0 between
+/// flashes. Lit while fract(age_s * hz + rnd) < duty, so each particle keeps its own phase and
+/// neighbours pop at different instants; a function of age and id alone (the same bytes on every
+/// render). hz <= 0: always lit.
+inline float strobe(float age_s, float rnd, float hz, float duty) {
+  if (!(hz > 0.f)) return 1.f;
+  const float x = age_s * hz + rnd;
+  return x - std::floor(x) < duty ? 1.f : 0.f;
+}
+
 }  // namespace simreel::render::detail

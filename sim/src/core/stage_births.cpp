@@ -1,14 +1,57 @@
-// Stage "births and deaths" (stages.hpp): splits (§3.9.1), removal of the dead, the step's
-// newborns (each moves and collides only for its own age, so jets show no banding), colours and
+// Stage "births and deaths" (stages.hpp): sub-emitters fired by the step's deaths, splits
+// (§3.9.1), removal of the dead, the step's newborns (each moves and collides only for its own age, so jets show no banding), colours and
 // sizes over lifetime (§3.8).
+#include <algorithm>
+
 #include "core/stages.hpp"
 #include "particles/split.hpp"
 
 namespace simreel::sim::detail {
 
+namespace {
+
+/// Sub-emitters (SubEmitterDef): every system's deaths of this step, found before anything is
+/// removed, handed to the target systems as SubBirths (consumed below in the same stage, so a
+/// target earlier in the list gets them in the same step as one later). Nothing is done, and
+/// nothing drawn, in a world without sub-emitters.
+void collect_sub_births(WorldState& w, double h) {
+  bool any = false;
+  for (ParticleSystemState& ps : w.systems.dense()) {
+    ps.sub_births.clear();
+    any |= !ps.sub_emitters.empty();
+  }
+  if (!any) return;
+  for (ParticleSystemState& ps : w.systems.dense()) {
+    const ParticleStore& st = ps.store;
+    for (const SubEmitterDef& se : ps.sub_emitters) {
+      if (!w.systems.contains(se.system.id)) continue;  // its target was removed
+      ParticleSystemState& target = w.systems[se.system.id];
+      for (std::size_t i = 0; i < ps.n_old; ++i) {
+        if (st.age[i] < st.lifetime[i]) continue;  // alive
+        if (!se.split_children && st.from_split[i] != 0) continue;
+        if (se.probability < 1.0 && !(target.emitter.rng.uniform() < se.probability)) continue;
+        // It died o seconds before the end of the step, at x1 - v1 o.
+        const double o = std::clamp(double(st.age[i]) - double(st.lifetime[i]), 0.0, h);
+        SubBirth b;
+        for (int k = 0; k < 3; ++k) {
+          const double v = st.velocity[3 * i + std::size_t(k)];
+          b.position[k] = double(st.position[3 * i + std::size_t(k)]) - v * o;
+          b.velocity[k] = se.inherit_velocity * v;
+        }
+        b.age = o;
+        b.count = se.count;
+        target.sub_births.push_back(b);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 void stage_births_and_deaths(WorldState& w, double t0, double t1) {
   const double h = t1 - t0;
   const bool any_collider = !w.shapes.empty();
+  collect_sub_births(w, h);
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
     ParticleStore& st = ps.store;
@@ -18,6 +61,8 @@ void stage_births_and_deaths(WorldState& w, double t0, double t1) {
 
     // Particles born in (t0, t1].
     const std::size_t first_new = emit(ps.def.emitter, ps.emitter, st, t0, t1, ps.next_id);
+    // Sub-emitter births follow the emitter's own: newborns alike from here on.
+    if (!ps.sub_births.empty()) emit_sub(ps.def.emitter, ps.emitter, st, ps.sub_births, ps.next_id);
     if (st.has_charge)
       for (std::size_t i = first_new; i < st.count; ++i)
         st.charge[i] = float(ps.charge_rng.normal(ps.def.charge.mean, ps.def.charge.deviation));

@@ -287,7 +287,9 @@ void load_joints(WorldState& w, StateReader& in) {
 
 // --- particle systems ------------------------------------------------------------------------
 
-void save_store(const detail::ParticleStore& st, StateWriter& out) {
+/// `from_split` is written only for a system with sub-emitters (the only reader), so snapshots of
+/// scenes without them are unchanged.
+void save_store(const detail::ParticleStore& st, StateWriter& out, bool from_split) {
   const std::size_t n = st.count;
   out.value(std::uint64_t(n));
   out.array(st.position, 3 * n);
@@ -304,9 +306,10 @@ void save_store(const detail::ParticleStore& st, StateWriter& out) {
   out.array(st.tint, n);
   out.array(st.split_generation, n);
   out.array(st.split_countdown, n);
+  if (from_split) out.array(st.from_split, n);
 }
 
-void load_store(detail::ParticleStore& st, StateReader& in, const std::string& name) {
+void load_store(detail::ParticleStore& st, StateReader& in, const std::string& name, bool from_split) {
   // The arrays were reserved for max_particles at registration: reading within that never
   // allocates.
   const std::size_t room = std::max(st.position.capacity() / 3, st.count);
@@ -330,13 +333,15 @@ void load_store(detail::ParticleStore& st, StateReader& in, const std::string& n
   in.array(st.tint, n, "particle tints");
   in.array(st.split_generation, n, "particle split generations");
   in.array(st.split_countdown, n, "particle split countdowns");
+  if (from_split) in.array(st.from_split, n, "particle split origins");
+  else st.from_split.assign(n, 0);
   const bool ok = st.position.size() == 3 * n && st.velocity.size() == 3 * n &&
                   st.prev_position.size() == (st.track_prev ? 3 * n : 0) && st.color.size() == 4 * n &&
                   st.radius.size() == n && st.mass.size() == n && st.age.size() == n &&
                   st.lifetime.size() == n && st.id.size() == n &&
                   st.charge.size() == (st.has_charge ? n : 0) && st.base_radius.size() == n &&
                   st.tint.size() == n && st.split_generation.size() == n &&
-                  st.split_countdown.size() == n;
+                  st.split_countdown.size() == n && st.from_split.size() == n;
   if (!ok) throw StateError("state: particle system '" + name + "' arrays do not hold its " +
                             std::to_string(n) + " particles");
 }
@@ -345,7 +350,7 @@ void save_systems(const WorldState& w, StateWriter& out) {
   out.begin("PSYS");
   out.value(std::uint64_t(w.systems.size()));
   for (const detail::ParticleSystemState& ps : w.systems.dense()) {
-    save_store(ps.store, out);
+    save_store(ps.store, out, !ps.sub_emitters.empty());
     out.value(ps.next_id);
     out.value(ps.emitter.scheduled);
     out.array(ps.emitter.bursts_fired);
@@ -374,7 +379,7 @@ void load_systems(WorldState& w, StateReader& in) {
   in.begin("PSYS");
   in.count(w.systems.size(), "particle systems");
   for (detail::ParticleSystemState& ps : w.systems.dense()) {
-    load_store(ps.store, in, ps.def.name);
+    load_store(ps.store, in, ps.def.name, !ps.sub_emitters.empty());
     in.value(ps.next_id);
     in.value(ps.emitter.scheduled);
     in.array(ps.emitter.bursts_fired, ps.def.emitter.bursts.size(), "emitter bursts");

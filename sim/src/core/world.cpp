@@ -204,6 +204,19 @@ void World::add_spring(ParticleSystemHandle h, const SpringDef& spring) {
   ps.springs.push_back(s);
 }
 
+void World::add_sub_emitter(ParticleSystemHandle parent, const SubEmitterDef& def) {
+  detail::ParticleSystemState& ps = impl_->systems[parent.id];
+  (void)impl_->systems[def.system.id];  // throws std::out_of_range on a stale target
+  if (def.count < 1 || def.count > 1'000'000 || !(def.probability >= 0.0 && def.probability <= 1.0) ||
+      !(def.inherit_velocity >= 0.0 && def.inherit_velocity <= 1.0)) {
+    std::ostringstream m;
+    m << "World::add_sub_emitter: count must be in [1, 10^6], probability and inherit_velocity in "
+      << "[0, 1] (got " << def.count << ", " << def.probability << ", " << def.inherit_velocity << ")";
+    throw std::invalid_argument(m.str());
+  }
+  ps.sub_emitters.push_back(def);
+}
+
 std::uint64_t World::integrator_steps(ParticleSystemHandle h) const {
   return impl_->systems[h.id].integrator_state.substeps;
 }

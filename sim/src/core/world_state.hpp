@@ -48,6 +48,10 @@ struct ParticleSystemState {
   // Collisions (issue 5): splash droplets, §3.4.2 removals.
   Rng splash_rng;
   std::vector<SpawnRequest> spawns;
+  // Sub-emitters (SubEmitterDef): this system's, and the births other systems' (or its own)
+  // deaths handed to it in the current step (stage_births.cpp).
+  std::vector<SubEmitterDef> sub_emitters;
+  std::vector<SubBirth> sub_births;
   std::uint64_t removed_inside = 0;
   // Handed from one stage of the current step to the next (stages.hpp).
   std::size_t n_old = 0;  ///< particles alive at t0 (integrated by the integration stage)

@@ -176,26 +176,27 @@ void schedule(const EmitterDef& def, EmitterState& st, double t1, std::size_t ro
   if (births.size() > room) births.resize(room);
 }
 
-}  // namespace
+/// Where and when newborn k of a release starts: the emitter frame it is placed in, its age at
+/// the end of the step, and a velocity added to its own draw (inherited).
+struct BirthPose {
+  Transform frame;
+  double age = 0.0;
+  bool inherit = false;  ///< add `velocity` (a plain emitter without inherited velocity adds nothing)
+  Vec3 velocity = Vec3::Zero();
+};
 
-std::size_t emit(const EmitterDef& def, EmitterState& st, ParticleStore& s, double t0, double t1,
-                 std::uint64_t& next_id) {
-  const std::size_t first = s.count;
-  const std::size_t room = def.max_particles > s.count ? def.max_particles - s.count : 0;
-  schedule(def, st, t1, room);
-  const std::size_t n = st.births.size();
-  if (n == 0) return first;
-  s.append(n);
+/// Draws particles [first, first + n) (already appended) from the emitter's distributions, newborn
+/// k placed by pose(k) (a BirthPose).
+template <class PoseOf>
+void release(const EmitterDef& def, EmitterState& st, ParticleStore& s, std::size_t first,
+             std::size_t n, const PoseOf& pose, std::uint64_t& next_id) {
   if (def.shape == EmitterShape::mesh && st.mesh_cdf.empty()) build_mesh_cdf(def, st);
-
-  const double h = t1 - t0;
-  const bool has_path = !def.path.empty();
   // Per-particle draws in a fixed order (the same seed gives the same particles): lifetime,
   // speed, spread, azimuth, mass, radius, the start point (shape draws), brightness.
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = first + k;
-    const double t_birth = st.births[k];
-    const double age = std::clamp(t1 - t_birth, 0.0, h);
+    const BirthPose b = pose(k);
+    const double age = b.age;
     const double lifetime = std::max(0.0, draw(st.rng, def.lifetime));
     const double speed = draw(st.rng, def.start_speed);
     // A negative polar angle at azimuth phi is the positive one at phi + 180 deg, so normal
@@ -213,7 +214,7 @@ std::size_t emit(const EmitterDef& def, EmitterState& st, ParticleStore& s, doub
     const double theta = spread_deg * (kPi / 180.0);
     Vec3 dir_local(std::sin(theta) * std::cos(azimuth), std::sin(theta) * std::sin(azimuth),
                    std::cos(theta));
-    const Transform f = frame_at(def, t_birth);
+    const Transform& f = b.frame;
 
     // Start point in the emitter frame (quad and cube: laid out below, per release).
     Vec3 p_local = Vec3::Zero();
@@ -265,8 +266,7 @@ std::size_t emit(const EmitterDef& def, EmitterState& st, ParticleStore& s, doub
         break;
     }
     Vec3 vel = f.rotation * (speed * dir_local);
-    if (has_path && def.inherit_velocity > 0.0)
-      vel += def.inherit_velocity * def.path.velocity(t_birth);
+    if (b.inherit) vel += b.velocity;
     const Vec3 p = f.translation + f.rotation * p_local;
     const double tint = std::clamp(st.rng.normal(1.0, def.color_deviation), 0.0, 2.0);
 
@@ -291,7 +291,7 @@ std::size_t emit(const EmitterDef& def, EmitterState& st, ParticleStore& s, doub
                 first, n);
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t i = first + k;
-      const Transform f = frame_at(def, st.births[k]);
+      const Transform f = pose(k).frame;
       const Vec3 p = f.translation + f.rotation * Vec3(st.local[2 * k], st.local[2 * k + 1], z);
       for (int c = 0; c < 3; ++c) s.position[3 * i + std::size_t(c)] = float(p[c]);
     }
@@ -299,6 +299,44 @@ std::size_t emit(const EmitterDef& def, EmitterState& st, ParticleStore& s, doub
   if (s.track_prev)
     std::copy(s.position.begin() + std::ptrdiff_t(3 * first), s.position.end(),
               s.prev_position.begin() + std::ptrdiff_t(3 * first));
+}
+
+}  // namespace
+
+std::size_t emit(const EmitterDef& def, EmitterState& st, ParticleStore& s, double t0, double t1,
+                 std::uint64_t& next_id) {
+  const std::size_t first = s.count;
+  const std::size_t room = def.max_particles > s.count ? def.max_particles - s.count : 0;
+  schedule(def, st, t1, room);
+  const std::size_t n = st.births.size();
+  if (n == 0) return first;
+  s.append(n);
+  const double h = t1 - t0;
+  const bool inherit = !def.path.empty() && def.inherit_velocity > 0.0;
+  release(def, st, s, first, n,
+          [&](std::size_t k) {
+            const double t_birth = st.births[k];
+            BirthPose b{frame_at(def, t_birth), std::clamp(t1 - t_birth, 0.0, h), inherit, Vec3::Zero()};
+            if (inherit) b.velocity = def.inherit_velocity * def.path.velocity(t_birth);
+            return b;
+          },
+          next_id);
+  return first;
+}
+
+std::size_t emit_sub(const EmitterDef& def, EmitterState& st, ParticleStore& s,
+                     const std::vector<SubBirth>& births, std::uint64_t& next_id) {
+  const std::size_t first = s.count;
+  for (const SubBirth& q : births) {
+    const std::size_t room = def.max_particles > s.count ? def.max_particles - s.count : 0;
+    const std::size_t n = std::min(q.count, room);
+    if (n == 0) continue;
+    const std::size_t at = s.append(n);
+    Transform f = def.transform;  // the emitter's rotation, placed on the parent
+    f.rotation.normalize();
+    f.translation = q.position;
+    release(def, st, s, at, n, [&](std::size_t) { return BirthPose{f, q.age, true, q.velocity}; }, next_id);
+  }
   return first;
 }
 

@@ -35,6 +35,23 @@ struct EmitterState {
 std::size_t emit(const EmitterDef& def, EmitterState& state, ParticleStore& store, double t0,
                  double t1, std::uint64_t& next_id);
 
+/// One triggering parent of a sub-emitter (SubEmitterDef): `count` particles to be born at
+/// `position` (m, world) with `velocity` (m/s, the inherited part) added, aged `age` (s) at the
+/// end of the step.
+struct SubBirth {
+  Vec3 position = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+  double age = 0.0;
+  std::size_t count = 0;
+};
+
+/// Releases the particles of sub-emitter `births`, in order, at the end of the system's arrays
+/// and returns the index of the first: each drawn from `def` like emit()'s newborns, its start
+/// point from def's shape in def's rotation placed on the parent's position. Births beyond
+/// max_particles live particles are dropped.
+std::size_t emit_sub(const EmitterDef& def, EmitterState& state, ParticleStore& store,
+                     const std::vector<SubBirth>& births, std::uint64_t& next_id);
+
 /// Size over lifetime: radius = base_radius * f(age / lifetime), f piecewise linear through the
 /// keys (end keys held outside them).
 class SizeCurve {

@@ -97,6 +97,10 @@ class Column {
     size_ = n;
   }
   void push_back(const T& v) { resize(size_ + 1, v); }
+  void assign(std::size_t n, const T& value) {
+    clear();
+    resize(n, value);
+  }
   void clear() { head_ = size_ = 0; }
   /// Removes the first k elements (k <= size()) without moving the others.
   void drop_front(std::size_t k) {
@@ -145,6 +149,8 @@ struct ParticleStore {
   Column<float> tint;                    ///< (count) brightness factor on the gradient RGB
   Column<std::uint8_t> split_generation; ///< (count) splits in the lineage (0 = emitted)
   Column<std::uint32_t> split_countdown; ///< (count) steps left before a child splits
+  Column<std::uint8_t> from_split;       ///< (count) 1: created by a split (§3.9.1), 0:
+                                         ///< emitted or spawned (sub-emitter filter)
 
   void reserve(std::size_t capacity);
   /// Appends n zero-initialised particles; returns the index of the first.

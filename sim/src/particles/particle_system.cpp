@@ -28,6 +28,7 @@ void ParticleStore::reserve(std::size_t capacity) {
   tint.reserve(capacity);
   split_generation.reserve(capacity);
   split_countdown.reserve(capacity);
+  from_split.reserve(capacity);
 }
 
 namespace {
@@ -46,6 +47,7 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.tint.resize(n, 1.0f);  // a particle not from the emitter keeps its colour
   s.split_generation.resize(n);
   s.split_countdown.resize(n);
+  s.from_split.resize(n);
   s.count = n;
 }
 
@@ -90,6 +92,7 @@ void ParticleStore::compact(std::size_t first) {
     id.drop_front(k);
     split_generation.drop_front(k);
     split_countdown.drop_front(k);
+    from_split.drop_front(k);
     count = n - k;
     compact(0);
     return;
@@ -115,6 +118,7 @@ void ParticleStore::compact(std::size_t first) {
     move_run(tint, 1, w, run, len);
     move_run(split_generation, 1, w, run, len);
     move_run(split_countdown, 1, w, run, len);
+    move_run(from_split, 1, w, run, len);
     w += len;
   }
   resize_all(*this, w);

@@ -59,6 +59,7 @@ std::size_t split_particles(const EmitterDef& def, Rng& rng, ParticleStore& s, s
       s.id[j] = next_id++;
       s.split_generation[j] = generation;
       s.split_countdown[j] = std::uint32_t(sp.delay_steps);
+      s.from_split[j] = 1;
     }
     s.split_generation[i] = generation;
     s.split_countdown[i] = std::uint32_t(sp.delay_steps);

@@ -171,6 +171,11 @@ struct ParticleBatch {
   /// Additive only: multiplies the colour; above 1 the frame holds values over 1 (HDR) where
   /// the particle glows, which the bloom post-pass spreads.
   float emissive = 1.f;
+  /// (Hz) additive only: each particle flashes on and off this many times per second of its
+  /// age (glitter, crackle): lit while fract(age x strobe_hz + r) < strobe_duty, r its own
+  /// random number (from `id`), dark otherwise. 0: steady.
+  float strobe_hz = 0.f;
+  float strobe_duty = 0.5f;  ///< in (0, 1]: the lit fraction of each period
   ParticleTexture texture = ParticleTexture::none;
 };
 

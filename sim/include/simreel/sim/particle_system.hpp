@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "simreel/sim/forces.hpp"
+#include "simreel/sim/handle.hpp"
 #include "simreel/sim/keyframes.hpp"
 #include "simreel/sim/types.hpp"
 
@@ -126,6 +127,38 @@ struct SplitDef {
   double direction_deviation_deg = 0.0;  ///< in [0, 180]
   double size_fraction = 1.0;            ///< > 0
   double lifetime_deviation = 0.0;       ///< (s) >= 0
+};
+
+/// When a sub-emitter fires (Unity's sub-emitter triggers; Houdini's "source from particles").
+enum class SubEmitterTrigger {
+  death,  ///< a particle of the parent system dies: its age reached its lifetime, or a collider
+          ///< killed it (HitAction::kill/split, or it was found inside a solid, §3.4.2)
+};
+
+/// A sub-emitter (Unity "Sub Emitters" module): when a particle of the parent system triggers,
+/// `count` particles are born in another system, `system`, at the parent's position at that
+/// instant. They are drawn from that system's own EmitterDef (lifetime, speed, spread, mass,
+/// radius, colour, brightness; its shape and rotation are placed on the parent's position, so a
+/// small sphere gives a cloud around it) and its own random stream, and they add
+/// `inherit_velocity` times the parent's velocity. The target's rate and bursts still run on their
+/// own (give it rate 0 and no bursts to emit only from the parent).
+///
+/// Timing (death): a particle whose age passed its lifetime by o (s) during the step died at
+/// t1 - o, at x1 - v1 o; its sub-particles are born there and then, age o, and move for the rest of
+/// the step like any newborn (so they do not lag the step). Sub-particles are born in the births
+/// stage of the step the parent died in, after the target's own newborns, parents taken in system
+/// order and store order; births beyond the target's max_particles are dropped.
+struct SubEmitterDef {
+  ParticleSystemHandle system;  ///< the system the particles are born in (may be the parent)
+  SubEmitterTrigger trigger = SubEmitterTrigger::death;
+  std::size_t count = 10;        ///< particles born per triggering parent, in [1, 10^6]
+  /// In [0, 1]: chance that a triggering parent emits at all (Unity's "emit probability"); one
+  /// uniform draw per triggering parent from the target's random stream when < 1.
+  double probability = 1.0;
+  double inherit_velocity = 1.0;  ///< in [0, 1]: fraction of the parent's velocity added
+  /// Whether particles created by a split (§3.9.1) trigger too; false: only particles from the
+  /// emitter (or spawn_particle), so a star's trail sparks do not fire the star's sub-emitter.
+  bool split_children = true;
 };
 
 /// Emitter definition (Coutinho §3.8): where and how particles are released. Every per-particle

@@ -99,6 +99,12 @@ class World {
   /// @throws std::invalid_argument if an id is not alive, a == b, or k_s/k_d < 0;
   ///         std::out_of_range on a stale handle.
   void add_spring(ParticleSystemHandle h, const SpringDef& spring);
+  /// Adds a sub-emitter (SubEmitterDef) to `parent`: from the next step on, its particles that
+  /// trigger give birth to particles of `def.system`. Sub-emitters of a parent fire in the order
+  /// they were added. A sub-emitter whose target is removed is dropped.
+  /// @throws std::out_of_range on a stale parent or target handle; std::invalid_argument unless
+  ///         count is in [1, 10^6], probability and inherit_velocity in [0, 1].
+  void add_sub_emitter(ParticleSystemHandle parent, const SubEmitterDef& def);
   /// Integrator (sub)steps accepted so far by the system (an adaptive system may take several
   /// per internal step, or one per several), and trial steps it rejected (adaptive only).
   [[nodiscard]] std::uint64_t integrator_steps(ParticleSystemHandle h) const;
