@@ -1,5 +1,6 @@
 // Gravitational and Coulomb pair forces between the particles of one system (Coutinho §3.3.4)
-// over a grid of cut-off cells; each particle gathers its own force in a fixed order.
+// over a grid of cut-off cells: each pair once on dense grids (Newton's third law, in a fixed
+// order), else each particle gathering its own force in a fixed order.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -56,6 +57,18 @@ void pair_coefficients(double kq, double gm, double eps2, const double* __restri
   for (std::size_t u = 0; u < len; ++u) {
     const double s2 = r2[u] + eps2;
     coef[u] = (kq * q[u] - gm * m[u]) / (s2 * std::sqrt(s2));
+  }
+}
+
+/// coef[u] = num[u] / s³, s = √(r2[u] + ε²), for u < len: the same coefficient for a pair whose
+/// numerator K q_i q_j - G m_i m_j was taken when the pair was found (dense grids, each pair
+/// once). Element-wise, as pair_coefficients().
+SIMREEL_VECTOR_CLONES
+void pair_coefficients_once(double eps2, const double* __restrict r2, const double* __restrict num,
+                            std::size_t len, double* __restrict coef) {
+  for (std::size_t u = 0; u < len; ++u) {
+    const double s2 = r2[u] + eps2;
+    coef[u] = num[u] / (s2 * std::sqrt(s2));
   }
 }
 
@@ -169,7 +182,7 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   }
   const double G = pair.gravitational_G, K = pair.coulomb_K;
   accel_.resize(3 * n);
-  double* sacc = accel_.data();  // (n x 3) each particle's pair acceleration, in cell order
+  double* sacc = accel_.data();  // (n x 3) each particle's pair force, in cell order
   // One occupied cell: particles [first, last) in cell order, its nine neighbour columns
   // (dx, dy = -1..1, x-major; each column's three cells dz = -1..1 one contiguous run, in key
   // order). The runs are copied once into a candidate list shared by the cell's particles;
@@ -222,11 +235,99 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
         ay += c * (yi - g.y[q]);
         az += c * (zi - g.z[q]);
       }
-      sacc[3 * si] = ax / mi;
-      sacc[3 * si + 1] = ay / mi;
-      sacc[3 * si + 2] = az / mi;
+      sacc[3 * si] = ax;  // (divided by the mass on the way back: the same bits)
+      sacc[3 * si + 1] = ay;
+      sacc[3 * si + 2] = az;
     }
   };
+  // Dense grids take each pair once (Newton's third law): a cell meets the later particles of
+  // its own cell and 13 of its 26 neighbours, the ones after it in the x-major linear order:
+  // (x, y, z + 1), the column (x, y + 1, z - 1..z + 1) and the columns (x + 1, y - 1..y + 1,
+  // z - 1..z + 1). Five runs: the cell and (x, y, z + 1) are one (adjacent in the order). Each
+  // pair within the cut-off is recorded (i < j in cell order) and its force F = coef (x_i - x_j)
+  // added to i and subtracted from j when the pair buffer is flushed, in the order found.
+  //
+  // Determinism: a cell of the x-plane X writes to particles of the planes X and X + 1 only. The
+  // planes are done in two passes, those with X even (absolute cell coordinate) then those with
+  // X odd, with a barrier between; in a pass no two planes touch the same particle, so a pass
+  // splits over threads by whole planes, and each plane is done by one thread from its first
+  // cell to its last. A particle of plane X thus receives, whatever the thread count, first the
+  // contributions of the plane done in the first pass (X if even, X - 1 if X is odd), then those
+  // of the other, each in that plane's own visiting order: a fixed sequence of additions.
+  const auto half_cell = [&](PairGather& g, std::size_t c, std::size_t ix, std::size_t iy,
+                             std::size_t iz) {
+    const std::uint32_t* cnt = cell_count_.data();
+    const std::uint32_t first = cnt[c], last = cnt[c + 1];
+    std::uint32_t rb[5], re[5];
+    rb[0] = first;
+    re[0] = iz + 1 < nz ? cnt[c + 2] : last;
+    const std::size_t z0 = iz > 0 ? iz - 1 : iz, z1 = iz + 1 < nz ? iz + 1 : iz;
+    const auto column = [&](int r, std::size_t cx, std::size_t cy) {
+      if (cx >= nx || cy >= ny) {  // (below 0 wraps to a huge value)
+        rb[r] = re[r] = 0;
+        return;
+      }
+      const std::size_t base = (cx * std::size_t(ny) + cy) * std::size_t(nz);
+      rb[r] = cnt[base + z0];
+      re[r] = cnt[base + z1 + 1];
+    };
+    column(1, ix, iy + 1);
+    column(2, ix + 1, iy - 1);
+    column(3, ix + 1, iy);
+    column(4, ix + 1, iy + 1);
+    std::size_t m = 0;
+    for (int r = 0; r < 5; ++r) m += re[r] - rb[r];
+    g.resize(m);
+    std::size_t k = 0;
+    for (int r = 0; r < 5; ++r)
+      for (std::uint32_t s = rb[r]; s < re[r]; ++s, ++k) {
+        g.x[k] = sx[s];
+        g.y[k] = sy[s];
+        g.z[k] = sz[s];
+        g.s[k] = s;
+      }
+    for (std::uint32_t si = first; si < last; ++si) {
+      const std::size_t k0 = si - first + 1, len = m - k0;  // the candidates after si
+      const double xi = sx[si], yi = sy[si], zi = sz[si];
+      const double kq = K * sq[si], gm = G * sm[si];
+      squared_distances(xi, yi, zi, g.x.data() + k0, g.y.data() + k0, g.z.data() + k0, len,
+                        g.r2.data());
+      g.reserve_pairs(g.pairs + len);
+      std::size_t p = g.pairs;
+      for (std::size_t w = 0; w < len; w += 64) {
+        std::uint64_t bits = inside_mask(g.r2.data() + w, std::min<std::size_t>(64, len - w), cut2);
+        for (; bits != 0; bits &= bits - 1, ++p) {
+          const std::size_t u = w + std::size_t(std::countr_zero(bits));
+          const std::uint32_t s = g.s[k0 + u];
+          g.pi[p] = si;
+          g.pj[p] = s;
+          g.pr2[p] = g.r2[u];
+          g.pnum[p] = kq * sq[s] - gm * sm[s];
+        }
+      }
+      g.pairs = p;
+    }
+  };
+  // The recorded pairs' coefficients in one vectorised pass, then their forces in record order.
+  const auto flush = [&](PairGather& g) {
+    const std::size_t np = g.pairs;
+    pair_coefficients_once(eps2, g.pr2.data(), g.pnum.data(), np, g.pcoef.data());
+    const std::uint32_t *pi = g.pi.data(), *pj = g.pj.data();
+    const double* pc = g.pcoef.data();
+    for (std::size_t u = 0; u < np; ++u) {
+      const std::size_t i = pi[u], j = pj[u];
+      const double c = pc[u];
+      const double fx = c * (sx[i] - sx[j]), fy = c * (sy[i] - sy[j]), fz = c * (sz[i] - sz[j]);
+      sacc[3 * i] += fx;
+      sacc[3 * i + 1] += fy;
+      sacc[3 * i + 2] += fz;
+      sacc[3 * j] -= fx;
+      sacc[3 * j + 1] -= fy;
+      sacc[3 * j + 2] -= fz;
+    }
+    g.pairs = 0;
+  };
+  constexpr std::size_t kFlushPairs = 512;  // (any flush points give the same bits)
   const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
   if (gather_.size() < std::size_t(parts)) gather_.resize(std::size_t(parts));
 #pragma omp parallel num_threads(parts) if (parts > 1)
@@ -239,30 +340,31 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     PairGather& g = gather_[t];
     std::uint32_t run_b[9], run_e[9];
     if (dense) {
-      // Cells split where the particles do (a part = the cells whose run starts in its share of
-      // [0, n)), so the parts hold about equal particle counts however the cells are filled.
+      std::fill(sacc + 3 * n * t / nt, sacc + 3 * n * (t + 1) / nt, 0.0);
       const std::uint32_t* cnt = cell_count_.data();
-      const auto part_begin = [&](std::size_t p) {
-        return p == 0    ? std::size_t(0)
-               : p == nt ? cells
-                         : std::size_t(std::lower_bound(cnt, cnt + cells, std::uint32_t(n * p / nt)) - cnt);
-      };
-      const std::size_t c_end = part_begin(t + 1), nyz = std::size_t(ny * nz);
-      for (std::size_t c = part_begin(t); c < c_end; ++c) {
-        if (cnt[c] == cnt[c + 1]) continue;
-        const std::size_t ix = c / nyz, iy = c % nyz / std::size_t(nz), iz = c % std::size_t(nz);
-        const std::size_t z0 = iz > 0 ? iz - 1 : iz, z1 = iz + 1 < nz ? iz + 1 : iz;
-        for (int col = 0; col < 9; ++col) {
-          const std::size_t cx = ix + std::size_t(col / 3) - 1, cy = iy + std::size_t(col % 3) - 1;
-          if (cx >= nx || cy >= ny) {  // (below 0 wraps to a huge value)
-            run_b[col] = run_e[col] = 0;
-            continue;
+      const std::size_t nyz = std::size_t(ny * nz);
+      const auto plane_count = [&](std::size_t ix) { return cnt[(ix + 1) * nyz] - cnt[ix * nyz]; };
+      for (std::int64_t pass = 0; pass < 2; ++pass) {
+#pragma omp barrier
+        // This pass's planes split where their particles do: a plane goes to the part whose
+        // share of the pass's particles holds the plane's first one.
+        std::size_t total = 0;
+        for (std::size_t ix = 0; ix < nx; ++ix)
+          if (((lo[0] + std::int64_t(ix)) & 1) == pass) total += plane_count(ix);
+        std::size_t before = 0;
+        for (std::size_t ix = 0; ix < nx; ++ix) {
+          if (((lo[0] + std::int64_t(ix)) & 1) != pass) continue;
+          const std::size_t here = plane_count(ix);
+          const bool mine = here > 0 && before * nt / total == t;
+          before += here;
+          if (!mine) continue;
+          for (std::size_t c = ix * nyz; c < (ix + 1) * nyz; ++c) {
+            if (cnt[c] == cnt[c + 1]) continue;
+            half_cell(g, c, ix, c % nyz / std::size_t(nz), c % std::size_t(nz));
+            if (g.pairs >= kFlushPairs) flush(g);
           }
-          const std::size_t base = (cx * std::size_t(ny) + cy) * std::size_t(nz);
-          run_b[col] = cnt[base + z0];
-          run_e[col] = cnt[base + z1 + 1];
+          flush(g);
         }
-        cell_forces(g, cnt[c], cnt[c + 1], run_b, run_e);
       }
     } else {
       // Keys order cells by (x, y, z), and as the cells are visited in key order each column's
@@ -293,13 +395,15 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
         cell_forces(g, cs[c], cs[c + 1], run_b, run_e);
       }
     }
-  }
-  // Back to the particles' order, reading each one's rank (independent loads).
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* o = sacc + 3 * std::size_t(rank_[i]);
-    a[3 * i] += o[0];
-    a[3 * i + 1] += o[1];
-    a[3 * i + 2] += o[2];
+    // Back to the particles' order, reading each one's rank (independent loads), force over mass.
+#pragma omp barrier
+    for (std::size_t i = n * t / nt; i < n * (t + 1) / nt; ++i) {
+      const double* o = sacc + 3 * std::size_t(rank_[i]);
+      const double mi = mass[i];
+      a[3 * i] += o[0] / mi;
+      a[3 * i + 1] += o[1] / mi;
+      a[3 * i + 2] += o[2] / mi;
+    }
   }
 }
 
