@@ -340,30 +340,60 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     PairGather& g = gather_[t];
     std::uint32_t run_b[9], run_e[9];
     if (dense) {
-      std::fill(sacc + 3 * n * t / nt, sacc + 3 * n * (t + 1) / nt, 0.0);
       const std::uint32_t* cnt = cell_count_.data();
       const std::size_t nyz = std::size_t(ny * nz);
-      const auto plane_count = [&](std::size_t ix) { return cnt[(ix + 1) * nyz] - cnt[ix * nyz]; };
+      // Plane ix's particles: [cnt[ix nyz], cnt[(ix + 1) nyz]) in cell order.
+      const auto zero = [&](std::size_t ix) {
+        if (ix < nx) std::fill(sacc + 3 * cnt[ix * nyz], sacc + 3 * cnt[(ix + 1) * nyz], 0.0);
+      };
+      const auto write_back = [&](std::size_t ix) {  // force over mass, to the particle's row
+        if (ix >= nx) return;
+        for (std::size_t s = cnt[ix * nyz]; s < cnt[(ix + 1) * nyz]; ++s) {
+          double* ai = a + 3 * std::size_t(order[s]);
+          const double* o = sacc + 3 * s;
+          ai[0] += o[0] / sm[s];
+          ai[1] += o[1] / sm[s];
+          ai[2] += o[2] / sm[s];
+        }
+      };
+      const auto parity = [&](std::size_t ix) { return (lo[0] + std::int64_t(ix)) & 1; };
       for (std::int64_t pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
 #pragma omp barrier
+        }
+        // A plane with no predecessor in the other pass: part 0 zeroes it before the first
+        // pass, or writes it back once its first pass is done.
+        if (t == 0 && parity(0) != pass) (pass == 0 ? zero(0) : write_back(0));
         // This pass's planes split where their particles do: a plane goes to the part whose
-        // share of the pass's particles holds the plane's first one.
+        // share of the pass's particles holds the plane's first one (empty planes too, for
+        // their zeroing or write-back of the next plane).
         std::size_t total = 0;
         for (std::size_t ix = 0; ix < nx; ++ix)
-          if (((lo[0] + std::int64_t(ix)) & 1) == pass) total += plane_count(ix);
+          if (parity(ix) == pass) total += cnt[(ix + 1) * nyz] - cnt[ix * nyz];
         std::size_t before = 0;
         for (std::size_t ix = 0; ix < nx; ++ix) {
-          if (((lo[0] + std::int64_t(ix)) & 1) != pass) continue;
-          const std::size_t here = plane_count(ix);
-          const bool mine = here > 0 && before * nt / total == t;
-          before += here;
+          if (parity(ix) != pass) continue;
+          const bool mine = std::min(before * nt / std::max<std::size_t>(total, 1), nt - 1) == t;
+          before += cnt[(ix + 1) * nyz] - cnt[ix * nyz];
           if (!mine) continue;
-          for (std::size_t c = ix * nyz; c < (ix + 1) * nyz; ++c) {
-            if (cnt[c] == cnt[c + 1]) continue;
-            half_cell(g, c, ix, c % nyz / std::size_t(nz), c % std::size_t(nz));
-            if (g.pairs >= kFlushPairs) flush(g);
+          // The first pass's plane ix is the first to touch planes ix and ix + 1; after the
+          // second pass's plane ix nothing more reaches planes ix and ix + 1.
+          if (pass == 0) {
+            zero(ix);
+            zero(ix + 1);
           }
+          std::size_t c = ix * nyz;
+          for (std::size_t iy = 0; iy < ny; ++iy)
+            for (std::size_t iz = 0; iz < nz; ++iz, ++c) {
+              if (cnt[c] == cnt[c + 1]) continue;
+              half_cell(g, c, ix, iy, iz);
+              if (g.pairs >= kFlushPairs) flush(g);
+            }
           flush(g);
+          if (pass == 1) {
+            write_back(ix);
+            write_back(ix + 1);
+          }
         }
       }
     } else {
@@ -395,15 +425,15 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
         cell_forces(g, cs[c], cs[c + 1], run_b, run_e);
       }
     }
-    // Back to the particles' order, reading each one's rank (independent loads), force over mass.
-#pragma omp barrier
-    for (std::size_t i = n * t / nt; i < n * (t + 1) / nt; ++i) {
-      const double* o = sacc + 3 * std::size_t(rank_[i]);
-      const double mi = mass[i];
-      a[3 * i] += o[0] / mi;
-      a[3 * i + 1] += o[1] / mi;
-      a[3 * i + 2] += o[2] / mi;
-    }
+  }
+  if (dense) return;  // (written back plane by plane)
+  // Back to the particles' order, reading each one's rank (independent loads), force over mass.
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* o = sacc + 3 * std::size_t(rank_[i]);
+    const double mi = mass[i];
+    a[3 * i] += o[0] / mi;
+    a[3 * i + 1] += o[1] / mi;
+    a[3 * i + 2] += o[2] / mi;
   }
 }
 
