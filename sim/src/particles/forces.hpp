@@ -101,7 +101,7 @@ struct Dynamics {
   /// Dense grids (each pair once): the pairs found so far, in the order their forces are added
   /// (sorted indices i < j in visiting order, squared distance, numerator K q_i q_j - G m_i m_j)
   /// and their coefficients; `pairs` of them in use.
-  struct PairGather {
+  struct alignas(64) PairGather {  // (one per thread: no shared cache line)
     std::vector<double> x, y, z, r2, kr2, kq, km, coef;
     std::vector<std::uint32_t> s, keep;
     std::vector<double> pr2, pnum, pcoef;

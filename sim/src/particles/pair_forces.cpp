@@ -101,6 +101,10 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     hi[d] = std::numeric_limits<std::int64_t>::min();
   }
   bool finite = true;
+  // (per particle, and min, max and "and" are exact: any split gives the same values)
+  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1) \
+    reduction(min : lo[:3]) reduction(max : hi[:3]) reduction(&& : finite)
   for (std::size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) {
       const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
@@ -172,6 +176,7 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   // accesses are independent stores, not loads the copy waits for).
   sorted_.resize(5 * n);
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t s = rank_[i];
     sx[s] = x[3 * i];
@@ -328,7 +333,6 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     g.pairs = 0;
   };
   constexpr std::size_t kFlushPairs = 512;  // (any flush points give the same bits)
-  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
   if (gather_.size() < std::size_t(parts)) gather_.resize(std::size_t(parts));
 #pragma omp parallel num_threads(parts) if (parts > 1)
   {
