@@ -294,21 +294,22 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     for (std::uint32_t si = first; si < last; ++si) {
       const std::size_t k0 = si - first + 1, len = m - k0;  // the candidates after si
       const double xi = sx[si], yi = sy[si], zi = sz[si];
-      const double kq = K * sq[si], gm = G * sm[si];
       squared_distances(xi, yi, zi, g.x.data() + k0, g.y.data() + k0, g.z.data() + k0, len,
                         g.r2.data());
       g.reserve_pairs(g.pairs + len);
+      // Branch-free compaction: every candidate is written at the end of the list, which grows
+      // only when it lies within the cut-off (false for NaN).
       std::size_t p = g.pairs;
-      for (std::size_t w = 0; w < len; w += 64) {
-        std::uint64_t bits = inside_mask(g.r2.data() + w, std::min<std::size_t>(64, len - w), cut2);
-        for (; bits != 0; bits &= bits - 1, ++p) {
-          const std::size_t u = w + std::size_t(std::countr_zero(bits));
-          const std::uint32_t s = g.s[k0 + u];
-          g.pi[p] = si;
-          g.pj[p] = s;
-          g.pr2[p] = g.r2[u];
-          g.pnum[p] = kq * sq[s] - gm * sm[s];
-        }
+      std::uint32_t* __restrict pi = g.pi.data();
+      std::uint32_t* __restrict pj = g.pj.data();
+      double* __restrict pr2 = g.pr2.data();
+      const std::uint32_t* __restrict cs = g.s.data() + k0;
+      const double* __restrict r2 = g.r2.data();
+      for (std::size_t u = 0; u < len; ++u) {
+        pi[p] = si;
+        pj[p] = cs[u];
+        pr2[p] = r2[u];
+        p += std::size_t(r2[u] < cut2);
       }
       g.pairs = p;
     }
@@ -316,6 +317,10 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   // The recorded pairs' coefficients in one vectorised pass, then their forces in record order.
   const auto flush = [&](PairGather& g) {
     const std::size_t np = g.pairs;
+    for (std::size_t u = 0; u < np; ++u) {
+      const std::size_t i = g.pi[u], j = g.pj[u];
+      g.pnum[u] = K * sq[i] * sq[j] - G * sm[i] * sm[j];
+    }
     pair_coefficients_once(eps2, g.pr2.data(), g.pnum.data(), np, g.pcoef.data());
     const std::uint32_t *pi = g.pi.data(), *pj = g.pj.data();
     const double* pc = g.pcoef.data();
