@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "core/vector_clones.hpp"
@@ -25,6 +26,8 @@ namespace simreel::sim::detail {
 namespace {
 
 constexpr std::int64_t kCellBias = 1 << 20;  // 21 bits per axis: +-1M cells
+constexpr std::size_t kCopyBlock = 8;         // particles per block copy of a candidate run
+static_assert(kCopyBlock >= 3, "the distance pass rounds its length up to 4 into this slack");
 
 std::uint64_t cell_key(std::int64_t cx, std::int64_t cy, std::int64_t cz) {
   auto c = [](std::int64_t v) {
@@ -174,7 +177,7 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   // contiguous, and the distance pass over a cell's candidates reads them as vectors. The
   // particles are read in their own order and written to their ranks (a scatter: the random
   // accesses are independent stores, not loads the copy waits for).
-  sorted_.resize(5 * n);
+  sorted_.resize(5 * n + kCopyBlock, 0.0);  // (+ a block: the dense path's copies overshoot)
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
   for (std::size_t i = 0; i < n; ++i) {
@@ -282,20 +285,25 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     column(4, ix + 1, iy + 1);
     std::size_t m = 0;
     for (int r = 0; r < 5; ++r) m += re[r] - rb[r];
-    g.resize(m);
-    std::size_t k = 0;
-    for (int r = 0; r < 5; ++r)
-      for (std::uint32_t s = rb[r]; s < re[r]; ++s, ++k) {
-        g.x[k] = sx[s];
-        g.y[k] = sy[s];
-        g.z[k] = sz[s];
-        g.s[k] = s;
+    g.resize(m + kCopyBlock);
+    // A run holds a few particles (~6 here), and an element loop over it costs a mispredicted
+    // exit per run: copy whole blocks of kCopyBlock instead, the last one overshooting into
+    // room the next run (or the slack) overwrites; it reads at most a block past the end of a
+    // sorted array (into the next one, or sorted_'s slack).
+    for (std::size_t r = 0, k = 0; r < 5; k += re[r] - rb[r], ++r)
+      for (std::size_t u = 0; u < re[r] - rb[r]; u += kCopyBlock) {
+        const std::size_t src = rb[r] + u, dst = k + u;
+        std::memcpy(g.x.data() + dst, sx + src, kCopyBlock * sizeof(double));
+        std::memcpy(g.y.data() + dst, sy + src, kCopyBlock * sizeof(double));
+        std::memcpy(g.z.data() + dst, sz + src, kCopyBlock * sizeof(double));
+        for (std::size_t v = 0; v < kCopyBlock; ++v) g.s[dst + v] = std::uint32_t(src + v);
       }
     for (std::uint32_t si = first; si < last; ++si) {
       const std::size_t k0 = si - first + 1, len = m - k0;  // the candidates after si
       const double xi = sx[si], yi = sy[si], zi = sz[si];
-      squared_distances(xi, yi, zi, g.x.data() + k0, g.y.data() + k0, g.z.data() + k0, len,
-                        g.r2.data());
+      // (over a multiple of 4 candidates, into the copies' slack: no remainder loop to mispredict)
+      squared_distances(xi, yi, zi, g.x.data() + k0, g.y.data() + k0, g.z.data() + k0,
+                        (len + 3) & ~std::size_t{3}, g.r2.data());
       g.reserve_pairs(g.pairs + len);
       // Branch-free compaction: every candidate is written at the end of the list, which grows
       // only when it lies within the cut-off (false for NaN).
