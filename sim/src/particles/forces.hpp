@@ -101,12 +101,13 @@ struct Dynamics {
   /// Dense grids (each pair once): the pairs found so far, in the order their forces are added
   /// (sorted indices i < j in visiting order, squared distance, numerator K q_i q_j - G m_i m_j)
   /// and their coefficients; `pairs` of them in use.
-  struct alignas(64) PairGather {  // (one per thread: no shared cache line)
+  struct PairGather {
     std::vector<double> x, y, z, r2, kr2, kq, km, coef;
     std::vector<std::uint32_t> s, keep;
     std::vector<double> pr2, pnum, pcoef;
     std::vector<std::uint32_t> pi, pj;
-    std::size_t pairs = 0;
+    std::size_t pairs = 0;  // (written per particle: the padding keeps the next thread's
+    char pad_[64 - sizeof(std::size_t)];  // buffers off its cache line)
     void resize(std::size_t m) {
       if (x.size() >= m) return;
       for (auto* a : {&x, &y, &z, &r2, &kr2, &kq, &km, &coef}) a->resize(m);
