@@ -191,8 +191,8 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   const double G = pair.gravitational_G, K = pair.coulomb_K;
   accel_.resize(3 * n);
   double* sacc = accel_.data();  // (n x 3) each particle's pair force, in cell order
-  // One occupied cell: particles [first, last) in cell order, its nine neighbour columns
-  // (dx, dy = -1..1, x-major; each column's three cells dz = -1..1 one contiguous run, in key
+  // Sparse grids. One occupied cell: particles [first, last) in cell order, its nine neighbour
+  // columns (dx, dy = -1..1, x-major; each column's three cells dz = -1..1 one contiguous run, in key
   // order). The runs are copied once into a candidate list shared by the cell's particles;
   // each particle takes the squared distances to all candidates in one vectorised pass, visits
   // those within the cut-off by the set bits of a mask (itself excluded by its place in the
