@@ -90,7 +90,7 @@ struct Dynamics {
   std::vector<std::uint32_t> order_;        // (n) particle indices sorted by (cell key, index)
   std::vector<std::uint32_t> rank_;         // (n) particle index -> sorted position
   std::vector<double> sorted_;              // (5 x n) x, then y, z, q, m, each in cell order
-  std::vector<double> accel_;               // (n x 3) pair accelerations in sorted order
+  std::vector<double> accel_;               // (n x 3) pair forces (N) in sorted order
   std::vector<std::uint64_t> cell_keys_;    // sparse grids: occupied cells' keys, increasing
   std::vector<std::uint32_t> cell_start_;   // sparse grids: first particle of each cell, + n
   std::vector<std::uint32_t> cell_count_;   // dense grids: run start of every bounding-box cell
@@ -98,14 +98,27 @@ struct Dynamics {
   /// One thread's candidates of a cell (the particles of its 27 neighbour cells, in run order):
   /// positions, sorted index, squared distances to the current particle; then the ones kept
   /// (candidate index, squared distance, charge, mass) and their force coefficients.
+  /// Dense grids (each pair once): the pairs found so far, in the order their forces are added
+  /// (sorted indices i < j in visiting order, squared distance, numerator K q_i q_j - G m_i m_j)
+  /// and their coefficients; `pairs` of them in use.
   struct PairGather {
     std::vector<double> x, y, z, r2, kr2, kq, km, coef;
     std::vector<std::uint32_t> s, keep;
+    std::vector<double> pr2, pnum, pcoef;
+    std::vector<std::uint32_t> pi, pj;
+    std::size_t pairs = 0;  // (written per particle: the padding keeps the next thread's
+    char pad_[64 - sizeof(std::size_t)];  // buffers off its cache line)
     void resize(std::size_t m) {
       if (x.size() >= m) return;
       for (auto* a : {&x, &y, &z, &r2, &kr2, &kq, &km, &coef}) a->resize(m);
       s.resize(m);
       keep.resize(m);
+    }
+    void reserve_pairs(std::size_t p) {
+      if (pr2.size() >= p) return;
+      for (auto* a : {&pr2, &pnum, &pcoef}) a->resize(p);
+      pi.resize(p);
+      pj.resize(p);
     }
   };
   std::vector<PairGather> gather_;  // one per thread

@@ -1,9 +1,11 @@
 // Gravitational and Coulomb pair forces between the particles of one system (Coutinho §3.3.4)
-// over a grid of cut-off cells; each particle gathers its own force in a fixed order.
+// over a grid of cut-off cells: each pair once on dense grids (Newton's third law, in a fixed
+// order), else each particle gathering its own force in a fixed order.
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "core/vector_clones.hpp"
@@ -24,6 +26,8 @@ namespace simreel::sim::detail {
 namespace {
 
 constexpr std::int64_t kCellBias = 1 << 20;  // 21 bits per axis: +-1M cells
+constexpr std::size_t kCopyBlock = 8;         // particles per block copy of a candidate run
+static_assert(kCopyBlock >= 3, "the distance pass rounds its length up to 4 into this slack");
 
 std::uint64_t cell_key(std::int64_t cx, std::int64_t cy, std::int64_t cz) {
   auto c = [](std::int64_t v) {
@@ -59,6 +63,18 @@ void pair_coefficients(double kq, double gm, double eps2, const double* __restri
   }
 }
 
+/// coef[u] = num[u] / s³, s = √(r2[u] + ε²), for u < len: the same coefficient for a pair whose
+/// numerator K q_i q_j - G m_i m_j was taken when the pair was found (dense grids, each pair
+/// once). Element-wise, as pair_coefficients().
+SIMREEL_VECTOR_CLONES
+void pair_coefficients_once(double eps2, const double* __restrict r2, const double* __restrict num,
+                            std::size_t len, double* __restrict coef) {
+  for (std::size_t u = 0; u < len; ++u) {
+    const double s2 = r2[u] + eps2;
+    coef[u] = num[u] / (s2 * std::sqrt(s2));
+  }
+}
+
 /// Bit k set when r2[k] < cut2 (false for NaN, as the scalar test), k < len <= 64. Two lanes a
 /// compare on SSE2 (every x86-64): the kept neighbours (~15% of a 27-cell stencil's candidates)
 /// are then visited by their set bits instead of testing each candidate in a scalar loop.
@@ -88,6 +104,10 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     hi[d] = std::numeric_limits<std::int64_t>::min();
   }
   bool finite = true;
+  // (per particle, and min, max and "and" are exact: any split gives the same values)
+  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1) \
+    reduction(min : lo[:3]) reduction(max : hi[:3]) reduction(&& : finite)
   for (std::size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) {
       const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
@@ -157,8 +177,9 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   // contiguous, and the distance pass over a cell's candidates reads them as vectors. The
   // particles are read in their own order and written to their ranks (a scatter: the random
   // accesses are independent stores, not loads the copy waits for).
-  sorted_.resize(5 * n);
+  sorted_.resize(5 * n + kCopyBlock, 0.0);  // (+ a block: the dense path's copies overshoot)
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t s = rank_[i];
     sx[s] = x[3 * i];
@@ -169,9 +190,9 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   }
   const double G = pair.gravitational_G, K = pair.coulomb_K;
   accel_.resize(3 * n);
-  double* sacc = accel_.data();  // (n x 3) each particle's pair acceleration, in cell order
-  // One occupied cell: particles [first, last) in cell order, its nine neighbour columns
-  // (dx, dy = -1..1, x-major; each column's three cells dz = -1..1 one contiguous run, in key
+  double* sacc = accel_.data();  // (n x 3) each particle's pair force, in cell order
+  // Sparse grids. One occupied cell: particles [first, last) in cell order, its nine neighbour
+  // columns (dx, dy = -1..1, x-major; each column's three cells dz = -1..1 one contiguous run, in key
   // order). The runs are copied once into a candidate list shared by the cell's particles;
   // each particle takes the squared distances to all candidates in one vectorised pass, visits
   // those within the cut-off by the set bits of a mask (itself excluded by its place in the
@@ -222,12 +243,109 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
         ay += c * (yi - g.y[q]);
         az += c * (zi - g.z[q]);
       }
-      sacc[3 * si] = ax / mi;
-      sacc[3 * si + 1] = ay / mi;
-      sacc[3 * si + 2] = az / mi;
+      sacc[3 * si] = ax;  // (divided by the mass on the way back: the same bits)
+      sacc[3 * si + 1] = ay;
+      sacc[3 * si + 2] = az;
     }
   };
-  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
+  // Dense grids take each pair once (Newton's third law): a cell meets the later particles of
+  // its own cell and 13 of its 26 neighbours, the ones after it in the x-major linear order:
+  // (x, y, z + 1), the column (x, y + 1, z - 1..z + 1) and the columns (x + 1, y - 1..y + 1,
+  // z - 1..z + 1). Five runs: the cell and (x, y, z + 1) are one (adjacent in the order). Each
+  // pair within the cut-off is recorded (i < j in cell order) and its force F = coef (x_i - x_j)
+  // added to i and subtracted from j when the pair buffer is flushed, in the order found.
+  //
+  // Determinism: a cell of the x-plane X writes to particles of the planes X and X + 1 only. The
+  // planes are done in two passes, those with X even (absolute cell coordinate) then those with
+  // X odd, with a barrier between; in a pass no two planes touch the same particle, so a pass
+  // splits over threads by whole planes, and each plane is done by one thread from its first
+  // cell to its last. A particle of plane X thus receives, whatever the thread count, first the
+  // contributions of the plane done in the first pass (X if even, X - 1 if X is odd), then those
+  // of the other, each in that plane's own visiting order: a fixed sequence of additions.
+  const auto half_cell = [&](PairGather& g, std::size_t c, std::size_t ix, std::size_t iy,
+                             std::size_t iz) {
+    const std::uint32_t* cnt = cell_count_.data();
+    const std::uint32_t first = cnt[c], last = cnt[c + 1];
+    std::uint32_t rb[5], re[5];
+    rb[0] = first;
+    re[0] = iz + 1 < nz ? cnt[c + 2] : last;
+    const std::size_t z0 = iz > 0 ? iz - 1 : iz, z1 = iz + 1 < nz ? iz + 1 : iz;
+    const auto column = [&](int r, std::size_t cx, std::size_t cy) {
+      if (cx >= nx || cy >= ny) {  // (below 0 wraps to a huge value)
+        rb[r] = re[r] = 0;
+        return;
+      }
+      const std::size_t base = (cx * std::size_t(ny) + cy) * std::size_t(nz);
+      rb[r] = cnt[base + z0];
+      re[r] = cnt[base + z1 + 1];
+    };
+    column(1, ix, iy + 1);
+    column(2, ix + 1, iy - 1);
+    column(3, ix + 1, iy);
+    column(4, ix + 1, iy + 1);
+    std::size_t m = 0;
+    for (int r = 0; r < 5; ++r) m += re[r] - rb[r];
+    g.resize(m + kCopyBlock);
+    // A run holds a few particles (~6 here), and an element loop over it costs a mispredicted
+    // exit per run: copy whole blocks of kCopyBlock instead, the last one overshooting into
+    // room the next run (or the slack) overwrites; it reads at most a block past the end of a
+    // sorted array (into the next one, or sorted_'s slack).
+    for (std::size_t r = 0, k = 0; r < 5; k += re[r] - rb[r], ++r)
+      for (std::size_t u = 0; u < re[r] - rb[r]; u += kCopyBlock) {
+        const std::size_t src = rb[r] + u, dst = k + u;
+        std::memcpy(g.x.data() + dst, sx + src, kCopyBlock * sizeof(double));
+        std::memcpy(g.y.data() + dst, sy + src, kCopyBlock * sizeof(double));
+        std::memcpy(g.z.data() + dst, sz + src, kCopyBlock * sizeof(double));
+        for (std::size_t v = 0; v < kCopyBlock; ++v) g.s[dst + v] = std::uint32_t(src + v);
+      }
+    for (std::uint32_t si = first; si < last; ++si) {
+      const std::size_t k0 = si - first + 1, len = m - k0;  // the candidates after si
+      const double xi = sx[si], yi = sy[si], zi = sz[si];
+      // (over a multiple of 4 candidates, into the copies' slack: no remainder loop to mispredict)
+      squared_distances(xi, yi, zi, g.x.data() + k0, g.y.data() + k0, g.z.data() + k0,
+                        (len + 3) & ~std::size_t{3}, g.r2.data());
+      g.reserve_pairs(g.pairs + len);
+      // Branch-free compaction: every candidate is written at the end of the list, which grows
+      // only when it lies within the cut-off (false for NaN).
+      std::size_t p = g.pairs;
+      std::uint32_t* __restrict pi = g.pi.data();
+      std::uint32_t* __restrict pj = g.pj.data();
+      double* __restrict pr2 = g.pr2.data();
+      const std::uint32_t* __restrict cs = g.s.data() + k0;
+      const double* __restrict r2 = g.r2.data();
+      for (std::size_t u = 0; u < len; ++u) {
+        pi[p] = si;
+        pj[p] = cs[u];
+        pr2[p] = r2[u];
+        p += std::size_t(r2[u] < cut2);
+      }
+      g.pairs = p;
+    }
+  };
+  // The recorded pairs' coefficients in one vectorised pass, then their forces in record order.
+  const auto flush = [&](PairGather& g) {
+    const std::size_t np = g.pairs;
+    for (std::size_t u = 0; u < np; ++u) {
+      const std::size_t i = g.pi[u], j = g.pj[u];
+      g.pnum[u] = K * sq[i] * sq[j] - G * sm[i] * sm[j];
+    }
+    pair_coefficients_once(eps2, g.pr2.data(), g.pnum.data(), np, g.pcoef.data());
+    const std::uint32_t *pi = g.pi.data(), *pj = g.pj.data();
+    const double* pc = g.pcoef.data();
+    for (std::size_t u = 0; u < np; ++u) {
+      const std::size_t i = pi[u], j = pj[u];
+      const double c = pc[u];
+      const double fx = c * (sx[i] - sx[j]), fy = c * (sy[i] - sy[j]), fz = c * (sz[i] - sz[j]);
+      sacc[3 * i] += fx;
+      sacc[3 * i + 1] += fy;
+      sacc[3 * i + 2] += fz;
+      sacc[3 * j] -= fx;
+      sacc[3 * j + 1] -= fy;
+      sacc[3 * j + 2] -= fz;
+    }
+    g.pairs = 0;
+  };
+  constexpr std::size_t kFlushPairs = 512;  // (any flush points give the same bits)
   if (gather_.size() < std::size_t(parts)) gather_.resize(std::size_t(parts));
 #pragma omp parallel num_threads(parts) if (parts > 1)
   {
@@ -239,30 +357,61 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     PairGather& g = gather_[t];
     std::uint32_t run_b[9], run_e[9];
     if (dense) {
-      // Cells split where the particles do (a part = the cells whose run starts in its share of
-      // [0, n)), so the parts hold about equal particle counts however the cells are filled.
       const std::uint32_t* cnt = cell_count_.data();
-      const auto part_begin = [&](std::size_t p) {
-        return p == 0    ? std::size_t(0)
-               : p == nt ? cells
-                         : std::size_t(std::lower_bound(cnt, cnt + cells, std::uint32_t(n * p / nt)) - cnt);
+      const std::size_t nyz = std::size_t(ny * nz);
+      // Plane ix's particles: [cnt[ix nyz], cnt[(ix + 1) nyz]) in cell order.
+      const auto zero = [&](std::size_t ix) {
+        if (ix < nx) std::fill(sacc + 3 * cnt[ix * nyz], sacc + 3 * cnt[(ix + 1) * nyz], 0.0);
       };
-      const std::size_t c_end = part_begin(t + 1), nyz = std::size_t(ny * nz);
-      for (std::size_t c = part_begin(t); c < c_end; ++c) {
-        if (cnt[c] == cnt[c + 1]) continue;
-        const std::size_t ix = c / nyz, iy = c % nyz / std::size_t(nz), iz = c % std::size_t(nz);
-        const std::size_t z0 = iz > 0 ? iz - 1 : iz, z1 = iz + 1 < nz ? iz + 1 : iz;
-        for (int col = 0; col < 9; ++col) {
-          const std::size_t cx = ix + std::size_t(col / 3) - 1, cy = iy + std::size_t(col % 3) - 1;
-          if (cx >= nx || cy >= ny) {  // (below 0 wraps to a huge value)
-            run_b[col] = run_e[col] = 0;
-            continue;
-          }
-          const std::size_t base = (cx * std::size_t(ny) + cy) * std::size_t(nz);
-          run_b[col] = cnt[base + z0];
-          run_e[col] = cnt[base + z1 + 1];
+      const auto write_back = [&](std::size_t ix) {  // force over mass, to the particle's row
+        if (ix >= nx) return;
+        for (std::size_t s = cnt[ix * nyz]; s < cnt[(ix + 1) * nyz]; ++s) {
+          double* ai = a + 3 * std::size_t(order[s]);
+          const double* o = sacc + 3 * s;
+          ai[0] += o[0] / sm[s];
+          ai[1] += o[1] / sm[s];
+          ai[2] += o[2] / sm[s];
         }
-        cell_forces(g, cnt[c], cnt[c + 1], run_b, run_e);
+      };
+      const auto parity = [&](std::size_t ix) { return (lo[0] + std::int64_t(ix)) & 1; };
+      for (std::int64_t pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
+#pragma omp barrier
+        }
+        // A plane with no predecessor in the other pass: part 0 zeroes it before the first
+        // pass, or writes it back once its first pass is done.
+        if (t == 0 && parity(0) != pass) (pass == 0 ? zero(0) : write_back(0));
+        // This pass's planes split where their particles do: a plane goes to the part whose
+        // share of the pass's particles holds the plane's first one (empty planes too, for
+        // their zeroing or write-back of the next plane).
+        std::size_t total = 0;
+        for (std::size_t ix = 0; ix < nx; ++ix)
+          if (parity(ix) == pass) total += cnt[(ix + 1) * nyz] - cnt[ix * nyz];
+        std::size_t before = 0;
+        for (std::size_t ix = 0; ix < nx; ++ix) {
+          if (parity(ix) != pass) continue;
+          const bool mine = std::min(before * nt / std::max<std::size_t>(total, 1), nt - 1) == t;
+          before += cnt[(ix + 1) * nyz] - cnt[ix * nyz];
+          if (!mine) continue;
+          // The first pass's plane ix is the first to touch planes ix and ix + 1; after the
+          // second pass's plane ix nothing more reaches planes ix and ix + 1.
+          if (pass == 0) {
+            zero(ix);
+            zero(ix + 1);
+          }
+          std::size_t c = ix * nyz;
+          for (std::size_t iy = 0; iy < ny; ++iy)
+            for (std::size_t iz = 0; iz < nz; ++iz, ++c) {
+              if (cnt[c] == cnt[c + 1]) continue;
+              half_cell(g, c, ix, iy, iz);
+              if (g.pairs >= kFlushPairs) flush(g);
+            }
+          flush(g);
+          if (pass == 1) {
+            write_back(ix);
+            write_back(ix + 1);
+          }
+        }
       }
     } else {
       // Keys order cells by (x, y, z), and as the cells are visited in key order each column's
@@ -294,12 +443,14 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
       }
     }
   }
-  // Back to the particles' order, reading each one's rank (independent loads).
+  if (dense) return;  // (written back plane by plane)
+  // Back to the particles' order, reading each one's rank (independent loads), force over mass.
   for (std::size_t i = 0; i < n; ++i) {
     const double* o = sacc + 3 * std::size_t(rank_[i]);
-    a[3 * i] += o[0];
-    a[3 * i + 1] += o[1];
-    a[3 * i + 2] += o[2];
+    const double mi = mass[i];
+    a[3 * i] += o[0] / mi;
+    a[3 * i + 1] += o[1] / mi;
+    a[3 * i + 2] += o[2] / mi;
   }
 }
 
