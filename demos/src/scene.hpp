@@ -79,6 +79,9 @@ struct ColliderScene {
   std::shared_ptr<const assets::TriangleMesh> mesh_asset;
   std::array<double, 3> mesh_scale{1, 1, 1};
   render::Vec4f color{0.6f, 0.6f, 0.62f, 1.f};
+  /// The scene gave `color` (or material.color): a mesh file with several materials is then
+  /// drawn in it; otherwise in the file's own materials.
+  bool color_given = false;
   float checker_m = 0.f;        ///< (m) plane checker cell; 0 = plain
   float draw_half_size = 20.f;  ///< (m) drawn extent of an infinite plane
   /// "motion": "dynamic" (box, sphere, cylinder, capsule); for Type::body only `enabled` (a

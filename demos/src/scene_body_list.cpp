@@ -347,6 +347,7 @@ ColliderScene body(const json& j, const std::string& ptr, const std::string& fil
     m.restitution = o.number("restitution", m.restitution, ranges::kRestitution);
     m.friction = o.number("friction", m.friction, ranges::kFriction);
     if (o.has("static_friction")) m.static_friction = o.number("static_friction", 0.0, 0.0, kInf);
+    c.color_given = o.has("color");
     color = o.color("color", color);
     c.texture = texture_file(o);
     o.finish();

@@ -70,10 +70,12 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
   if (!r.has("type"))
     r.error_at(ptr, "expected a \"type\": one of \"plane\", \"box\", \"sphere\", \"cylinder\", \"capsule\", \"mesh\"");
   c.name = r.string("name", type + std::to_string(index));
+  c.color_given = r.has("color");
   std::array<double, 4> color = r.color("color", type == "plane" ? std::array<double, 4>{0.55, 0.56, 0.58, 1}
                                                                  : std::array<double, 4>{0.78, 0.36, 0.16, 1});
   if (const json* mj = object_member(r, "material")) {  // the drawing material: {"color": ...}
     ObjectReader o(*mj, r.pointer("material"), file, errors);
+    c.color_given = c.color_given || o.has("color");
     color = o.color("color", color);
     o.finish();
   }

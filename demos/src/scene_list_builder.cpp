@@ -118,19 +118,19 @@ void append_at(const render::MeshDesc& m, const sim::Transform& offset, render::
 /// colour or texture, every shape's triangles are a part with its own material.
 render::MeshDesc body_desc(const ColliderScene& c) {
   render::MeshDesc d;
-  const bool own = std::any_of(c.body_draw.begin(), c.body_draw.end(),
-                               [](const BodyShapeDraw& b) { return b.color || !b.texture.empty(); });
+  std::vector<render::MeshDesc> meshes(c.body.shapes.size());
   for (std::size_t i = 0; i < c.body.shapes.size(); ++i) {
     const sim::ShapeDef& s = c.body.shapes[i];
     const BodyShapeDraw& draw = c.body_draw[i];
     if (draw.skip) continue;
-    render::MeshDesc m;
+    render::MeshDesc& m = meshes[i];
     if (draw.asset) {
       ColliderScene as_mesh;
       as_mesh.mesh_asset = draw.asset;
       as_mesh.mesh_scale = draw.scale;
+      as_mesh.color = c.color;
+      as_mesh.color_given = c.color_given || draw.color.has_value();
       m = mesh_desc(as_mesh);
-      if (c.texture.empty() && !m.material.texture_path.empty() && !own) d.material.texture_path = m.material.texture_path;
     } else {
       switch (s.type) {
         case sim::ShapeType::sphere: m = render::make_sphere_mesh(float(s.radius), 48); break;
@@ -145,19 +145,38 @@ render::MeshDesc body_desc(const ColliderScene& c) {
         default: break;
       }
     }
+  }
+  // One material for the body, unless a shape has its own colour or texture or a mesh file
+  // brings several materials: then every shape's triangles are parts.
+  const bool own = std::any_of(c.body_draw.begin(), c.body_draw.end(),
+                               [](const BodyShapeDraw& b) { return b.color || !b.texture.empty(); }) ||
+                   std::any_of(meshes.begin(), meshes.end(), [](const render::MeshDesc& m) { return !m.parts.empty(); });
+  for (std::size_t i = 0; i < c.body.shapes.size(); ++i) {
+    const BodyShapeDraw& draw = c.body_draw[i];
+    const render::MeshDesc& m = meshes[i];
+    if (draw.skip) continue;
+    if (draw.asset && c.texture.empty() && !m.material.texture_path.empty() && !own)
+      d.material.texture_path = m.material.texture_path;
     const auto first = std::uint32_t(d.indices.size() / 3);
-    append_at(m, s.offset, d);
-    if (own && d.indices.size() / 3 > first) {
-      render::MeshPart& part = d.parts.emplace_back();
-      part.first_triangle = first;
-      part.triangle_count = std::uint32_t(d.indices.size() / 3) - first;
-      part.material = collider_material(c);
-      if (draw.color) part.material.base_color = render::Vec4f((*draw.color)[0], (*draw.color)[1], (*draw.color)[2], (*draw.color)[3]);
-      // The shape's texture, else the body's, else the one its mesh file names.
-      part.material.texture_path = !draw.texture.empty() ? draw.texture
-                                   : !c.texture.empty()  ? c.texture
-                                                         : m.material.texture_path;
+    append_at(m, c.body.shapes[i].offset, d);
+    if (!own || d.indices.size() / 3 == first) continue;
+    if (!m.parts.empty()) {  // the file's own materials
+      for (render::MeshPart part : m.parts) {
+        part.first_triangle += first;
+        part.material.double_sided = false;
+        d.parts.push_back(std::move(part));
+      }
+      continue;
     }
+    render::MeshPart& part = d.parts.emplace_back();
+    part.first_triangle = first;
+    part.triangle_count = std::uint32_t(d.indices.size() / 3) - first;
+    part.material = collider_material(c);
+    if (draw.color) part.material.base_color = render::Vec4f((*draw.color)[0], (*draw.color)[1], (*draw.color)[2], (*draw.color)[3]);
+    // The shape's texture, else the body's, else the one its mesh file names.
+    part.material.texture_path = !draw.texture.empty() ? draw.texture
+                                 : !c.texture.empty()  ? c.texture
+                                                       : m.material.texture_path;
   }
   const std::string file_texture = d.material.texture_path;
   d.material = collider_material(c);
@@ -190,6 +209,17 @@ render::MeshDesc cloth_desc(const ClothScene& cloth, const sim::ClothView& v) {
 render::MeshDesc mesh_desc(const ColliderScene& c) {
   render::MeshDesc d;
   const assets::TriangleMesh& m = *c.mesh_asset;
+  // A file with several materials in use (OBJ usemtl groups, glTF primitives) is drawn in them
+  // unless the scene gives a colour: its triangles grouped by material (stable), one part each
+  // with the file's base colour and texture.
+  std::vector<std::uint32_t> used;
+  bool valid = m.triangle_material.size() == m.triangles.size();
+  for (std::size_t t = 0; valid && !c.color_given && t < m.triangle_material.size(); ++t) {
+    const std::uint32_t k = m.triangle_material[t];
+    valid = k < m.materials.size();
+    if (valid && std::find(used.begin(), used.end(), k) == used.end()) used.push_back(k);
+  }
+  const bool by_material = valid && used.size() > 1;
   d.positions.reserve(3 * m.positions.size());
   d.normals.reserve(3 * m.normals.size());
   for (const auto& p : m.positions)
@@ -202,12 +232,30 @@ render::MeshDesc mesh_desc(const ColliderScene& c) {
     d.normals.insert(d.normals.end(), {n.x(), n.y(), n.z()});
   }
   for (const auto& uv : m.uvs) d.uvs.insert(d.uvs.end(), {uv.x(), uv.y()});
-  for (const auto& t : m.triangles) d.indices.insert(d.indices.end(), t.begin(), t.end());
+  const auto file_texture = [](const assets::MeshMaterial& mm) {
+    // (embedded textures, "*0", ..., are not read)
+    return !mm.texture.empty() && mm.texture.string()[0] != '*' ? mm.texture.string() : std::string();
+  };
   d.material = collider_material(c);
-  if (!m.materials.empty() && !m.materials[0].texture.empty() && m.materials[0].texture.string()[0] != '*')
-    d.material.texture_path = m.materials[0].texture.string();
+  if (!m.materials.empty()) d.material.texture_path = file_texture(m.materials[0]);
   // Open meshes (a ramp's underside, stairs seen from behind) show their inside faces too.
   d.material.double_sided = true;
+  if (!by_material) {
+    for (const auto& t : m.triangles) d.indices.insert(d.indices.end(), t.begin(), t.end());
+    return d;
+  }
+  std::sort(used.begin(), used.end());
+  for (const std::uint32_t k : used) {
+    render::MeshPart& part = d.parts.emplace_back();
+    part.first_triangle = std::uint32_t(d.indices.size() / 3);
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+      if (m.triangle_material[t] == k) d.indices.insert(d.indices.end(), m.triangles[t].begin(), m.triangles[t].end());
+    part.triangle_count = std::uint32_t(d.indices.size() / 3) - part.first_triangle;
+    part.material = d.material;
+    const auto& bc = m.materials[k].base_color;
+    part.material.base_color = render::Vec4f(bc[0], bc[1], bc[2], bc[3]);
+    part.material.texture_path = file_texture(m.materials[k]);
+  }
   return d;
 }
 

@@ -16,6 +16,7 @@
 
 #include "json_reader.hpp"
 #include "scene.hpp"
+#include "simreel/assets/mesh.hpp"
 #include "scene_list_builder.hpp"
 #include "simreel/render/mesh.hpp"
 
@@ -63,6 +64,18 @@ std::filesystem::path mesh_folder() {
     for (const auto& p : xy) ell << "v " << p[0] << ' ' << p[1] << ' ' << z << '\n';
   ell << "f 7 8 9\nf 7 9 10\nf 7 10 11\nf 7 11 12\nf 1 3 2\nf 1 4 3\nf 1 5 4\nf 1 6 5\n";
   for (int i = 1; i <= 6; ++i) ell << "f " << i << ' ' << i % 6 + 1 << ' ' << i % 6 + 7 << ' ' << i + 6 << '\n';
+  // A unit cube whose faces use two materials of an MTL file (three faces each).
+  std::ofstream mtl(dir / "two.mtl");
+  mtl << "newmtl red\nKd 0.9 0.1 0.1\nnewmtl blue\nKd 0.1 0.2 0.9\n";
+  std::ofstream two_mats(dir / "two_mats.obj");
+  two_mats << "mtllib two.mtl\n";
+  for (int i = 0; i < 8; ++i)
+    two_mats << "v " << ((i & 1) ? 0.5 : -0.5) << ' ' << ((i & 2) ? 0.5 : -0.5) << ' ' << ((i & 4) ? 0.5 : -0.5) << '\n';
+  for (int q = 0; q < 6; ++q) {
+    if (q == 0) two_mats << "usemtl red\n";
+    if (q == 3) two_mats << "usemtl blue\n";
+    two_mats << "f " << quads[q][0] << ' ' << quads[q][1] << ' ' << quads[q][2] << ' ' << quads[q][3] << '\n';
+  }
   std::ofstream open(dir / "open.obj");
   open << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 1 2 5\n";
   return dir;
@@ -274,6 +287,49 @@ TEST(SceneBodyList, CompoundDrawableHasEveryShapeAtItsOffset) {
   float zmax = -1e9f;
   for (std::size_t i = 2; i < d.positions.size(); i += 3) zmax = std::max(zmax, d.positions[i]);
   EXPECT_FLOAT_EQ(zmax, 3.0f);  // the tetrahedron's apex at offset z 2 + 1
+}
+
+TEST(SceneBodyList, AMeshFileWithSeveralMaterialsIsDrawnInThemUnlessTheSceneGivesAColour) {
+  const auto dir = mesh_folder();
+  const std::string file = (dir / "s.json").string();
+  const Scene s = scene_from_json(json::parse(R"({
+      "colliders": [{"type": "mesh", "file": "two_mats.obj"}, {"type": "mesh", "file": "two_mats.obj", "color": [0, 1, 0]}],
+      "bodies": [{"shape": "mesh", "mesh": "two_mats.obj", "position": [3, 0, 1]},
+                 {"shape": "mesh", "mesh": "two_mats.obj", "position": [6, 0, 1], "material": {"color": [0, 1, 0]}},
+                 {"shapes": [{"type": "sphere", "radius": 0.2, "position": [0, 0, 1]},
+                             {"type": "convex_hull", "mesh": "two_mats.obj"}], "position": [9, 0, 1]}]})"),
+                                  file);
+  const simreel::assets::TriangleMesh asset = simreel::assets::load_mesh(dir / "two_mats.obj");
+  // (assimp may add a default material of its own; the faces use the two named ones)
+  const auto named = [&](const std::string& name) {
+    for (const auto& m : asset.materials)
+      if (m.name == name) return m.base_color;
+    ADD_FAILURE() << "no material " << name;
+    return std::array<float, 4>{};
+  };
+  SceneWorld sw = build_world(s);
+  const render::SceneList list = simreel::app::initial_scene_list(s, sw);
+  // The file's materials, each over its own six triangles, in its own colour.
+  for (const std::size_t k : {std::size_t(0), std::size_t(2)}) {
+    const auto& d = std::get<render::MeshDesc>(list.added[k].desc);
+    ASSERT_EQ(d.parts.size(), 2u) << k;
+    EXPECT_EQ(d.indices.size(), 3u * 12u);
+    for (std::size_t p = 0; p < 2; ++p) {
+      EXPECT_EQ(d.parts[p].first_triangle, 6u * p);
+      EXPECT_EQ(d.parts[p].triangle_count, 6u);
+      const auto want = named(p == 0 ? "red" : "blue");
+      EXPECT_FLOAT_EQ(d.parts[p].material.base_color.x(), want[0]) << k << " part " << p;
+      EXPECT_FLOAT_EQ(d.parts[p].material.base_color.z(), want[2]) << k << " part " << p;
+    }
+    EXPECT_GT(d.parts[0].material.base_color.x(), d.parts[0].material.base_color.z());  // red
+    EXPECT_GT(d.parts[1].material.base_color.z(), d.parts[1].material.base_color.x());  // blue
+  }
+  // A colour in the scene paints the whole file, as before.
+  EXPECT_TRUE(std::get<render::MeshDesc>(list.added[1].desc).parts.empty());
+  EXPECT_TRUE(std::get<render::MeshDesc>(list.added[3].desc).parts.empty());
+  // A hull built from the file is drawn flat in the body's colour: no file materials.
+  EXPECT_TRUE(std::get<render::MeshDesc>(list.added[4].desc).parts.empty());
+  std::filesystem::remove_all(dir);
 }
 
 TEST(SceneBodyList, SpringsAndJointsNameBodies) {
