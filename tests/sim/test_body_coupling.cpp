@@ -268,6 +268,90 @@ TEST(BodyCoupling, ClothFallingOnALightBoxPushesItDownAndConservesMomentum) {
                  std::to_string((pc + bm.linear_momentum - expected).norm() / expected.norm()));
 }
 
+/// A dynamic ball (radius 8 cm, `mass`, gravity on) thrown down at 8 m/s from 0.3 m onto a
+/// 1 m, 0.2 kg, 24 x 24 sheet at z = 0 pinned along its border (a trampoline) or at its corners
+/// (a hammock), stepped at h for 1 s (60 frames).
+struct CatchResult {
+  bool through = false;  ///< the ball's centre went below the sheet's lowest vertex
+  std::string where;
+  double max_strain = 0.0;  ///< over every frame
+  double lowest = 0.0;      ///< (m) the ball centre's lowest height
+  double final_speed = 0.0, final_drift = 0.0;  ///< (m/s, m) at 1 s; drift: horizontal distance
+  double final_poke = 0.0;  ///< (m) at 1 s: how far the ball's bottom is below the sheet's lowest vertex
+};
+CatchResult throw_ball_at_sheet(double mass, double h, bool border) {
+  World w(def_with_step(h));
+  BodyDef b;
+  b.type = BodyType::dynamic;
+  b.pose.translation = {0.0, 0.0, 0.3};
+  b.mass = mass;
+  b.linear_velocity = {0.0, 0.0, -8.0};
+  b.shapes.push_back(ShapeDef::sphere(0.08));
+  const BodyHandle ball = w.add_body(b);
+  ClothDef c;
+  c.rows = c.columns = 24;
+  c.width = c.height = 1.0;
+  c.mass = 0.2;
+  for (std::size_t i = 0; i < 24; ++i)
+    for (std::size_t j = 0; j < 24; ++j) {
+      const bool edge = i == 0 || j == 0 || i == 23 || j == 23;
+      const bool corner = (i == 0 || i == 23) && (j == 0 || j == 23);
+      if (border ? edge : corner) c.pins.push_back({i, j, {}});
+    }
+  const ClothHandle cloth = w.add_cloth(c);
+  CatchResult r;
+  r.lowest = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 60; ++f) {
+    w.advance(1.0 / 60.0);
+    const ClothStats st = w.cloth_stats(cloth);
+    const BodyMotion m = w.motion(ball);
+    const Vec3& x = m.center_of_mass;
+    r.max_strain = std::max(r.max_strain, st.max_strain);
+    r.lowest = std::min(r.lowest, x.z());
+    if (!r.through && x.z() < st.min_z) {
+      r.through = true;
+      r.where = "frame " + std::to_string(f) + ": ball at (" + std::to_string(x.x()) + ", " +
+                std::to_string(x.y()) + ", " + std::to_string(x.z()) +
+                ") below the sheet's lowest vertex " + std::to_string(st.min_z);
+    }
+    r.final_speed = m.linear_velocity.norm();
+    r.final_drift = x.head<2>().norm();
+    r.final_poke = st.min_z - (x.z() - 0.08);
+  }
+  return r;
+}
+
+TEST(BodyCoupling, ABallIsCaughtByAPinnedSheetNeverThrough) {
+  // Issue 16: a sheet held by its pins holds whatever lands in it. The strain pass pulls the
+  // vertices under the ball back into it; those vertices then hold the ball (its approach is
+  // cancelled at them, hold_dynamic_bodies), so balls of 25 and 1/4 times the sheet's mass at
+  // 8 m/s stay on it, the heavy one at rest in it. Before, the 5 kg ball went through in the first
+  // frames at both step sizes, and a light ball was thrown about by the sheet's tension handed
+  // to it once per contact round. Two step sizes, trampoline and hammock.
+  for (const double h : {1.0 / 240.0, 1.0 / 600.0})
+    for (const bool border : {true, false})
+      for (const double mass : {5.0, 0.05}) {
+        const CatchResult r = throw_ball_at_sheet(mass, h, border);
+        SCOPED_TRACE("h = 1/" + std::to_string(int(std::lround(1.0 / h))) +
+                     (border ? ", border pinned" : ", corners pinned") + ", ball mass " +
+                     std::to_string(mass));
+        EXPECT_FALSE(r.through) << r.where;
+        EXPECT_LE(r.max_strain, 0.10 + 0.02);
+        // A sheet 10% longer, held at its border or corners, cannot let the ball's centre
+        // sag below about 0.45 m.
+        EXPECT_GT(r.lowest, -0.45);
+        // Its bottom in the sheet after 1 s (within two thicknesses of its lowest vertex), not
+        // poking through it.
+        EXPECT_LT(r.final_poke, 2 * 0.005);
+        // The heavy ball is at rest where it landed. (The light one still bobs on the
+        // vibrating sheet at the small step and wanders: README, known limits.)
+        if (mass >= 5.0) {
+          EXPECT_LT(r.final_speed, 0.1);
+          EXPECT_LT(r.final_drift, 0.15);
+        }
+      }
+}
+
 TEST(BodyCoupling, SameStateAtOneTwoAndFourThreads) {
   // An emitted jet (thread-split integration over 20 000 particles) against two boxes on a plane,
   // with a wind field: the body impulses are summed in particle order whatever the split.

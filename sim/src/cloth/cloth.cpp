@@ -197,10 +197,16 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     case ClothIntegrator::explicit_euler: S.integrate_explicit(h, t1, false); break;
   }
   const bool collide = S.def.collide && colliders != nullptr && !colliders->empty();
+  // Only pins can take a body's momentum: a pinned cloth holds a dynamic body that lands in it
+  // (hold_dynamic_bodies); a free one is carried along.
+  detail::BodyContacts* held_bodies =
+      collide && impulses != nullptr && !S.pinned.empty() ? &S.body_contacts : nullptr;
+  if (held_bodies != nullptr) held_bodies->reset(S.n);
   if (collide) {
     std::fill(S.hit.begin(), S.hit.end(), std::uint8_t(0));
     detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
-                          S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal);
+                          S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal,
+                          held_bodies);
   }
   S.strain_passes = 0;
   S.max_deformation_pass();
@@ -212,21 +218,30 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     // rounds). A vertex a kinematic body pushed is held by the pass (max_deformation.cpp): the
     // sheet around it follows, and when the sheet cannot (pinned elsewhere) the body wins and
     // the sheet stretches; nothing passes through it. Against static colliders and dynamic
-    // bodies the strain limit has the last word. (A dynamic body does not feel the strain
-    // limit's tension: letting it win would drag the sheet along without end, so a heavy fast
-    // body can still pass through a pinned sheet. Known limit.)
+    // bodies the strain limit has the last word; a pinned sheet's vertices that it pulled back
+    // into a dynamic body then hold the body (hold_dynamic_bodies, below).
     S.contact_views.assign(1, S.contact_view());
     S.contact_views[0].self = S.contact_views[0].others = false;
     for (int round = 0; round <= kFeatureRounds; ++round) {
+      // On a pinned sheet these rounds undo the strain pass's pull back into a dynamic body:
+      // logging each round's push would hand the body the sheet's tension once per round (a
+      // light body resting on the sheet was thrown off it); hold_dynamic_bodies hands it over
+      // once, as the impulse that stops the body. (The first vertex pass, the vertices' own
+      // momentum change against the body, is logged.)
+      if (held_bodies != nullptr) impulses->muted = true;
       const detail::ContactStats st = detail::collide_cloth_features(
           S.contact_views, colliders, false, h, S.contact_scratch, impulses);
       S.contact_stats.contacts += st.contacts;
       if (st.contacts == 0) break;
       detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
-                            S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal);
+                            S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal,
+                            held_bodies);
       if (!S.max_deformation_pass()) break;
     }
   }
+  if (held_bodies != nullptr) impulses->muted = false;
+  if (held_bodies != nullptr)
+    detail::hold_dynamic_bodies(S.x, S.v, S.free, S.def.thickness, h, *held_bodies, *impulses);
   bool finite = true;
   for (std::size_t i = 0; i < S.n; ++i) finite = finite && S.x[i].allFinite() && S.v[i].allFinite();
   if (!finite) return false;

@@ -166,7 +166,8 @@ bool solid(const Collider& c, const Vec3& x_start, Vec3& x, double thickness, Ve
 void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector<Vec3>& x_start,
                    const std::vector<std::uint8_t>& free, const std::vector<Collider>& colliders,
                    double thickness, double friction, std::vector<std::uint8_t>& hit,
-                   double vertex_mass, BodyImpulses* impulses, std::vector<Vec3>* pushed_normal) {
+                   double vertex_mass, BodyImpulses* impulses, std::vector<Vec3>* pushed_normal,
+                   BodyContacts* body_contacts) {
   const std::size_t n = x.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (!free[i]) continue;
@@ -197,6 +198,11 @@ void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector
           // Two-way (§3.7): the body takes the momentum the vertex lost, at the surface point.
           if (impulses != nullptr && v[i] != v_in)
             impulses->add(c, vertex_mass * (v_in - v[i]), x[i] - thickness * normal);
+          if (body_contacts != nullptr && impulses != nullptr && impulses->logs(c)) {
+            body_contacts->shape[i] = std::uint32_t(&c - colliders.data());
+            body_contacts->point[i] = x[i];
+            body_contacts->normal[i] = normal;
+          }
           // 2: pushed by a kinematic body (the maximum-deformation pass then holds the vertex).
           const bool pushed = c.moving && (impulses == nullptr || !impulses->logs(c));
           hit[i] = std::max(hit[i], std::uint8_t(pushed ? 2 : 1));
@@ -206,6 +212,94 @@ void collide_cloth(std::vector<Vec3>& x, std::vector<Vec3>& v, const std::vector
       }
       if (!moved) break;
     }
+  }
+}
+
+void hold_dynamic_bodies(const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                         const std::vector<std::uint8_t>& free, double thickness, double h,
+                         BodyContacts& contacts, BodyImpulses& impulses) {
+  constexpr double kBaumgarte = 0.1;
+  // (m/s) The push-out is capped (Box2D's contact push velocity): a vertex the strain pass left
+  // deep in the body must not throw it out.
+  constexpr double kMaxPushOut = 0.2;
+  constexpr int kIterations = 10;
+  // Depths below this are the strain pass's rounding, not a pull.
+  const double tol = std::max(1e-5, 0.05 * thickness);
+  auto& rows = contacts.rows;
+  rows.clear();
+  contacts.slot.assign(impulses.motion.size(), -1);
+  contacts.held_bodies.clear();
+  contacts.vel.clear();
+  contacts.omega.clear();
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const std::uint32_t k = contacts.shape[i];
+    if (k == BodyImpulses::kNone || !free[i]) continue;
+    const Vec3& n = contacts.normal[i];
+    const double d = (contacts.point[i] - x[i]).dot(n);
+    if (!(d > tol)) continue;
+    const std::uint32_t r = impulses.rigid[k];
+    const BodyImpulses::Motion& m = impulses.motion[r];
+    if (!(m.inv_mass > 0.0)) continue;  // asleep: immovable this step
+    const Vec3 p = contacts.point[i] - thickness * n;
+    const Vec3 rn = (p - m.centre).cross(n);
+    const double k_inv = m.inv_mass + rn.dot(m.inv_inertia * rn);
+    // A vertex moving into the body does not throw it (it weighs next to nothing): the body
+    // only may not approach it.
+    rows.push_back({k, r, p, n, std::max(0.0, v[i].dot(n)), 1.0 / k_inv, 0.0, d});
+    if (contacts.slot[r] < 0) {
+      contacts.slot[r] = std::int32_t(contacts.held_bodies.size());
+      contacts.held_bodies.push_back(r);
+      contacts.vel.push_back(m.velocity + h * m.gravity);  // the bodies stage adds it first
+      contacts.omega.push_back(m.angular_velocity);
+    }
+  }
+  if (rows.empty()) return;
+  // The bodies stage applies this step's logged impulses first: start from their result.
+  for (const BodyImpulses::Entry& e : impulses.entries) {
+    const std::uint32_t r = impulses.rigid[e.shape];
+    const std::int32_t s = contacts.slot[r];
+    if (s < 0) continue;
+    const BodyImpulses::Motion& m = impulses.motion[r];
+    contacts.vel[s] += m.inv_mass * e.impulse;
+    contacts.omega[s] += m.inv_inertia *
+                         (e.moment + (impulses.shapes[e.shape].center - m.centre).cross(e.impulse));
+  }
+  for (int it = 0; it < kIterations; ++it) {
+    for (BodyContacts::Row& row : rows) {
+      const std::int32_t s = contacts.slot[row.rigid];
+      const BodyImpulses::Motion& m = impulses.motion[row.rigid];
+      const Vec3 arm = row.point - m.centre;
+      const double wn = (contacts.vel[s] + contacts.omega[s].cross(arm)).dot(row.normal);
+      const double lambda = std::max(0.0, row.lambda + (wn - row.target) * row.m_eff);
+      const double dl = lambda - row.lambda;
+      row.lambda = lambda;
+      contacts.vel[s] -= (m.inv_mass * dl) * row.normal;
+      contacts.omega[s] -= m.inv_inertia * (arm.cross(row.normal) * dl);
+    }
+  }
+  for (const BodyContacts::Row& row : rows)
+    if (row.lambda > 0.0) impulses.add(impulses.shapes[row.shape], -row.lambda * row.normal, row.point);
+  // The overlap is undone by a push of the whole body, along the depth-weighted mean of the
+  // rows' -n: vertices pressing from opposite sides (a body squeezed against the pins) cancel
+  // instead of asking for two speeds at once.
+  auto& push = contacts.push;
+  push.assign(contacts.held_bodies.size(), {Vec3::Zero(), 0.0, 0.0, BodyImpulses::kNone});
+  for (const BodyContacts::Row& row : rows) {
+    BodyContacts::Push& q = push[std::size_t(contacts.slot[row.rigid])];
+    q.direction -= row.depth * row.normal;
+    q.depth_sum += row.depth;
+    q.depth_max = std::max(q.depth_max, row.depth);
+    q.shape = row.shape;
+  }
+  for (std::size_t s = 0; s < push.size(); ++s) {
+    const BodyContacts::Push& q = push[s];
+    const BodyImpulses::Motion& m = impulses.motion[contacts.held_bodies[s]];
+    const double len = q.direction.norm();
+    if (!(len > 0.0)) continue;
+    const Vec3 u = q.direction / len;
+    const double speed = std::min(kBaumgarte * q.depth_max / h, kMaxPushOut) * len / q.depth_sum;
+    const double need = speed - contacts.vel[s].dot(u);
+    if (need > 0.0) impulses.add(impulses.shapes[q.shape], (need / m.inv_mass) * u, m.centre);
   }
 }
 

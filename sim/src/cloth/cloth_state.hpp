@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "cloth/cloth_collide.hpp"
 #include "cloth/cloth_contacts.hpp"
 #include "cloth/sym3.hpp"
 #include "simreel/sim/cloth.hpp"
@@ -51,6 +52,7 @@ struct Cloth::State {
   std::vector<std::uint8_t> hit;     // per vertex: 1 touched a collider this step, 2 a kinematic one
   std::vector<std::uint8_t> held;    // per vertex: the pass does not move it (pinned or hit == 2)
   std::vector<Vec3> pushed_normal;   // per vertex with hit == 2: the kinematic body's outward normal
+  detail::BodyContacts body_contacts;  // per vertex: last dynamic-body contact (pinned cloth only)
   std::vector<Vec3> nacc;            // vertex normal accumulator
   // Float copies for views.
   std::vector<float> fpos, fnor, fvel;

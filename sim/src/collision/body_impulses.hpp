@@ -34,6 +34,21 @@ struct BodyImpulses {
   const Collider* shapes = nullptr;
   std::vector<std::uint32_t> rigid;
   std::vector<Entry> entries;
+  /// A dynamic body's motion at the start of the step, for passes that must know how the body
+  /// answers an impulse (the cloth's hold on a body, cloth_collide.hpp).
+  struct Motion {
+    Vec3 centre = Vec3::Zero();            ///< x (m), centre of mass, world
+    Vec3 velocity = Vec3::Zero();          ///< v (m/s), world
+    Vec3 angular_velocity = Vec3::Zero();  ///< ω (rad/s), world
+    Vec3 gravity = Vec3::Zero();           ///< (m/s²) the body's own gravity, world
+    double inv_mass = 0.0;                 ///< 1/m (1/kg); 0 while asleep (immovable)
+    Mat3 inv_inertia = Mat3::Zero();       ///< I_w⁻¹ (1/(kg m²)), world; 0 while asleep
+  };
+  /// Per rigid index (the values of `rigid`), set by prepare_coupling each step.
+  std::vector<Motion> motion;
+  /// While set, add() logs nothing (logs() still answers): a pass that repeats a contact
+  /// resolution whose reaction another pass accounts for (cloth.cpp).
+  bool muted = false;
 
   /// Does add() log anything for collider c (a shape of a dynamic body)?
   [[nodiscard]] bool logs(const Collider& c) const {
@@ -43,6 +58,7 @@ struct BodyImpulses {
   /// Logs the impulse J (N s, world) on collider c (an element of the `shapes` array) at world
   /// point p, if c belongs to a dynamic body.
   void add(const Collider& c, const Vec3& J, const Vec3& p) {
+    if (muted) return;
     const std::size_t k = std::size_t(&c - shapes);
     if (k >= rigid.size() || rigid[k] == kNone) return;
     entries.push_back(Entry{std::uint32_t(k), J, (p - c.center).cross(J)});

@@ -92,6 +92,24 @@ void prepare_coupling(WorldState& w) {
   for (const Body& b : w.bodies.dense())
     if (b.dynamic())
       for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k) c.rigid[k] = b.rigid;
+  const RigidBodies& r = w.dyn.rigid;
+  c.motion.resize(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i)
+    c.motion[i] = {r.position[i], r.linear_velocity[i], r.angular_velocity[i], Vec3::Zero(),
+                   r.inv_mass[i], r.inv_inertia_world[i]};
+  for (const Body& b : w.bodies.dense()) {
+    if (!b.dynamic()) continue;
+    BodyImpulses::Motion& m = c.motion[b.rigid];
+    m.gravity = b.gravity;
+    // A sleeping body answers an impulse as the awake body it becomes (the impulse wakes it):
+    // a pinned sheet keeps holding a body asleep in it, which then never sleeps there, instead
+    // of the sheet's tension throwing it when it wakes.
+    if (r.asleep[b.rigid] && r.mass[b.rigid] > 0.0) {
+      const Mat3 R = r.orientation[b.rigid].toRotationMatrix();
+      m.inv_mass = 1.0 / r.mass[b.rigid];
+      m.inv_inertia = R * r.inv_inertia_body[b.rigid] * R.transpose();
+    }
+  }
 }
 
 BodyImpulses* coupling_log(WorldState& w) {
