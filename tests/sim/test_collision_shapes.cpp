@@ -122,6 +122,64 @@ TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
   EXPECT_GT(hits, 100);  // the test exercises hits, not only misses (168 with this seed)
 }
 
+TEST(SimCollisionMesh, CulledTriangleSweepEqualsEveryFeatureTested) {
+  // sweep_triangle skips the features a segment cannot come within r of; it must give the bits
+  // of testing them all. Segments aimed at the hard places: lying on the face (the resting
+  // drop), grazing an edge's or a vertex's reach within 1e-3 .. 1e-12 of r on either side, and
+  // random ones; near the origin and 1 km from it; with and without an earlier hit known.
+  Rng rng(19, 3);
+  int hits = 0, culled_cases = 0;
+  for (int q = 0; q < 40000; ++q) {
+    const double far = q % 4 == 3 ? 1000.0 : 0.0;
+    const Vec3 c = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) + Vec3::Constant(far);
+    const double size = rng.uniform(0.05, 0.5);
+    detail::Triangle t{c + size * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)),
+                       c + size * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)),
+                       c + size * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)),
+                       Vec3::Zero()};
+    t.normal = (t.b - t.a).cross(t.c - t.a).normalized();
+    const double r = rng.uniform(0.002, 0.05);
+    const Vec3* v[3] = {&t.a, &t.b, &t.c};
+    const int k = int(rng.uniform() * 3.0) % 3;
+    const Vec3 e = *v[(k + 1) % 3] - *v[k];
+    const Vec3 in = t.normal.cross(e).normalized();  // in-plane, pointing into the triangle
+    const double eps[] = {1e-3, 1e-7, 1e-10, 1e-12, 0.0, -1e-12, -1e-10, -1e-7, -1e-3};
+    const double rel = eps[int(rng.uniform() * 9.0) % 9];
+    Vec3 a, d;
+    switch (q % 3) {
+      case 0: {  // lying on the face, sliding and pressed in a little
+        const double u = rng.uniform(0, 1), w = rng.uniform(0, 1 - u);
+        a = t.a + u * (t.b - t.a) + w * (t.c - t.a) + r * (1.0 + rel) * t.normal;
+        d = 0.01 * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) -
+            rng.uniform(0, 1e-4) * t.normal;
+        break;
+      }
+      case 1: {  // grazing edge k's reach from either side, or its vertex's
+        const double u = rng.uniform(-0.2, 1.2);
+        const double side = rng.uniform() < 0.5 ? -1.0 : 1.0;
+        a = *v[k] + u * e + side * r * (1.0 + rel) * in + rng.uniform(-1, 1) * r * t.normal;
+        d = 0.02 * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+        d -= d.dot(in) * in;  // along the edge's reach: the distance to its line stays put
+        break;
+      }
+      default:
+        a = c + Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * (size + 0.1);
+        d = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * rng.uniform(0, 0.5);
+    }
+    detail::SweepHit all, culled;
+    if (rng.uniform() < 0.2) all.s = culled.s = rng.uniform() < 0.3 ? 0.0 : rng.uniform(0, 1);
+    detail::sweep_triangle_all(t, a, d, r, all);
+    detail::sweep_triangle(t, a, d, r, culled);
+    ASSERT_EQ(all.s, culled.s) << q;
+    ASSERT_EQ(all.normal, culled.normal) << q;
+    ASSERT_EQ(all.point, culled.point) << q;
+    if (std::isfinite(all.s)) ++hits;
+    culled_cases += q % 3 == 1 && !std::isfinite(all.s);
+  }
+  EXPECT_GT(hits, 8000);         // hits of every kind are compared, not only misses
+  EXPECT_GT(culled_cases, 2000);  // and misses at the edge of an edge's reach
+}
+
 TEST(SimCollisionMesh, MeshGridGivesTheTreesTrianglesInTheTreesOrder) {
   // The grid must hand out exactly the triangles whose own box overlaps the query, in the
   // order the tree visits them (so a first-hit sweep over either gives the same bits), or
@@ -374,7 +432,10 @@ TEST(SimCollisionMesh, LargeRainOnMeshesIsBitIdenticalAtAnyThreadCount) {
   // 20,000 drops (above the parallel threshold) on a bowl and a closed box, some born inside the
   // box: bounce only, no bodies, so the pass splits over the threads. State and removal count
   // must not depend on the count.
-  auto run = [](int threads) {
+  // The drops may also come as 10 systems of 2,000: a pass that small visits its particles in
+  // index order, a large one in spatial order (Z-order over the meshes), which must not change
+  // a bit either.
+  auto run = [](int threads, int systems = 1) {
     World world(WorldDef{1.0 / 240, 1, 0.05, threads});
     world.add_mesh(bowl(2.0, 12, 24, mat(0.3, 0.4)));
     MeshDef box = box_mesh(Vec3(0.4, 0.4, 0.4), mat(0.5, 0.2));
@@ -382,16 +443,26 @@ TEST(SimCollisionMesh, LargeRainOnMeshesIsBitIdenticalAtAnyThreadCount) {
     world.add_mesh(box);
     ParticleSystemDef def = probes();
     def.emitter.max_particles = 20000;
-    const auto ps = world.add_particle_system(def);
+    std::vector<ParticleSystemHandle> ids;
+    for (int k = 0; k < systems; ++k) ids.push_back(world.add_particle_system(def));
     Rng rng(7);
     for (int i = 0; i < 20000; ++i)
-      world.spawn_particle(ps, Vec3(rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5), rng.uniform(-1.6, 0.5)),
+      world.spawn_particle(ids[std::size_t(i / (20000 / systems))],
+                           Vec3(rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5), rng.uniform(-1.6, 0.5)),
                            Vec3(0, 0, -rng.uniform(1, 4)), 1e-3, 0.01, 100);
     for (int k = 0; k < 48; ++k) world.advance(1.0 / 240);
-    const ParticleView v = world.particles(ps);
-    std::vector<float> state(v.position, v.position + 3 * v.count);
-    state.insert(state.end(), v.velocity, v.velocity + 3 * v.count);
-    return std::make_pair(state, world.removed_inside_count(ps));
+    std::vector<float> state;
+    std::uint64_t removed = 0;
+    for (const auto ps : ids) {
+      const ParticleView v = world.particles(ps);
+      state.insert(state.end(), v.position, v.position + 3 * v.count);
+      removed += world.removed_inside_count(ps);
+    }
+    for (const auto ps : ids) {
+      const ParticleView v = world.particles(ps);
+      state.insert(state.end(), v.velocity, v.velocity + 3 * v.count);
+    }
+    return std::make_pair(state, removed);
   };
   const auto one = run(1);
   EXPECT_GT(one.second, 0u) << "some drops were born inside the box";
@@ -401,6 +472,9 @@ TEST(SimCollisionMesh, LargeRainOnMeshesIsBitIdenticalAtAnyThreadCount) {
     EXPECT_EQ(many.second, one.second) << t << " threads";
     EXPECT_TRUE(many.first == one.first) << t << " threads";
   }
+  const auto small = run(1, 10);
+  EXPECT_EQ(small.second, one.second);
+  EXPECT_TRUE(small.first == one.first) << "spatial order changed the results";
 }
 
 TEST(SimCollisionMesh, HitActionsStickKillAndSplit) {
