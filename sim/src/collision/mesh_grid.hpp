@@ -51,12 +51,9 @@ class MeshGrid {
           for (std::uint32_t q = b; q < e; ++q) {
             const std::uint32_t rank = rank_[q];
             const double* box = &box_[6 * std::size_t(rank)];
-            // Without branches: whether a neighbour's box overlaps is a coin toss to the
-            // predictor (the room for it was checked above).
-            const bool overlaps = (box[0] <= hi[0]) & (box[1] <= hi[1]) & (box[2] <= hi[2]) &
-                                  (box[3] >= lo[0]) & (box[4] >= lo[1]) & (box[5] >= lo[2]);
-            cand[count] = rank;
-            count += int(overlaps);
+            if (box[0] <= hi[0] && box[1] <= hi[1] && box[2] <= hi[2] && box[3] >= lo[0] &&
+                box[4] >= lo[1] && box[5] >= lo[2])
+              cand[count++] = rank;
           }
         }
     // Few entries: insertion sort, then each rank once (a triangle may sit in several cells).
