@@ -265,6 +265,117 @@ TEST(SimParticleCollision, LargeCollidingSystemIsBitIdenticalAtAnyThreadCount) {
   EXPECT_EQ(one, run(3));
 }
 
+/// Colliders for the wavefront tests: the ground plane and a box moving into the heap (its
+/// contacts carry a surface velocity).
+std::vector<detail::Collider> ground_and_moving_box() {
+  std::vector<detail::Collider> cols;
+  cols.push_back(detail::make_collider(ShapeDef::plane(), "ground"));
+  cols.back().follow(Transform{}, Vec3::Zero(), Vec3::Zero());
+  cols.push_back(detail::make_collider(ShapeDef::box(Vec3(0.05, 0.2, 0.05)), "box"));
+  cols.back().follow(Transform{Vec3(0.1, 0.0, 0.04), Quat::Identity()}, Vec3(-0.5, 0.1, 0.0),
+                     Vec3(0.0, 0.0, 2.0));
+  return cols;
+}
+
+TEST(SimParticleCollision, WavefrontSweepsGiveTheBitsOfTheContactOrder) {
+  // The solve sweeps the contacts in waves that share no particle (schedule()), so that the
+  // processor overlaps neighbouring updates. Each update touches only its two particles, so any
+  // order that keeps each particle's contacts in order is the same Gauss-Seidel sweep: the
+  // velocities and impulses must be those of the plain sweep in contact order, to the bit.
+  // A heap on the ground against a moving box: pairs and collider contacts, resting, sliding
+  // (friction 0.4 and 0), speculative gaps, warm-started impulses.
+  const double h = 1.0 / 240;
+  const std::vector<detail::Collider> cols = ground_and_moving_box();
+  detail::ParticleCollider a;
+  Rng rng(17, 0);
+  for (int i = 0; i < 4000; ++i) {
+    a.x.emplace_back(rng.uniform(-0.15, 0.15), rng.uniform(-0.15, 0.15), rng.uniform(0.004, 0.12));
+    a.v.emplace_back(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-0.5, 0.1));
+    a.inv_mass.push_back(1.0 / rng.uniform(1e-3, 3e-3));
+    a.radius.push_back(rng.uniform(0.006, 0.011));
+    a.restitution.push_back(0.3);
+    a.friction.push_back(i % 5 == 0 ? 0.0 : 0.4);
+  }
+  a.find_contacts(0.05, h);
+  const std::size_t pairs = a.contacts.size();
+  a.find_collider_contacts(cols, h, 0.05);
+  ASSERT_GT(pairs, 5000u);
+  ASSERT_GT(a.contacts.size() - pairs, 300u);
+  for (auto& c : a.contacts) {  // a warm start, as the previous step would leave it
+    c.pn = rng.uniform(0.0, 1e-4);
+    c.pt = Vec3(rng.uniform(-1e-5, 1e-5), rng.uniform(-1e-5, 1e-5), rng.uniform(-1e-5, 1e-5));
+  }
+  detail::ParticleCollider b = a;
+  b.wavefront = false;
+  const std::vector<Vec3> v0 = a.v;
+  a.solve();
+  b.solve();
+  int changed = 0;
+  for (std::size_t p = 0; p < a.v.size(); ++p) {
+    ASSERT_EQ(a.v[p], b.v[p]) << "particle " << p;
+    changed += a.v[p] != v0[p];
+  }
+  EXPECT_GT(changed, 3000);
+  int sliding = 0;
+  for (std::size_t q = 0; q < a.contacts.size(); ++q) {
+    ASSERT_EQ(a.contacts[q].pn, b.contacts[q].pn) << "contact " << q;
+    ASSERT_EQ(a.contacts[q].pt, b.contacts[q].pt) << "contact " << q;
+    const auto& c = a.contacts[q];
+    sliding += c.mu > 0.0 && c.pn > 0.0 && c.pt.norm() >= c.mu * c.pn * (1 - 1e-12);
+  }
+  EXPECT_GT(sliding, 100) << "the case must have contacts at the friction bound";
+}
+
+TEST(SimParticleCollision, WavefrontSweepsOfBandsGiveTheBitsOfTheContactOrder) {
+  // The same for a step of run() large enough to be solved in bands (even bands, odd bands,
+  // then the collider contacts), at 1 and 2 threads: positions and velocities to the bit.
+  const double h = 1.0 / 240;
+  const std::vector<detail::Collider> cols = ground_and_moving_box();
+  detail::ParticleStore start;
+  const std::size_t n = 20000;
+  start.append(n);
+  Rng rng(23, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float x[3] = {float(rng.uniform(-0.3, 0.3)), float(rng.uniform(-0.3, 0.3)),
+                        float(rng.uniform(0.004, 0.1))};
+    const float v[3] = {float(rng.uniform(-0.3, 0.3)), float(rng.uniform(-0.3, 0.3)),
+                        float(rng.uniform(-0.5, 0.1))};
+    for (int k = 0; k < 3; ++k) {
+      start.position[3 * i + std::size_t(k)] = x[k];
+      start.velocity[3 * i + std::size_t(k)] = v[k];
+    }
+    start.radius[i] = float(rng.uniform(0.004, 0.006));
+    start.mass[i] = 1e-3f;
+    start.age[i] = 1.0f;
+    start.id[i] = i;
+  }
+  auto step = [&](bool wavefront, int threads) {
+    detail::ParticleStore s;
+    s.append(n);
+    std::copy_n(start.position.data(), 3 * n, s.position.data());
+    std::copy_n(start.velocity.data(), 3 * n, s.velocity.data());
+    std::copy_n(start.radius.data(), n, s.radius.data());
+    std::copy_n(start.mass.data(), n, s.mass.data());
+    std::copy_n(start.age.data(), n, s.age.data());
+    std::copy_n(start.id.data(), n, s.id.data());
+    detail::ParticleCollider pc;
+    pc.wavefront = wavefront;
+    pc.threads = threads;
+    const std::vector<detail::ParticleGroupMember> members{{&s, 0.3, 0.4, true, 0}};
+    for (int k = 0; k < 3; ++k) pc.run(members, 0.05, h, &cols);  // warm-started after the first
+    std::vector<float> out(s.position.data(), s.position.data() + 3 * n);
+    out.insert(out.end(), s.velocity.data(), s.velocity.data() + 3 * n);
+    return std::pair(out, pc.contacts.size());
+  };
+  const auto [plain, contacts] = step(false, 1);
+  ASSERT_GT(contacts, 20000u);
+  EXPECT_EQ(step(true, 1).first, plain);
+  EXPECT_EQ(step(true, 2).first, plain);
+  int changed = 0;
+  for (std::size_t k = 0; k < 3 * n; ++k) changed += plain[3 * n + k] != start.velocity[k];
+  EXPECT_GT(changed, 3 * 10000);
+}
+
 TEST(SimParticleCollision, StackOfTenOnAPlaneStaysStackedWithoutDrift) {
   // Resting contact (§3.6.3): ten particles in a column on the ground. The ground contact is in
   // the same solve as the pair contacts and the resting impulses are warm started, so the

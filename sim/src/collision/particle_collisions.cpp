@@ -7,6 +7,9 @@
 #include <cmath>
 #include <limits>
 #include <type_traits>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "core/state_io.hpp"
 #include "core/vector_clones.hpp"
@@ -362,10 +365,11 @@ void ParticleCollider::solve() {
     v[c.j] += inv_mass[c.j] * p;
   }
   // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
-  const auto update = [&](Contact& c, auto wall_tag) __attribute__((always_inline)) {
+  const auto update = [&](SolverContact& c, const Vec3& vc, auto wall_tag)
+                          __attribute__((always_inline)) {
     constexpr bool wall = decltype(wall_tag)::value;
     const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
-    Vec3 dv = v[c.j] - (wall ? c.vc : v[c.i]);
+    Vec3 dv = v[c.j] - (wall ? vc : v[c.i]);
     // Normal: accumulated impulse clamped to push only.
     const double vn = dv.dot(c.n);
     const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
@@ -374,29 +378,50 @@ void ParticleCollider::solve() {
     if (!wall) v[c.i] -= (dpn * wi) * c.n;
     v[c.j] += (dpn * wj) * c.n;
     // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
-    dv = v[c.j] - (wall ? c.vc : v[c.i]);
+    dv = v[c.j] - (wall ? vc : v[c.i]);
     const Vec3 vt = dv - dv.dot(c.n) * c.n;
     Vec3 pt_new = c.pt - c.m_eff * vt;
     const double bound = c.mu * c.pn;
     const double len = pt_new.norm();
-    if (len > bound) pt_new *= bound / len;
+    // A minimum, not a branch: whether a contact slides is data, and a mispredicted branch
+    // stops the overlap of independent contacts. bound / len < 1 exactly when the branch
+    // "len > bound" would scale (a quotient rounded up to 1 scales by 1.0 either way; 0 / 0 and
+    // b / 0 leave it at 1), and x * 1.0 == x: the bits are those of the branch.
+    const double ratio = bound / len;
+#if defined(__SSE2__)
+    // gcc turns the ternary below into a branch; minsd returns its second operand on NaN.
+    pt_new *= _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(ratio), _mm_set_sd(1.0)));
+#else
+    pt_new *= ratio < 1.0 ? ratio : 1.0;
+#endif
     const Vec3 dpt = pt_new - c.pt;
     c.pt = pt_new;
     if (!wall) v[c.i] -= wi * dpt;
     v[c.j] += wj * dpt;
   };
+  // The sweeps run over a copy of the contacts in wavefront order (schedule()), which is the
+  // same Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end.
+  schedule();
   const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
     for (std::size_t q = begin; q < end; ++q) {
-      Contact& c = contacts[q];
+      SolverContact& c = work_[q];
       if (c.i == kCollider) {
-        update(c, std::true_type{});
+        update(c, work_vc_[q], std::true_type{});
       } else {
-        update(c, std::false_type{});
+        update(c, work_vc_[q], std::false_type{});
       }
+    }
+  };
+  const auto give_back = [&] {
+    for (std::size_t k = 0; k < work_.size(); ++k) {
+      Contact& c = contacts[sched_[k]];
+      c.pn = work_[k].pn;
+      c.pt = work_[k].pt;
     }
   };
   if (bands_.empty()) {
     for (int it = 0; it < iterations; ++it) sweep(0, contacts.size());
+    give_back();
     return;
   }
   const int nb = int(bands_.size());
@@ -413,6 +438,65 @@ void ParticleCollider::solve() {
 #pragma omp parallel for schedule(static) num_threads(threads) if (par)
     for (int b = 0; b < nb; ++b)
       sweep(bands_[std::size_t(b)].wall_begin, bands_[std::size_t(b)].wall_end);
+  }
+  give_back();
+}
+
+void ParticleCollider::schedule() {
+  const std::size_t m = contacts.size();
+  sched_.resize(m);
+  work_.resize(m);
+  work_vc_.resize(m);
+  wave_.resize(m);
+  last_wave_.assign(x.size(), 0);
+  // Contact q's wave is one past the latest wave of the contacts before it (in its window) that
+  // share a particle with it, so a particle's contacts keep their order and the contacts of one
+  // wave share none: sorting a window by wave (stably) changes no result, and the sweep can
+  // overlap each wave's contacts. Windows of kWindow contacts keep the reordered sweep's reads
+  // near each other in memory.
+  constexpr std::size_t kWindow = 2048;
+  const auto order_window = [&](std::size_t begin, std::size_t end) {
+    std::uint32_t top = 0;
+    for (std::size_t q = begin; q < end; ++q) {
+      const Contact& c = contacts[q];
+      const bool wall = c.i == kCollider;
+      std::uint32_t w = last_wave_[c.j];
+      if (!wall) w = std::max(w, last_wave_[c.i]);
+      // Wave k's pairs are 2k + 2, its collider contacts 2k + 3: the sweep's branch on the
+      // contact's kind then changes once per wave.
+      w = 2 * (w / 2 + 1) + (wall ? 1u : 0u);
+      wave_[q] = w;
+      last_wave_[c.j] = w;
+      if (!wall) last_wave_[c.i] = w;
+      top = std::max(top, w);
+    }
+    wave_count_.assign(std::size_t(top) + 2, 0);
+    for (std::size_t q = begin; q < end; ++q) ++wave_count_[wave_[q] + 1];
+    for (std::size_t w = 0; w + 1 < wave_count_.size(); ++w) wave_count_[w + 1] += wave_count_[w];
+    for (std::size_t q = begin; q < end; ++q)
+      sched_[begin + wave_count_[wave_[q]]++] = std::uint32_t(q);
+    for (std::size_t q = begin; q < end; ++q) {
+      last_wave_[contacts[q].j] = 0;
+      if (contacts[q].i != kCollider) last_wave_[contacts[q].i] = 0;
+    }
+  };
+  const auto order_range = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t w = begin; w < end; w += kWindow) order_window(w, std::min(end, w + kWindow));
+  };
+  if (!wavefront) {
+    for (std::size_t q = 0; q < m; ++q) sched_[q] = std::uint32_t(q);
+  } else if (bands_.empty()) {
+    order_range(0, m);
+  } else {
+    for (const Band& b : bands_) {
+      order_range(b.pair_begin, b.pair_end);
+      order_range(b.wall_begin, b.wall_end);
+    }
+  }
+  for (std::size_t k = 0; k < m; ++k) {
+    const Contact& c = contacts[sched_[k]];
+    work_[k] = SolverContact{c.i, c.j, c.n, c.m_eff, c.target, c.mu, c.pn, c.pt};
+    if (c.i == kCollider) work_vc_[k] = c.vc;
   }
 }
 
