@@ -4,6 +4,7 @@
 // rigid entries' order, so the result is the same at any thread count.
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "collision/collider_impl.hpp"
 #include "collision/gjk.hpp"
@@ -134,6 +135,36 @@ double time_of_impact(const Sweep& sw, const Collider& c, const Target& target, 
   return t;
 }
 
+/// Time of impact in [0, 1) of shape ca of swept body a against shape cb of swept body b, both
+/// moving over the step, or 1 for none: conservative advancement on their relative motion, each
+/// point approaching no faster than the two centres' relative speed along the normal plus
+/// θ_a r_a + θ_b r_b (Mirtich 1996, §2.3.2, with two moving bodies).
+double pair_time_of_impact(const Sweep& a, const Collider& ca, const Sweep& b, const Collider& cb) {
+  const auto gap_at = [&](double t) {
+    Target target;
+    target.convex = shape_at(cb, *b.body, b.x(t), b.q(t));
+    return gap_of(target, shape_at(ca, *a.body, a.x(t), a.q(t)));  // normal from b towards a
+  };
+  Gap g = gap_at(0.0);
+  if (g.overlap || !(g.distance > kGapTolerance)) return 1.0;
+  const double thinnest = std::min(a.extent.thinnest, b.extent.thinnest);
+  if (a.bound() + b.bound() <= g.distance + kFastFraction * thinnest) return 1.0;
+  const double goal = std::min(kTimeOfImpactGap, 0.5 * g.distance);
+  const Vec3 dx = (a.x1 - a.x0) - (b.x1 - b.x0);
+  const double spin = a.angle * a.extent.reach + b.angle * b.extent.reach;
+  double t = 0.0;
+  for (int round = 0; round < kMaxRounds; ++round) {
+    if (g.overlap) return t;
+    if (g.distance <= goal + kGapTolerance) return t;
+    const double approach = -dx.dot(g.normal) + spin;
+    if (!(approach > 0.0)) return 1.0;
+    t += (g.distance - goal) / approach;
+    if (t >= 1.0) return 1.0;
+    g = gap_at(t);
+  }
+  return t;
+}
+
 }  // namespace
 
 void begin_continuous(WorldState& w, double h) {
@@ -178,22 +209,56 @@ void continuous_collisions(WorldState& w) {
     }
   }
   if (!any) return;
+  const auto sweep_of = [&](const Body& b) {
+    const std::uint32_t i = b.rigid;
+    return Sweep{&b, d.start_position[i], r.position[i], d.start_orientation[i], r.orientation[i],
+                 d.start_orientation[i].angularDistance(r.orientation[i]),
+                 extent_of(w, b, d.start_position[i])};
+  };
+  // Two swept bodies meet at the first time of impact of their relative motion (two bullets
+  // head on would otherwise pass through each other: neither is swept against the other, and the
+  // step's motion outruns the contacts' margin). Found from the start and end poses before any
+  // body is moved back, so the order of the bodies does not matter; each keeps the earliest.
+  std::vector<std::uint32_t> swept;
+  for (std::uint32_t bi = 0; bi < bodies.size(); ++bi)
+    if (bodies[bi].dynamic() && sweeping[bodies[bi].rigid] == 1) swept.push_back(bi);
+  std::vector<double> pair_toi(r.size(), 1.0);
+  for (std::size_t u = 0; u < swept.size(); ++u) {
+    const Body& a = bodies[swept[u]];
+    const Sweep sa = sweep_of(a);
+    const Vec3 grow_a = Vec3::Constant(sa.extent.reach + kSpeculativeMargin);
+    const Vec3 lo_a = sa.x0.cwiseMin(sa.x1) - grow_a, hi_a = sa.x0.cwiseMax(sa.x1) + grow_a;
+    for (std::size_t v = u + 1; v < swept.size(); ++v) {
+      const Body& b = bodies[swept[v]];
+      const Sweep sb = sweep_of(b);
+      const Vec3 grow_b = Vec3::Constant(sb.extent.reach + kSpeculativeMargin);
+      const Vec3 lo_b = sb.x0.cwiseMin(sb.x1) - grow_b, hi_b = sb.x0.cwiseMax(sb.x1) + grow_b;
+      if ((hi_a.array() < lo_b.array()).any() || (hi_b.array() < lo_a.array()).any()) continue;
+      // As against one moving body below: only when they could pass through each other.
+      if (!(sa.bound() + sb.bound() > sa.extent.thinnest + sb.extent.thinnest)) continue;
+      if (no_collide(d, swept[u], swept[v])) continue;
+      double t = 1.0;
+      for (std::uint32_t ka = a.first_shape; ka < a.first_shape + a.shape_count; ++ka)
+        for (std::uint32_t kb = b.first_shape; kb < b.first_shape + b.shape_count; ++kb)
+          t = std::min(t, pair_time_of_impact(sa, w.shapes[ka], sb, w.shapes[kb]));
+      pair_toi[a.rigid] = std::min(pair_toi[a.rigid], t);
+      pair_toi[b.rigid] = std::min(pair_toi[b.rigid], t);
+    }
+  }
   for (std::uint32_t bi = 0; bi < bodies.size(); ++bi) {
     const Body& b = bodies[bi];
     if (!b.dynamic() || sweeping[b.rigid] != 1) continue;
     const std::uint32_t i = b.rigid;
-    const Sweep sw{&b, d.start_position[i], r.position[i], d.start_orientation[i], r.orientation[i],
-                   d.start_orientation[i].angularDistance(r.orientation[i]),
-                   extent_of(w, b, d.start_position[i])};
+    const Sweep sw = sweep_of(b);
     // The swept sphere's box (start and end centres grown by the reach and the gap).
     const Vec3 grow = Vec3::Constant(sw.extent.reach + kSpeculativeMargin);
     const Vec3 lo = sw.x0.cwiseMin(sw.x1) - grow, hi = sw.x0.cwiseMax(sw.x1) + grow;
-    double toi = 1.0;
+    double toi = pair_toi[i];
     for (std::uint32_t bj = 0; bj < bodies.size(); ++bj) {
       if (bj == bi) continue;
       const Body& o = bodies[bj];
       const bool moves = o.dynamic() && r.is_dynamic(o.rigid);
-      if (moves && sweeping[o.rigid] == 1) continue;  // two swept bodies: left to the contacts
+      if (moves && sweeping[o.rigid] == 1) continue;  // two swept bodies: pair_toi above
       // A moving body is swept against only when this one could pass through it in one step
       // (deeper than both their half-thicknesses): stopping at every touch between bodies that
       // merely move quickly (a row of falling dominoes) would drop the rest of their steps and

@@ -202,7 +202,10 @@ void begin_continuous(WorldState& w, double h);
 /// (centre of mass linear, orientation by slerp) against every shape of every body that is not
 /// itself swept (static, kinematic and sleeping ones where they are; awake dynamic ones at their
 /// end pose, only when its motion exceeds both bodies' inner radii together; planes; mesh
-/// triangles through the mesh's AABB tree). The time of impact is found by
+/// triangles through the mesh's AABB tree). Two swept bodies whose motions together exceed
+/// their inner radii together are swept against each other, both moving (the approach bound
+/// sums both centres' relative speed and both θ r_max), and each keeps the earlier of that time
+/// and its own. The time of impact is found by
 /// conservative advancement (Mirtich 1996, "Impulse-based Dynamic Simulation of Rigid Body
 /// Systems", §2.3.2) on GJK distances (gjk.hpp): advance by (d - gap) / (approach bound), the
 /// bound being the centre's speed towards the other shape plus θ r_max. A pair already
