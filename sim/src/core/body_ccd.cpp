@@ -219,30 +219,44 @@ void continuous_collisions(WorldState& w) {
   // head on would otherwise pass through each other: neither is swept against the other, and the
   // step's motion outruns the contacts' margin). Found from the start and end poses before any
   // body is moved back, so the order of the bodies does not matter; each keeps the earliest.
-  std::vector<std::uint32_t> swept;
-  for (std::uint32_t bi = 0; bi < bodies.size(); ++bi)
-    if (bodies[bi].dynamic() && sweeping[bodies[bi].rigid] == 1) swept.push_back(bi);
+  // Sweep and prune over the swept boxes along x (many fast bodies, such as an explosion's
+  // debris, must not cost a test per pair); the result is a minimum, so the order is free.
+  struct Swept {
+    std::uint32_t body;
+    Sweep sweep;
+    Vec3 lo, hi;  ///< box of the swept sphere (start and end centres grown by reach and gap)
+  };
+  std::vector<Swept> swept;
+  for (std::uint32_t bi = 0; bi < bodies.size(); ++bi) {
+    if (!bodies[bi].dynamic() || sweeping[bodies[bi].rigid] != 1) continue;
+    const Sweep sw = sweep_of(bodies[bi]);
+    const Vec3 grow = Vec3::Constant(sw.extent.reach + kSpeculativeMargin);
+    const Vec3 lo = sw.x0.cwiseMin(sw.x1) - grow, hi = sw.x0.cwiseMax(sw.x1) + grow;
+    // A body whose step blew up is reported after this stage (stage_bodies.cpp); a NaN key
+    // would break the sort's ordering.
+    if (!(lo.allFinite() && hi.allFinite())) continue;
+    swept.push_back(Swept{bi, sw, lo, hi});
+  }
+  std::sort(swept.begin(), swept.end(), [](const Swept& p, const Swept& q) {
+    return p.lo.x() != q.lo.x() ? p.lo.x() < q.lo.x() : p.body < q.body;
+  });
   std::vector<double> pair_toi(r.size(), 1.0);
   for (std::size_t u = 0; u < swept.size(); ++u) {
-    const Body& a = bodies[swept[u]];
-    const Sweep sa = sweep_of(a);
-    const Vec3 grow_a = Vec3::Constant(sa.extent.reach + kSpeculativeMargin);
-    const Vec3 lo_a = sa.x0.cwiseMin(sa.x1) - grow_a, hi_a = sa.x0.cwiseMax(sa.x1) + grow_a;
-    for (std::size_t v = u + 1; v < swept.size(); ++v) {
-      const Body& b = bodies[swept[v]];
-      const Sweep sb = sweep_of(b);
-      const Vec3 grow_b = Vec3::Constant(sb.extent.reach + kSpeculativeMargin);
-      const Vec3 lo_b = sb.x0.cwiseMin(sb.x1) - grow_b, hi_b = sb.x0.cwiseMax(sb.x1) + grow_b;
-      if ((hi_a.array() < lo_b.array()).any() || (hi_b.array() < lo_a.array()).any()) continue;
+    const Swept& a = swept[u];
+    for (std::size_t v = u + 1; v < swept.size() && swept[v].lo.x() <= a.hi.x(); ++v) {
+      const Swept& b = swept[v];
+      if ((a.hi.array() < b.lo.array()).any() || (b.hi.array() < a.lo.array()).any()) continue;
       // As against one moving body below: only when they could pass through each other.
+      const Sweep &sa = a.sweep, &sb = b.sweep;
       if (!(sa.bound() + sb.bound() > sa.extent.thinnest + sb.extent.thinnest)) continue;
-      if (no_collide(d, swept[u], swept[v])) continue;
+      if (no_collide(d, a.body, b.body)) continue;
+      const Body &ba = bodies[a.body], &bb = bodies[b.body];
       double t = 1.0;
-      for (std::uint32_t ka = a.first_shape; ka < a.first_shape + a.shape_count; ++ka)
-        for (std::uint32_t kb = b.first_shape; kb < b.first_shape + b.shape_count; ++kb)
+      for (std::uint32_t ka = ba.first_shape; ka < ba.first_shape + ba.shape_count; ++ka)
+        for (std::uint32_t kb = bb.first_shape; kb < bb.first_shape + bb.shape_count; ++kb)
           t = std::min(t, pair_time_of_impact(sa, w.shapes[ka], sb, w.shapes[kb]));
-      pair_toi[a.rigid] = std::min(pair_toi[a.rigid], t);
-      pair_toi[b.rigid] = std::min(pair_toi[b.rigid], t);
+      pair_toi[ba.rigid] = std::min(pair_toi[ba.rigid], t);
+      pair_toi[bb.rigid] = std::min(pair_toi[bb.rigid], t);
     }
   }
   for (std::uint32_t bi = 0; bi < bodies.size(); ++bi) {
