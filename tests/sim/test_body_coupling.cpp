@@ -116,6 +116,38 @@ TEST(BodyCoupling, JetMomentumChangeEqualsBoxMomentumWithinOnePercent) {
   }
 }
 
+TEST(BodyCoupling, AParticleAsHeavyAsTheBodyCollidesAsTwoFreeBodies) {
+  // A 0.2 kg ball at 2 m/s hits a free 0.05 kg box head on: the impact is a collision of two
+  // free bodies (closed form: momentum kept, relative velocity reversed times e), not a bounce
+  // off a wall with the box thrown at m (1 + e) u / M. Held fixed, e = 1 would send the ball
+  // back at 2 m/s and the box off at 16 m/s, creating 16 times the energy there was.
+  const double mp = 0.2, mb = 0.05, u = 2.0;
+  for (const double e : {1.0, 0.5}) {
+    for (const double h : {1.0 / 120.0, 1.0 / 480.0}) {
+      World w(def_with_step(h));
+      const BodyHandle box =
+          w.add_body(floating_box({0.05, 0.05, 0.05}, Vec3::Zero(), mb, Material{e, 0.0}));
+      ParticleSystemDef def = quiet_system();
+      def.particle_restitution = e;
+      const ParticleSystemHandle ps = w.add_particle_system(def);
+      w.spawn_particle(ps, {-0.3, 0.0, 0.0}, {u, 0.0, 0.0}, mp, 0.01, 100.0);
+      for (int f = 0; f < 30; ++f) w.advance(1.0 / 60.0);
+      // m_p v_p + M v_b = m_p u and v_b - v_p = e u.
+      const double vp = (mp - e * mb) * u / (mp + mb), vb = mp * (1.0 + e) * u / (mp + mb);
+      const ParticleView v = w.particles(ps);
+      ASSERT_EQ(v.count, 1u);
+      EXPECT_NEAR(v.velocity[0], vp, 0.01 * u) << "e = " << e << ", h = " << h;
+      EXPECT_NEAR(w.velocity(box).first.x(), vb, 0.01 * u) << "e = " << e << ", h = " << h;
+      EXPECT_NEAR(mp * v.velocity[0] + w.motion(box).linear_momentum.x(), mp * u, 1e-6 * mp * u);
+      if (e == 1.0) {
+        const double energy = 0.5 * mp * v.velocity[0] * v.velocity[0] +
+                              0.5 * mb * w.velocity(box).first.squaredNorm();
+        EXPECT_NEAR(energy, 0.5 * mp * u * u, 0.01 * 0.5 * mp * u * u) << "h = " << h;
+      }
+    }
+  }
+}
+
 TEST(BodyCoupling, OffCentreJetSpinsTheBoxWithRCrossJ) {
   // The jet hits the face x = -0.2 at y = 0.1: the impulse J (along +x) acts at r = (-0.2, 0.1, 0)
   // from the centre of mass, so L = r × J = (0, 0, -0.1 J). A short jet (two frames) on a heavy

@@ -3,7 +3,9 @@
 // Coutinho §3.7: a particle colliding with (or resting on) a rigid body is responded to with the
 // body held fixed; "for each simulation time step, we need to sum all collision impulses acting
 // on the rigid body owing to one or more particle-rigid body collisions, and apply the resultant
-// impulse at the beginning of the next simulation time step". The passes that change a particle's
+// impulse at the beginning of the next simulation time step". (An impact of the swept particle
+// pass departs from the fixed body: its velocity change is shared by the two inverse masses,
+// inverse_mass_at(), so a particle as heavy as the body does not throw it.) The passes that change a particle's
 // or a vertex's velocity against a shape (collision/particle_response.cpp, the particle-particle
 // stage's collider contacts, cloth/cloth_collide.cpp) append the equal and opposite impulse here;
 // the bodies stage sums the log per body, in log order, and applies it (core/body_coupling.cpp).
@@ -54,6 +56,16 @@ struct BodyImpulses {
   [[nodiscard]] bool logs(const Collider& c) const {
     const std::size_t k = std::size_t(&c - shapes);
     return k < rigid.size() && rigid[k] != kNone;
+  }
+  /// The inverse effective mass (1/kg) of collider c's body at world point p along the unit
+  /// normal n: 1/M + (r × n)·I⁻¹(r × n), r = p - x its centre of mass, from the start-of-step
+  /// motion; 0 when c's body is not dynamic or is asleep (immovable) and while muted (the body
+  /// takes nothing). A particle's impact is shared by this and 1/m_p (particle_response.cpp).
+  [[nodiscard]] double inverse_mass_at(const Collider& c, const Vec3& p, const Vec3& n) const {
+    if (muted || !logs(c)) return 0.0;
+    const Motion& m = motion[rigid[std::size_t(&c - shapes)]];
+    const Vec3 rn = (p - m.centre).cross(n);
+    return m.inv_mass + rn.dot(m.inv_inertia * rn);
   }
   /// Logs the impulse J (N s, world) on collider c (an element of the `shapes` array) at world
   /// point p, if c belongs to a dynamic body.

@@ -216,9 +216,25 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
       v0 = vn0 < 0.0 ? Vec3(v_hit - vn0 * n) : v_hit;
     } else {
       v0 = respond(v_hit, vc, n, mat, ctx.contact_speed, kick, false);
+      // An impact on a dynamic body is a collision of two free bodies: the change of the
+      // relative velocity is shared in proportion to the inverse masses, 1/m_p against the
+      // body's 1/M + (r × n)·I⁻¹(r × n) at the contact (Coutinho §3.6.1 with both sides free;
+      // the body takes the rest through the logged impulse, §3.7). Held fixed, a particle as
+      // heavy as the body would bounce off it as off a wall and throw it at many times its speed.
+      // The body's point then recedes along -n by `recede` (m/s): the particle is separating
+      // from it at -e vn even when it keeps going the same way.
+      double recede = 0.0;
+      if (ctx.impulses != nullptr) {
+        const double wb = ctx.impulses->inverse_mass_at(*hit.collider, hit.point - r * n, n);
+        if (wb > 0.0) {
+          const double wp = 1.0 / double(s.mass[i]);
+          v0 = v_hit + (wp / (wp + wb)) * (v0 - v_hit);
+          recede = wb * double(s.mass[i]) * (v0 - v_hit).dot(n);
+        }
+      }
       v1 = v0 + rest * A;
       // Gravity turning a weak bounce back within the remainder: it lies on the surface.
-      const double vn1 = (v1 - vc).dot(n);
+      const double vn1 = (v1 - vc).dot(n) + recede;
       if (vn1 < 0.0) v1 -= vn1 * n;
     }
     // §3.7: the body takes the momentum the contact removed, m (v without it - v with it).
