@@ -8,6 +8,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 
 #include "core/vector_clones.hpp"
 
@@ -251,9 +252,6 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
                       IntegratorState& state, IntegratorWorkspace& w, bool age_particles) {
   if (begin >= end) return false;
   const std::size_t n = end - begin, m = 3 * n;
-  for (Vec* a : {&w.x, &w.v, &w.a1, &w.a2, &w.a3, &w.a4, &w.xt, &w.vt, &w.v2, &w.v3})
-    if (a->size() < m) a->resize(m);
-  if (w.m.size() < n) w.m.resize(n);
   const int th = dyn.threads;
   const bool par = n >= kParallelMin && th > 1;
   dyn.n = n;
@@ -269,6 +267,18 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
     }
     return bad;
   }
+  // Only the stages this integrator reads are grown: resize() writes every element, and for a
+  // million particles each array is 24 MB the first step would fault in for nothing.
+  const auto grow = [m](std::initializer_list<Vec*> arrays) {
+    for (Vec* a : arrays)
+      if (a->size() < m) a->resize(m);
+  };
+  grow({&w.x, &w.v, &w.a1});
+  if (integrator == Integrator::rk2) grow({&w.a2, &w.xt, &w.vt});
+  if (integrator == Integrator::implicit_euler) grow({&w.a2, &w.a3});
+  if (integrator == Integrator::rk4 || integrator == Integrator::adaptive)
+    grow({&w.a2, &w.a3, &w.a4, &w.xt, &w.vt, &w.v2, &w.v3});
+  if (w.m.size() < n) w.m.resize(n);
   {
     double* __restrict wx = w.x.data();
     double* __restrict wv = w.v.data();
