@@ -36,6 +36,14 @@ BodyDef static_box(const Vec3& p, const Vec3& half, double restitution = 0.0, do
   return b;
 }
 
+/// A 5 cm dynamic box at p flying along x at vx (m/s), without gravity.
+BodyDef fast_box(const Vec3& p, double vx, double restitution = 0.0) {
+  BodyDef b = dynamic_box(p, Vec3::Constant(0.025), restitution);
+  b.gravity = Vec3::Zero();
+  b.linear_velocity = {vx, 0.0, 0.0};
+  return b;
+}
+
 /// Runs `seconds` in frames of 1/60 s.
 void run(World& w, double seconds) {
   for (int k = 0; k < int(std::lround(seconds * 60.0)); ++k) (void)w.advance(1.0 / 60.0);
@@ -50,10 +58,7 @@ TEST(Continuous, AFiveCentimetreBoxAtHundredMetresPerSecondStopsAtACentimetreWal
     for (const bool continuous : {true, false}) {
       World w(def(h, continuous));
       (void)w.add_body(static_box({1.0, 0.0, 0.0}, {0.005, 1.0, 1.0}));
-      BodyDef b = dynamic_box({0.0, 0.0, 0.0}, Vec3::Constant(0.025));
-      b.gravity = Vec3::Zero();
-      b.linear_velocity = {100.0, 0.0, 0.0};
-      const BodyHandle box = w.add_body(b);
+      const BodyHandle box = w.add_body(fast_box({0.0, 0.0, 0.0}, 100.0));
       run(w, 0.25);
       const double x = w.pose(box).translation.x();
       if (continuous) {
@@ -75,10 +80,7 @@ TEST(Continuous, ASweptImpactKeepsRestitutionAndMomentum) {
   for (const double h : {1.0 / 60.0, 1.0 / 240.0}) {
     World w(def(h, true));
     (void)w.add_body(static_box({1.0, 0.0, 0.0}, {0.005, 1.0, 1.0}, 0.5));
-    BodyDef b = dynamic_box({0.0, 0.0, 0.0}, Vec3::Constant(0.025), 0.5);
-    b.gravity = Vec3::Zero();
-    b.linear_velocity = {60.0, 0.0, 0.0};
-    const BodyHandle box = w.add_body(b);
+    const BodyHandle box = w.add_body(fast_box({0.0, 0.0, 0.0}, 60.0, 0.5));
     run(w, 0.1);
     const Vec3 v = w.velocity(box).first;
     EXPECT_NEAR(v.x(), -30.0, 0.3) << "h = " << h << ": rebounds at e v";
@@ -89,10 +91,7 @@ TEST(Continuous, ASweptImpactKeepsRestitutionAndMomentum) {
     BodyDef p = dynamic_box({1.0, 0.0, 0.0}, {0.005, 0.5, 0.5});
     p.gravity = Vec3::Zero();
     const BodyHandle plate = w.add_body(p);
-    BodyDef b = dynamic_box({0.0, 0.1, 0.05}, Vec3::Constant(0.025));
-    b.gravity = Vec3::Zero();
-    b.linear_velocity = {100.0, 0.0, 0.0};
-    const BodyHandle box = w.add_body(b);
+    const BodyHandle box = w.add_body(fast_box({0.0, 0.1, 0.05}, 100.0));
     const double p0 = w.motion(box).linear_momentum.x();
     run(w, 0.1);
     const Vec3 total = w.motion(box).linear_momentum + w.motion(plate).linear_momentum;
@@ -113,13 +112,8 @@ TEST(Continuous, TwoFastBodiesMeetInsteadOfPassingThroughEachOther) {
   for (const double h : kSteps) {
     for (const bool continuous : {true, false}) {
       World w(def(h, continuous));
-      BodyDef a = dynamic_box({-0.5, 0.0, 0.0}, Vec3::Constant(0.025), 0.5);
-      a.gravity = Vec3::Zero();
-      a.linear_velocity = {100.0, 0.0, 0.0};
-      BodyDef b = a;
-      b.pose.translation = {0.5, 0.0, 0.0};
-      b.linear_velocity = {-100.0, 0.0, 0.0};
-      const BodyHandle ha = w.add_body(a), hb = w.add_body(b);
+      const BodyHandle ha = w.add_body(fast_box({-0.5, 0.0, 0.0}, 100.0, 0.5));
+      const BodyHandle hb = w.add_body(fast_box({0.5, 0.0, 0.0}, -100.0, 0.5));
       run(w, 0.25);
       const double xa = w.pose(ha).translation.x(), xb = w.pose(hb).translation.x();
       if (continuous) {
@@ -159,13 +153,8 @@ TEST(Continuous, TwoFastBodiesMeetInsteadOfPassingThroughEachOther) {
   }
   for (const double h : kSteps) {
     World w(def(h, true));
-    BodyDef a = dynamic_box({-0.5, 0.0, 0.0}, Vec3::Constant(0.025));
-    a.gravity = Vec3::Zero();
-    a.linear_velocity = {100.0, 0.0, 0.0};
-    BodyDef b = a;
-    b.pose.translation = {0.5, 0.06, 0.0};
-    b.linear_velocity = {-100.0, 0.0, 0.0};
-    const BodyHandle ha = w.add_body(a), hb = w.add_body(b);
+    const BodyHandle ha = w.add_body(fast_box({-0.5, 0.0, 0.0}, 100.0));
+    const BodyHandle hb = w.add_body(fast_box({0.5, 0.06, 0.0}, -100.0));
     run(w, 0.1);
     EXPECT_EQ(w.velocity(ha).first, Vec3(100.0, 0.0, 0.0)) << "h = " << h << ": untouched";
     EXPECT_EQ(w.velocity(hb).first, Vec3(-100.0, 0.0, 0.0)) << "h = " << h;
@@ -182,13 +171,8 @@ TEST(Continuous, ManyFastPairsEachMeetTheirOwnPartner) {
   for (int iy = 0; iy < 10; ++iy)
     for (int iz = 0; iz < 10; ++iz) {
       const double y = 0.3 * iy, z = 0.3 * iz, off = 0.01 * ((iy + iz) % 3);
-      BodyDef a = dynamic_box({-0.5 - off, y, z}, Vec3::Constant(0.025), 0.5);
-      a.gravity = Vec3::Zero();
-      a.linear_velocity = {100.0, 0.0, 0.0};
-      BodyDef b = a;
-      b.pose.translation = {0.5 + off, y, z};
-      b.linear_velocity = {-100.0, 0.0, 0.0};
-      pairs.emplace_back(w.add_body(a), w.add_body(b));
+      const BodyHandle a = w.add_body(fast_box({-0.5 - off, y, z}, 100.0, 0.5));
+      pairs.emplace_back(a, w.add_body(fast_box({0.5 + off, y, z}, -100.0, 0.5)));
     }
   run(w, 0.1);
   for (const auto& [a, b] : pairs) {

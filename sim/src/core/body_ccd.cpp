@@ -101,6 +101,31 @@ Gap gap_of(const Target& t, const PosedShape& s) {
   return {g.distance - t.convex.shape.core_radius() - s.shape.core_radius(), g.normal, false};
 }
 
+/// Conservative advancement (Mirtich 1996, §2.3.2) from the gap g at t = 0, gap_at(t) the gap
+/// at a later time: t advances by (d - goal) / approach, where no point approaches faster than
+/// the centres' relative motion over the step along the normal, -dx·n, plus `spin` (Σ θ r_max).
+/// `bound` is how far any point may move relative to the target over the step and `thinnest`
+/// the thinner side's inner radius. Returns the time of impact in [0, 1), or 1 for none.
+template <class GapAt>
+double advance(Gap g, const Vec3& dx, double spin, double bound, double thinnest, GapAt&& gap_at) {
+  // Touching at the start: the discrete contacts have it. Cannot get deeper than half its inner
+  // radius: the discrete contacts push it back out.
+  if (g.overlap || !(g.distance > kGapTolerance)) return 1.0;
+  if (bound <= g.distance + kFastFraction * thinnest) return 1.0;
+  const double goal = std::min(kTimeOfImpactGap, 0.5 * g.distance);
+  double t = 0.0;
+  for (int round = 0; round < kMaxRounds; ++round) {
+    if (g.overlap) return t;  // rounding past the target: stop here
+    if (g.distance <= goal + kGapTolerance) return t;
+    const double approach = -dx.dot(g.normal) + spin;
+    if (!(approach > 0.0)) return 1.0;
+    t += (g.distance - goal) / approach;
+    if (t >= 1.0) return 1.0;
+    g = gap_at(t);
+  }
+  return t;
+}
+
 /// Time of impact in [0, 1) of shape c of the swept body against `target`, or 1 for none.
 /// `face`, for a mesh triangle, is its unit normal (world).
 double time_of_impact(const Sweep& sw, const Collider& c, const Target& target, const Vec3* face = nullptr) {
@@ -113,56 +138,24 @@ double time_of_impact(const Sweep& sw, const Collider& c, const Target& target, 
     const double s0 = face->dot(sw.x0 - p), s1 = face->dot(sw.x1 - p);
     if ((s0 >= 0.0 ? s0 - s1 : s1 - s0) < kFastFraction * sw.extent.thinnest) return 1.0;
   }
-  Gap g = gap_of(target, shape_at(c, b, sw.x0, sw.q0));
-  // Touching at the start: the discrete contacts have it. Cannot get deeper than half its inner
-  // radius: the discrete contacts push it back out.
-  if (g.overlap || !(g.distance > kGapTolerance)) return 1.0;
-  if (sw.bound() <= g.distance + kFastFraction * sw.extent.thinnest) return 1.0;
-  const double goal = std::min(kTimeOfImpactGap, 0.5 * g.distance);
-  const Vec3 dx = sw.x1 - sw.x0;
-  double t = 0.0;
-  for (int round = 0; round < kMaxRounds; ++round) {
-    if (g.overlap) return t;  // rounding past the target: stop here
-    if (g.distance <= goal + kGapTolerance) return t;
-    // No point of the body approaches the target faster than its centre's speed towards it
-    // plus θ r_max (Mirtich's bound), per unit of the step's time.
-    const double approach = -dx.dot(g.normal) + sw.angle * sw.extent.reach;
-    if (!(approach > 0.0)) return 1.0;
-    t += (g.distance - goal) / approach;
-    if (t >= 1.0) return 1.0;
-    g = gap_of(target, shape_at(c, b, sw.x(t), sw.q(t)));
-  }
-  return t;
+  return advance(gap_of(target, shape_at(c, b, sw.x0, sw.q0)), sw.x1 - sw.x0,
+                 sw.angle * sw.extent.reach, sw.bound(), sw.extent.thinnest,
+                 [&](double t) { return gap_of(target, shape_at(c, b, sw.x(t), sw.q(t))); });
 }
 
 /// Time of impact in [0, 1) of shape ca of swept body a against shape cb of swept body b, both
-/// moving over the step, or 1 for none: conservative advancement on their relative motion, each
-/// point approaching no faster than the two centres' relative speed along the normal plus
-/// θ_a r_a + θ_b r_b (Mirtich 1996, §2.3.2, with two moving bodies).
+/// moving over the step, or 1 for none: advance() on their relative motion, the two bodies'
+/// spins added.
 double pair_time_of_impact(const Sweep& a, const Collider& ca, const Sweep& b, const Collider& cb) {
-  const auto gap_at = [&](double t) {
+  const auto gap_at = [&](const Vec3& xa, const Quat& qa, const Vec3& xb, const Quat& qb) {
     Target target;
-    target.convex = shape_at(cb, *b.body, b.x(t), b.q(t));
-    return gap_of(target, shape_at(ca, *a.body, a.x(t), a.q(t)));  // normal from b towards a
+    target.convex = shape_at(cb, *b.body, xb, qb);
+    return gap_of(target, shape_at(ca, *a.body, xa, qa));  // normal from b towards a
   };
-  Gap g = gap_at(0.0);
-  if (g.overlap || !(g.distance > kGapTolerance)) return 1.0;
-  const double thinnest = std::min(a.extent.thinnest, b.extent.thinnest);
-  if (a.bound() + b.bound() <= g.distance + kFastFraction * thinnest) return 1.0;
-  const double goal = std::min(kTimeOfImpactGap, 0.5 * g.distance);
-  const Vec3 dx = (a.x1 - a.x0) - (b.x1 - b.x0);
-  const double spin = a.angle * a.extent.reach + b.angle * b.extent.reach;
-  double t = 0.0;
-  for (int round = 0; round < kMaxRounds; ++round) {
-    if (g.overlap) return t;
-    if (g.distance <= goal + kGapTolerance) return t;
-    const double approach = -dx.dot(g.normal) + spin;
-    if (!(approach > 0.0)) return 1.0;
-    t += (g.distance - goal) / approach;
-    if (t >= 1.0) return 1.0;
-    g = gap_at(t);
-  }
-  return t;
+  return advance(gap_at(a.x0, a.q0, b.x0, b.q0), (a.x1 - a.x0) - (b.x1 - b.x0),
+                 a.angle * a.extent.reach + b.angle * b.extent.reach, a.bound() + b.bound(),
+                 std::min(a.extent.thinnest, b.extent.thinnest),
+                 [&](double t) { return gap_at(a.x(t), a.q(t), b.x(t), b.q(t)); });
 }
 
 }  // namespace
