@@ -2,7 +2,7 @@
 // found) by Bullet 3.24 in the same process, one after the other, alternating for --reps rounds,
 // so the ratio is measured under the same machine load:
 //   pyramid  20 rows of 0.5 m boxes (210) on a ground plane, 600 steps of 1/60 s
-//   terrain  500 mixed convex bodies (spheres, boxes, capsules) dropped onto a 2048-triangle
+//   terrain  500 mixed convex bodies (spheres, boxes, capsules, hulls) dropped onto a 2048-triangle
 //            height-field mesh, 600 steps of 1/60 s (after Jolt's ConvexVsMesh)
 // Frames of 1/60 s. Each engine runs as its users get it: simreel at its default internal step
 // (WorldDef::max_step = 1/240 s, 4 steps per frame; --simreel-steps N for N per frame), Bullet
@@ -11,9 +11,12 @@
 // simreel's WorldDef::allow_sleeping; --bullet-no-sleep turns Bullet's off).
 // Reported per engine: CPU time per frame (median over the rounds), the pyramid's top-box drift
 // from its start (m), and the number of bodies that ended below the ground / terrain (tunnelled).
-// Hulls are not in the terrain scene: simreel's dynamic bodies do not take hull shapes yet.
+// The hulls are one irregular 10-point rock (its hull has fewer vertices), scaled by the body's
+// size: btConvexHullShape with Bullet's default collision margin, and the mass simreel computes
+// from the hull's boundary (App. D), the centre of mass near the frame origin in both.
 //
-// Usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep] [--simreel-steps N].
+// Usage: bench_bodies [--reps N] [--scene pyramid|terrain|all] [--bullet-no-sleep] [--simreel-steps N]
+//                     [--simreel-substeps N] (WorldDef::body_substeps: the soft step when >= 2).
 // Figures go in issue notes, never
 // thresholds in tests.
 #include <time.h>
@@ -107,18 +110,41 @@ void terrain_mesh(std::vector<Vec3>& v, std::vector<std::array<std::uint32_t, 3>
     }
 }
 
-/// Body k of the terrain scene: kind k % 3 (sphere, box, capsule), on a 10 x 10 grid in 5
+/// Body k of the terrain scene: kind k % 4 (sphere, box, capsule, hull), on a 10 x 10 grid in 5
 /// layers, 1.6 m apart, starting 3 m above the terrain's highest point.
 struct Drop {
   int kind;
   Vec3 p;
   double size;
 };
+/// The terrain scene's hull: ten points of an irregular rock about `size` (m) across its
+/// half-width, their centroid at the origin.
+std::vector<Vec3> rock(double size) {
+  std::vector<Vec3> p{{1.0, 0.0, 0.2},   {-0.8, 0.5, 0.0}, {-0.6, -0.7, 0.1}, {0.3, 0.9, -0.2},
+                      {0.2, -0.8, -0.3}, {0.0, 0.0, 0.9},  {0.1, 0.2, -0.8},  {0.7, 0.4, 0.5},
+                      {-0.5, 0.1, 0.7},  {-0.3, -0.3, -0.7}};
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& v : p) c += v / double(p.size());
+  for (Vec3& v : p) v = size * (v - c);
+  return p;
+}
+
+/// (kg) Mass of the rock of size 1 at density 1000, as simreel computes it from the hull's
+/// boundary (App. D); a rock of size s has s³ times this.
+double rock_unit_mass() {
+  World world;
+  BodyDef b;
+  b.type = BodyType::dynamic;
+  b.shapes = {ShapeDef::convex_hull(rock(1.0))};
+  b.shapes[0].density = 1000.0;
+  return world.motion(world.add_body(b)).mass;
+}
+
 std::vector<Drop> drops() {
   std::vector<Drop> d;
   for (int k = 0; k < kDropped; ++k) {
     const int i = k % 10, j = (k / 10) % 10, layer = k / 100;
-    d.push_back({k % 3, Vec3((i - 4.5) * 1.6, (j - 4.5) * 1.6, 3.0 + 1.6 * layer),
+    d.push_back({k % 4, Vec3((i - 4.5) * 1.6, (j - 4.5) * 1.6, 3.0 + 1.6 * layer),
                  0.25 + 0.05 * double((k * 7) % 5)});
   }
   return d;
@@ -169,7 +195,8 @@ Result run_simreel_terrain() {
     b.pose.translation = d.p;
     b.shapes = {d.kind == 0   ? ShapeDef::sphere(d.size)
                 : d.kind == 1 ? ShapeDef::box(Vec3::Constant(d.size))
-                              : ShapeDef::capsule(0.6 * d.size, d.size)};
+                : d.kind == 2 ? ShapeDef::capsule(0.6 * d.size, d.size)
+                              : ShapeDef::convex_hull(rock(d.size))};
     b.shapes[0].material = Material(0.0, 0.5);
     bodies.push_back(world.add_body(b));
   }
@@ -265,6 +292,7 @@ Result run_bullet_terrain() {
   w.add(new btBvhTriangleMeshShape(&mesh, true), 0.0, Vec3::Zero());
   std::vector<btRigidBody*> bodies;
   const double pi = 3.14159265358979323846;
+  const double rock_mass = rock_unit_mass();
   for (const Drop& d : drops()) {
     const double s = d.size;
     if (d.kind == 0) {
@@ -272,10 +300,14 @@ Result run_bullet_terrain() {
     } else if (d.kind == 1) {
       bodies.push_back(w.add(new btBoxShape(btVector3(btScalar(s), btScalar(s), btScalar(s))),
                              1000.0 * 8.0 * s * s * s, d.p));
-    } else {
+    } else if (d.kind == 2) {
       const double r = 0.6 * s;  // capsule: radius r, segment 2 s
       bodies.push_back(w.add(new btCapsuleShapeZ(btScalar(r), btScalar(2.0 * s)),
                              1000.0 * (pi * r * r * 2.0 * s + 4.0 / 3.0 * pi * r * r * r), d.p));
+    } else {
+      auto* hull = new btConvexHullShape();
+      for (const Vec3& p : rock(s)) hull->addPoint(btVector3(btScalar(p.x()), btScalar(p.y()), btScalar(p.z())));
+      bodies.push_back(w.add(hull, rock_mass * s * s * s, d.p));
     }
   }
   const double t0 = cpu_seconds();

@@ -12,9 +12,14 @@
 #include <vector>
 
 #include "collision/box_box.hpp"
+#include "collision/bvh.hpp"
+#include "collision/collider_impl.hpp"
 #include "collision/contact_manifold.hpp"
+#include "collision/convex_contact.hpp"
 #include "collision/persistent_manifold.hpp"
+#include "core/body_dynamics.hpp"
 #include "rigid/convex_hull.hpp"
+#include "simreel/sim/random.hpp"
 
 namespace simreel::sim::detail {
 namespace {
@@ -290,6 +295,87 @@ TEST(ManifoldWarmStart, VanishedPointsDropTheirImpulseAndATurnedNormalCarriesNot
   Manifold turned = resting(0.0);
   turned.normal = rot(Vec3::UnitX(), 0.5) * turned.normal;
   EXPECT_EQ(warm_start(before, turned), 0);
+}
+
+}  // namespace
+}  // namespace simreel::sim::detail
+
+namespace simreel::sim::detail {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// The triangle-plane cull of the mesh–convex narrow phase (TrianglePlaneCull, body_contacts.cpp)
+
+TEST(MeshNarrowPhase, TrianglePlaneCullSkipsOnlyTrianglesGjkFindsApart) {
+  // One tilted triangle of a posed mesh, and each solid kind at random poses around it, some
+  // placed so that their nearest point lies exactly at the gap (plus or minus a hair) from the
+  // triangle's plane, others beside the triangle at that distance from an edge's line: whenever the cull says apart, GJK on the pair (the test
+  // the narrow phase would otherwise run) must say not touching, so skipping changes nothing.
+  ShapeDef md;
+  md.type = ShapeType::mesh;
+  md.vertices = {Vec3(-0.8, -0.6, 0.1), Vec3(0.9, -0.4, -0.2), Vec3(0.1, 0.8, 0.3)};
+  md.triangles = {{0, 1, 2}};
+  Collider mesh = make_collider(md, "mesh");
+  mesh.follow(Transform{Vec3(0.3, -0.2, 0.1), Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 0.5).normalized()))},
+              Vec3::Zero(), Vec3::Zero());
+  const Triangle& tri = mesh.mesh->triangles[0];
+  const std::array<Vec3, 3> corners{tri.a, tri.b, tri.c};
+  const PosedShape T(ConvexShape::hull(corners), mesh.R, mesh.center);
+  const Vec3 n = mesh.R * tri.normal;  // world
+  const std::vector<ShapeDef> solids{
+      ShapeDef::sphere(0.2), ShapeDef::box(Vec3(0.3, 0.1, 0.2)), ShapeDef::capsule(0.1, 0.25),
+      ShapeDef::cylinder(0.15, 0.2),
+      ShapeDef::convex_hull({Vec3(0.3, 0, 0), Vec3(-0.1, 0.25, 0.05), Vec3(-0.15, -0.2, 0.1),
+                             Vec3(0.05, 0.02, 0.35), Vec3(0.0, -0.05, -0.2)})};
+  Rng rng(11);
+  for (const ShapeDef& def : solids) {
+    Collider s = make_collider(def, "solid");
+    int culled = 0, touching = 0, samples = 0;
+    for (int k = 0; k < 3000; ++k) {
+      const Vec3 axis(rng.normal(), rng.normal(), rng.normal());
+      const Quat q(Eigen::AngleAxisd(rng.uniform(0.0, 2.0 * std::numbers::pi), axis.normalized()));
+      // A point of the triangle's plane near the triangle (barycentric weights in [-0.3, 1.3]).
+      const double u = rng.uniform(-0.3, 1.3), v = rng.uniform(-0.3, 1.3);
+      const Vec3 on = T.to_world((1.0 - u - v) * tri.a + u * tri.b + v * tri.c);
+      const double side = k % 2 == 0 ? 1.0 : -1.0;
+      for (const double gap : {0.005, 0.05}) {
+        // Pose the solid, then (every third sample) slide it along n until its lowest point
+        // towards the plane sits at gap + delta from it.
+        s.follow(Transform{on + side * rng.uniform(-0.6, 0.6) * n, q}, Vec3::Zero(), Vec3::Zero());
+        // every other third sample, slide it perpendicular to one edge, in the triangle's plane,
+        // until its nearest point to that edge's line sits at gap + delta beyond it.
+        const double delta = std::array{-1e-7, -1e-12, 0.0, 1e-12, 1e-10, 1e-9, 3e-9}[k / 3 % 7];
+        if (k % 3 == 0) {
+          const PosedShape body(convex_of(s), s.R, s.center);
+          const Vec3 low = body.support(-side * n, ShapePart::full).world;
+          const double lift = gap + delta - side * n.dot(low - on);
+          s.follow(Transform{s.center + side * lift * n, q}, Vec3::Zero(), Vec3::Zero());
+        } else if (k % 3 == 1) {
+          const std::array<Vec3, 3> w{T.to_world(tri.a), T.to_world(tri.b), T.to_world(tri.c)};
+          const int e = k / 3 % 3;
+          const Vec3 &p = w[std::size_t(e)], &r = w[std::size_t((e + 1) % 3)],
+                     &o = w[std::size_t((e + 2) % 3)];
+          Vec3 m = (r - p).cross(n).normalized();
+          if (m.dot(o - p) > 0.0) m = -m;
+          const PosedShape body(convex_of(s), s.R, s.center);
+          const Vec3 low = body.support(-m, ShapePart::full).world;
+          const double shift = gap + delta - m.dot(low - p);
+          s.follow(Transform{s.center + shift * m, q}, Vec3::Zero(), Vec3::Zero());
+        }
+        const PosedShape body(convex_of(s), s.R, s.center);
+        const ConvexContact cc = collide(T, body, gap);
+        const bool apart = TrianglePlaneCull(mesh, s).apart(tri, gap);
+        ++samples;
+        culled += apart;
+        touching += cc.touching;
+        EXPECT_FALSE(apart && cc.touching)
+            << "kind " << int(def.type) << " sample " << k << " gap " << gap << " depth " << cc.depth;
+      }
+    }
+    // Both outcomes occur in numbers, so the property is tested where it matters.
+    EXPECT_GT(culled, samples / 5) << int(def.type);
+    EXPECT_GT(touching, samples / 20) << int(def.type);
+  }
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 
 #include "collision/body_impulses.hpp"
 #include "collision/manifold.hpp"
+#include "collision/support.hpp"
 #include "rigid/body_state.hpp"
 #include "rigid/contact_solver.hpp"
 #include "rigid/joint_solver.hpp"
@@ -186,11 +187,32 @@ inline constexpr double kSpeculativeMargin = 0.004;
 /// (m) How far short of the surface a swept body is stopped (conservative advancement's target).
 inline constexpr double kTimeOfImpactGap = 0.001;
 
-struct ConvexShape;  // collision/support.hpp
 struct Collider;     // collision/collider_impl.hpp
 /// The convex of a solid collider (sphere, box, capsule, cylinder) in its shape frame, for GJK
 /// (body_contacts.cpp); an empty sphere for planes and meshes.
 [[nodiscard]] ConvexShape convex_of(const Collider& c);
+
+struct Triangle;  // collision/bvh.hpp
+/// A solid shape (sphere, box, capsule, cylinder, hull) seen from a mesh's frame, for skipping
+/// the mesh's triangles that cannot touch it (body_contacts.cpp). A triangle's plane is a
+/// candidate separating axis (Ericson 2005, §5.2.1): when the shape's support along the
+/// triangle's normal stays farther than the gap from that plane, on either side, so does the
+/// shape from the triangle. Both poses are those of the colliders when it is built.
+class TrianglePlaneCull {
+ public:
+  TrianglePlaneCull(const Collider& mesh, const Collider& shape);
+  /// True only when the plane of `tri` (mesh frame, unit normal) keeps the shape farther than
+  /// gap (m) from the triangle, with a slack of 1e-9 m (plus 1e-9 of the shape's offset from
+  /// the mesh origin) above rounding: GJK on the pair (collide()) then reports it apart. False
+  /// for a NaN or zero normal.
+  [[nodiscard]] bool apart(const Triangle& tri, double gap) const;
+
+ private:
+  ConvexShape shape_;  // support mapping, shape frame (a hull's vertices stay the collider's)
+  Mat3 to_shape_;      // mesh frame -> shape frame (rotation)
+  Vec3 origin_;        // (m) the shape frame's origin, mesh frame
+  double slack_;
+};
 
 /// Marks BodyDynamics::fast from the velocities at the start of a step of length h and saves the
 /// start poses (body_ccd.cpp). Call before find_body_contacts.
