@@ -93,18 +93,20 @@ TEST(DynamicBodies, BoxDroppedFlatComesToRestWithoutDriftOrJitter) {
 }
 
 /// Displacement (m) along the slope of a box set on an incline of angle theta (rad) with
-/// friction mu on both sides, after T seconds.
-double incline_slide(double theta, double mu, double T) {
-  World w(def_with_step(1.0 / 240.0));
+/// friction mu (static mu_s, < 0: = mu) on both sides, after T seconds at internal step h.
+double incline_slide(double theta, double mu, double T, double mu_s = -1.0, double h = 1.0 / 240.0) {
+  World w(def_with_step(h));
   const Quat q(Eigen::AngleAxisd(theta, Vec3::UnitX()));
   const Vec3 n = q * Vec3::UnitZ();
+  Material m{0.0, mu};
+  m.static_friction = mu_s;
   BodyDef slope;
   slope.pose.rotation = q;
   slope.pose.translation = -0.5 * n;  // top face through the origin
   slope.shapes.push_back(ShapeDef::box({5.0, 5.0, 0.5}));
-  slope.shapes.back().material = {0.0, mu};
+  slope.shapes.back().material = m;
   w.add_body(slope);
-  BodyDef box = dynamic_body(ShapeDef::box({0.2, 0.2, 0.2}), (0.2 - 0.0005) * n, {0.0, mu});
+  BodyDef box = dynamic_body(ShapeDef::box({0.2, 0.2, 0.2}), (0.2 - 0.0005) * n, m);
   box.pose.rotation = q;
   const BodyHandle bh = w.add_body(box);
   const Vec3 start = w.pose(bh).translation;
@@ -115,12 +117,89 @@ double incline_slide(double theta, double mu, double T) {
 TEST(DynamicBodies, BoxOnInclineSlidesWithCoulombAccelerationOrSticks) {
   const double theta = 30.0 * std::numbers::pi / 180.0, mu = 0.2, T = 1.0;
   const double a = kG * (std::sin(theta) - mu * std::cos(theta));
-  const double s = std::abs(incline_slide(theta, mu, T));
-  // Measured 1.663 m against 1.603 m (+3.7%; semi-implicit Euler accounts for 0.4%): the box
-  // slides a little too far — an open gap in the friction of 4-point face manifolds, to find.
-  EXPECT_NEAR(s, 0.5 * a * T * T, 0.05 * 0.5 * a * T * T);
+  // Semi-implicit Euler from rest goes ½ a T² (1 + h/T). The box slides along the contact's
+  // first tangent axis: before both tangent rows were solved from the same velocities it went
+  // 1.663 m (+3.3 %), friction 7 % weak in that direction.
+  for (const double h : {1.0 / 240.0, 1.0 / 1000.0}) {
+    const double s = std::abs(incline_slide(theta, mu, T, -1.0, h));
+    RecordProperty(h > 0.002 ? "slide_rel_err_240" : "slide_rel_err_1000",
+                   std::to_string(s / (0.5 * a * T * T * (1.0 + h / T)) - 1.0));
+    EXPECT_NEAR(s, 0.5 * a * T * T * (1.0 + h / T), 0.01 * 0.5 * a * T * T) << "h = " << h;
+  }
   // tan 20° = 0.364 < 0.5: it holds.
   EXPECT_LT(std::abs(incline_slide(20.0 * std::numbers::pi / 180.0, 0.5, 2.0)), 1e-3);
+}
+
+TEST(DynamicBodies, StaticFrictionHoldsABoxUntilTanThetaExceedsItThenKineticFrictionSlidesIt) {
+  // μ = 0.3, μ_s = 0.6 (Coutinho §3.6.3): at 25° (tan 0.466) the box holds, though μ alone would
+  // let it slide 0.5 (sin - 0.3 cos) g T²; at 35° (tan 0.700) it breaks loose at once and slides
+  // with a = g (sin θ - μ cos θ), the kinetic μ. Semi-implicit Euler from rest goes
+  // ½ a T² (1 + h/T), the same at any μ.
+  const double mu = 0.3, mu_s = 0.6, T = 1.0, deg = std::numbers::pi / 180.0;
+  for (const double h : {1.0 / 240.0, 1.0 / 1000.0}) {
+    EXPECT_LT(incline_slide(25.0 * deg, mu, 2.0, mu_s, h), 1e-3) << "h = " << h;
+    const double free = incline_slide(25.0 * deg, mu, T, -1.0, h);  // μ_s = μ: it slides
+    const double a25 = kG * (std::sin(25.0 * deg) - mu * std::cos(25.0 * deg));
+    EXPECT_NEAR(free, 0.5 * a25 * T * T * (1.0 + h / T), 0.01 * 0.5 * a25 * T * T) << "h = " << h;
+    const double a35 = kG * (std::sin(35.0 * deg) - mu * std::cos(35.0 * deg));
+    const double s35 = incline_slide(35.0 * deg, mu, T, mu_s, h);
+    RecordProperty(h > 0.002 ? "slide35_rel_err_240" : "slide35_rel_err_1000",
+                   std::to_string(s35 / (0.5 * a35 * T * T * (1.0 + h / T)) - 1.0));
+    EXPECT_NEAR(s35, 0.5 * a35 * T * T * (1.0 + h / T), 0.01 * 0.5 * a35 * T * T) << "h = " << h;
+  }
+}
+
+TEST(DynamicBodies, FrictionIsTheSameInEveryDirectionOfSliding) {
+  // A box sliding under gravity tilted by 25° (μ = 0.3) along the tangent axes of its contacts
+  // and between them, on a plane and on a static box, the scene turned as a whole: every run
+  // meets a = g (sin θ - μ cos θ). Solving the tangent rows one after the other gave μ 0.281 along
+  // one axis and 0.300 along the other.
+  const double theta = 25.0 * std::numbers::pi / 180.0, mu = 0.3, h = 1.0 / 240.0;
+  const double a = kG * (std::sin(theta) - mu * std::cos(theta));
+  for (const bool plane : {true, false})
+    for (const double turn : {0.0, 0.7})
+      for (const Vec3& dir : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.6, -0.8, 0)}) {
+        World w(def_with_step(h));
+        const Quat q(Eigen::AngleAxisd(turn, Vec3(1, 2, 3).normalized()));
+        BodyDef g;
+        g.shapes.push_back(plane ? ShapeDef::plane() : ShapeDef::box({20.0, 20.0, 0.5}));
+        g.shapes.back().material = {0.0, mu};
+        g.pose.rotation = q;
+        g.pose.translation = plane ? Vec3::Zero() : Vec3(q * Vec3(0.0, 0.0, -0.5));
+        w.add_body(g);
+        BodyDef b = dynamic_body(ShapeDef::box({0.2, 0.2, 0.2}), q * Vec3(0.0, 0.0, 0.1995), {0.0, mu});
+        b.pose.rotation = q;
+        b.gravity = q * (kG * std::sin(theta) * dir + Vec3(0.0, 0.0, -kG * std::cos(theta)));
+        const BodyHandle bh = w.add_body(b);
+        auto along = [&](const Vec3& x) { return (q.conjugate() * x).dot(dir); };
+        for (int i = 0; i < 15; ++i) w.advance(1.0 / 60.0);
+        const double x0 = along(w.pose(bh).translation), v0 = along(w.velocity(bh).first), T = 0.75;
+        for (int i = 0; i < 45; ++i) w.advance(1.0 / 60.0);
+        const double s = along(w.pose(bh).translation) - x0 - v0 * T;
+        EXPECT_NEAR(s, 0.5 * a * T * T * (1.0 + h / T), 0.002 * 0.5 * a * T * T)
+            << "plane " << plane << " turn " << turn << " dir " << dir.transpose();
+      }
+}
+
+TEST(DynamicBodies, ABoxPushedAlongTheFloorStopsAtTheKineticFrictionDistance) {
+  // v0 = 2 m/s with μ = 0.3, μ_s = 0.6: it decelerates at μ g and stops after v0² / (2 μ g)
+  // = 0.680 m (μ_s would stop it at 0.340 m), then stays put.
+  const double mu = 0.3, mu_s = 0.6, v0 = 2.0;
+  for (const double h : {1.0 / 240.0, 1.0 / 1000.0}) {
+    World w(def_with_step(h));
+    Material m{0.0, mu};
+    m.static_friction = mu_s;
+    w.add_body(ground_plane(m));
+    BodyDef b = dynamic_body(ShapeDef::box({0.2, 0.2, 0.2}), {0.0, 0.0, 0.2}, m);
+    b.linear_velocity = {v0, 0.0, 0.0};
+    const BodyHandle bh = w.add_body(b);
+    for (int i = 0; i < 60; ++i) w.advance(1.0 / 60.0);
+    const double x1 = w.pose(bh).translation.x();
+    for (int i = 0; i < 60; ++i) w.advance(1.0 / 60.0);
+    const double stop = v0 * v0 / (2.0 * mu * kG);
+    EXPECT_NEAR(x1, stop, 0.02 * stop) << "h = " << h;
+    EXPECT_NEAR(w.pose(bh).translation.x(), x1, 1e-6) << "h = " << h;
+  }
 }
 
 TEST(DynamicBodies, StackOfFourBoxesStandsFiveSeconds) {
@@ -297,6 +376,141 @@ TEST(DynamicBodies, DynamicMeshesAndPlanesAndBadDensitiesAreRejected) {
     EXPECT_NE(std::string(e.what()).find("BodyDef.shapes[0].density must be > 0"), std::string::npos);
   }
   EXPECT_TRUE(w.colliders().empty());  // nothing half-registered
+}
+
+// ---------------------------------------------------------------------------------------------
+// Issue 12's closed forms for bodies on an incline and in stacks (Coutinho §4.8).
+
+/// A static slope of angle theta (rad) about x, its top face through the origin: uphill is +y.
+struct Incline {
+  Quat q;
+  Vec3 n;     ///< unit normal of the top face
+  Vec3 down;  ///< unit, downhill along the face
+};
+Incline add_incline(World& w, double theta, const Material& m) {
+  Incline s{Quat(Eigen::AngleAxisd(theta, Vec3::UnitX())), Vec3::Zero(), Vec3::Zero()};
+  s.n = s.q * Vec3::UnitZ();
+  s.down = -(s.q * Vec3::UnitY());
+  BodyDef slope;
+  slope.pose.rotation = s.q;
+  slope.pose.translation = -0.5 * s.n;
+  slope.shapes.push_back(ShapeDef::box({20.0, 20.0, 0.5}));
+  slope.shapes.back().material = m;
+  w.add_body(slope);
+  return s;
+}
+
+TEST(DynamicBodies, SphereRollsWithoutSlippingAtFiveSeventhsGSinTheta) {
+  // A solid sphere rolling without slipping: a = (5/7) g sin θ, needing μ >= (2/7) tan θ (0.104
+  // at 20°; μ = 0.5 here); its spin ω r equals its speed. Semi-implicit Euler from rest goes
+  // ½ a T² (1 + h/T).
+  const double theta = 20.0 * std::numbers::pi / 180.0, r = 0.1, T = 1.0;
+  const double a = 5.0 / 7.0 * kG * std::sin(theta);
+  for (const int substeps : {1, 4})
+    for (const double h : {1.0 / 240.0, 1.0 / 1000.0}) {
+      if (substeps > 1 && h < 0.002) continue;  // the soft step runs at 1/60 s
+      WorldDef d = def_with_step(substeps > 1 ? 1.0 / 60.0 : h);
+      d.body_substeps = substeps;
+      d.allow_sleeping = false;
+      World w(d);
+      const Incline s = add_incline(w, theta, {0.0, 0.5});
+      const BodyHandle ball = w.add_body(dynamic_body(ShapeDef::sphere(r), r * s.n, {0.0, 0.5}));
+      for (int i = 0; i < 60; ++i) w.advance(1.0 / 60.0);
+      const Vec3 x = w.pose(ball).translation - r * s.n;
+      const auto [v, omega] = w.velocity(ball);
+      const double hh = substeps > 1 ? 1.0 / 240.0 : h;  // the substep
+      const double expect = 0.5 * a * T * T * (1.0 + hh / T);
+      const std::string at = "substeps " + std::to_string(substeps) + ", h = " + std::to_string(h);
+      EXPECT_NEAR(x.dot(s.down), expect, 0.01 * expect) << at;
+      EXPECT_NEAR(v.dot(s.down), a * T, 0.01 * a * T) << at;
+      // Rolling: the contact point is at rest, ω × (-r n) + v = 0, so ω r = |v| about n × down.
+      EXPECT_NEAR(omega.dot(s.n.cross(s.down)) * r, v.dot(s.down), 0.01 * a * T) << at;
+      // On the slope. The soft step tracks a contact's separation from anchors fixed in the
+      // bodies for the whole 1/60 s step, so a ball turning 0.4 rad in it sinks (2.5 mm here at
+      // 2.4 m/s; README's known limits): recorded, not asserted.
+      if (substeps == 1)
+        EXPECT_NEAR(x.dot(s.n), 0.0, 1.1e-3) << at;  // at most the slop
+      else
+        RecordProperty("soft_step_sink_m", std::to_string(-x.dot(s.n)));
+    }
+}
+
+/// Largest tilt (rad) over T seconds of a box of half extents (0.1 along the slope, 0.3 up) set
+/// on a slope of angle theta with μ = 1.5 (it cannot slide below 56°).
+double box_tilt_on_slope(double theta, double T, int substeps = 1) {
+  WorldDef d = def_with_step(substeps > 1 ? 1.0 / 60.0 : 1.0 / 240.0);
+  d.body_substeps = substeps;
+  d.allow_sleeping = false;
+  World w(d);
+  const Incline s = add_incline(w, theta, {0.0, 1.5});
+  BodyDef b = dynamic_body(ShapeDef::box({0.3, 0.1, 0.3}), 0.3 * s.n, {0.0, 1.5});
+  b.pose.rotation = s.q;
+  const BodyHandle bh = w.add_body(b);
+  double tilt = 0.0;
+  for (int i = 0; i < int(std::lround(T * 60.0)); ++i) {
+    w.advance(1.0 / 60.0);
+    const Vec3 up = w.pose(bh).rotation * Vec3::UnitZ();
+    tilt = std::max(tilt, std::acos(std::clamp(up.dot(s.n), -1.0, 1.0)));
+  }
+  return tilt;
+}
+
+TEST(DynamicBodies, BoxTipsOverItsDownhillEdgeOnlyPastTheAngleOfItsGeometry) {
+  // The centre of mass passes over the downhill edge when tan θ > half-width / half-height =
+  // 0.1 / 0.3: θ_c = 18.43°. 1.5° below it the box stands (it rocks by at most 1° as its
+  // contact settles: 0.64° with the soft step); 1.5° above it tips over (past 45°).
+  const double deg = std::numbers::pi / 180.0, critical = std::atan(0.1 / 0.3);
+  for (const int substeps : {1, 4}) {
+    EXPECT_LT(box_tilt_on_slope(critical - 1.5 * deg, 3.0, substeps), 1.0 * deg) << substeps;
+    EXPECT_GT(box_tilt_on_slope(critical + 1.5 * deg, 3.0, substeps), 45.0 * deg) << substeps;
+  }
+}
+
+TEST(DynamicBodies, StackOfTenBoxesStandsTenSecondsAwake) {
+  // Ten 0.5 m boxes set 1 cm apart fall onto each other and settle; with sleeping off (nothing
+  // helps it stand) the top box stays within 1 cm of where it rests, at 1/240 and 1/1000 s.
+  for (const double h : {1.0 / 240.0, 1.0 / 1000.0}) {
+    WorldDef d = def_with_step(h);
+    d.allow_sleeping = false;
+    World w(d);
+    w.add_body(ground_plane());
+    const double half = 0.25;
+    std::vector<BodyHandle> boxes;
+    for (int k = 0; k < 10; ++k)
+      boxes.push_back(w.add_body(
+          dynamic_body(ShapeDef::box({half, half, half}), {0.0, 0.0, (half + 0.005) * (2 * k + 1)})));
+    for (int i = 0; i < 600; ++i) w.advance(1.0 / 60.0);
+    const Vec3 top = w.pose(boxes.back()).translation;
+    RecordProperty(h > 0.002 ? "top_drift_m_240" : "top_drift_m_1000",
+                   std::to_string((top - Vec3(0.0, 0.0, 19 * half)).norm()));
+    EXPECT_LT((top - Vec3(0.0, 0.0, 19 * half)).norm(), 0.01) << "h = " << h;
+  }
+}
+
+TEST(DynamicBodies, PyramidOfTwentyRowsStandsTenSeconds) {
+  // bench_bodies' pyramid: 210 boxes of 0.5 m in 20 rows, columns 2 cm apart, on the ground;
+  // 10 s at the default step and with the soft step, sleeping off. Every box stays within 2 cm
+  // of where it was set (rows sit exactly on each other), and the top box within 1 cm.
+  for (const int substeps : {1, 4}) {
+    WorldDef d = def_with_step(substeps > 1 ? 1.0 / 60.0 : 1.0 / 240.0);
+    d.body_substeps = substeps;
+    d.allow_sleeping = false;
+    World w(d);
+    w.add_body(ground_plane());
+    std::vector<std::pair<BodyHandle, Vec3>> boxes;
+    for (int row = 0; row < 20; ++row)
+      for (int c = 0; c < 20 - row; ++c) {
+        const Vec3 p((c - 0.5 * (19 - row)) * 0.52, 0.0, 0.25 + 0.5 * row);
+        boxes.emplace_back(w.add_body(dynamic_body(ShapeDef::box({0.25, 0.25, 0.25}), p)), p);
+      }
+    for (int i = 0; i < 600; ++i) w.advance(1.0 / 60.0);
+    double worst = 0.0;
+    for (const auto& [bh, p] : boxes) worst = std::max(worst, (w.pose(bh).translation - p).norm());
+    const double top = (w.pose(boxes.back().first).translation - boxes.back().second).norm();
+    RecordProperty(substeps > 1 ? "soft_top_drift_m" : "top_drift_m", std::to_string(top));
+    EXPECT_LT(worst, 0.02) << "substeps " << substeps;
+    EXPECT_LT(top, 0.01) << "substeps " << substeps;
+  }
 }
 
 }  // namespace

@@ -80,6 +80,34 @@ TEST(SoftStep, BoxOnTiltedGravitySlidesWithCoulombAccelerationOrSticks) {
   EXPECT_LT(std::abs(slide(20.0 * std::numbers::pi / 180.0, 0.5, 2.0).first), 1e-3);
 }
 
+TEST(SoftStep, StaticFrictionHoldsUntilTanThetaExceedsItThenKineticFrictionSlides) {
+  // μ = 0.3, μ_s = 0.6 under gravity tilted by θ: holds at 25° (tan 0.466); at 35° (tan 0.700)
+  // it breaks loose and, once sliding, moves with a = g (sin θ - μ cos θ) within 1 % (measured
+  // from 0.25 s on: the soft step decides sticking once per step, so breaking loose lags by up
+  // to a step, and it starts 0.5 mm into the floor). Set exactly on the floor, a box falls
+  // freely for the first step (that contact is found a step late) and lands slipping.
+  auto slide = [](double theta, double mu, double mu_s, double T) {
+    World w(soft_def(4, false));
+    Material m{0.0, mu};
+    m.static_friction = mu_s;
+    w.add_body(ground_plane(m));
+    BodyDef b = dynamic_body(ShapeDef::box({0.2, 0.2, 0.2}), {0.0, 0.0, 0.1995}, m);
+    b.gravity = Vec3(kG * std::sin(theta), 0.0, -kG * std::cos(theta));
+    const BodyHandle h = w.add_body(b);
+    for (int i = 0; i < 15; ++i) w.advance(kFrame);
+    const double x0 = w.pose(h).translation.x(), v0 = w.velocity(h).first.x();
+    for (int i = 0; i < int(std::lround(T / kFrame)); ++i) w.advance(kFrame);
+    return std::pair{w.pose(h).translation.x(), w.pose(h).translation.x() - x0 - v0 * T};
+  };
+  const double deg = std::numbers::pi / 180.0, mu = 0.3, T = 1.0;
+  EXPECT_LT(std::abs(slide(25.0 * deg, mu, 0.6, 2.0).first), 1e-3);
+  EXPECT_GT(slide(25.0 * deg, mu, -1.0, T).first, 0.1);  // μ_s = μ = 0.3 < tan 25°: it slides
+  const double a = kG * (std::sin(35.0 * deg) - mu * std::cos(35.0 * deg));
+  const double s = slide(35.0 * deg, mu, 0.6, T).second;
+  RecordProperty("slide35_relative_error", std::to_string(s / (0.5 * a * T * T) - 1.0));
+  EXPECT_NEAR(s, 0.5 * a * T * T, 0.01 * 0.5 * a * T * T);
+}
+
 TEST(SoftStep, SphereBouncesToESquaredH) {
   const double e = 0.8, r = 0.1, drop = 1.0;
   World w(soft_def(4, false));

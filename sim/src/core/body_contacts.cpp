@@ -236,9 +236,11 @@ class Builder {
     if (it != d_.previous.end() && it->key == k) warm_start(it->manifold, m);
     const Material& ma = w_.shapes[a].material;
     const Material& mb = w_.shapes[b].material;
-    // Box2D's mixing: the bouncier side wins, friction is the geometric mean.
+    // Box2D's mixing: the bouncier side wins, friction is the geometric mean (static friction
+    // too, each side's μ_s defaulting to its μ).
     const double e = std::max(ma.restitution, mb.restitution);
     const double mu = std::sqrt(ma.friction * mb.friction);
+    const double mu_s = std::sqrt(ma.static_mu() * mb.static_mu());
     BodyManifold bm{k, m, rigid(a), rigid(b), std::uint32_t(d_.points.size())};
     Vec3 t1, t2;
     tangent_basis(m.normal, t1, t2);
@@ -252,6 +254,7 @@ class Builder {
       c.depth = -p.separation;
       c.restitution = e;
       c.friction = mu;
+      c.static_friction = mu_s;
       c.normal_impulse = p.normal_impulse;
       c.tangent_impulse[0] = p.tangent_impulse.dot(t1);
       c.tangent_impulse[1] = p.tangent_impulse.dot(t2);

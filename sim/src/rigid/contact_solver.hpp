@@ -10,10 +10,21 @@
 // on b and -λ n on a. Either body may be kStaticBody (infinite mass, not in RigidBodies).
 //
 // Choices (and why):
-// - Friction: the circular Coulomb cone. Each step solves the two tangent directions one after
-//   the other, then scales the accumulated tangent 2-vector back onto the disc of radius μ λ_n
-//   (Jolt's ContactConstraintManager does the same). A two-direction pyramid would be simpler
-//   but makes sliding friction depend on the direction of sliding relative to the tangent axes.
+// - Friction (sequential impulses; the soft step's differs, see solve_soft): the circular Coulomb
+//   cone, both tangent rows of a contact solved together from the same velocities: the pair that stops the slip (the whole 2×2 tangent block inverted) when it
+//   lies in the disc of radius μ λ_n (sticking), else a pair on the disc's rim along p - m̄ v_t
+//   with one mass m̄ = 2 / trace K_t for both rows (sliding), which settles against the slip
+//   itself whatever the tangent basis. Solving t1 then t2 with their own masses (the former
+//   rule) made friction anisotropic: sliding along t1 off a box's corners met 6-7 % less of it.
+// - Static and kinetic friction (Coulomb's two coefficients, Coutinho §3.6.3; PhysX's static and
+//   dynamic friction): a contact whose slip (tangential relative speed) at the step's start is
+//   at most stick_speed sticks for the step, its disc of radius μ_s λ_n; one slipping faster
+//   slides on the disc of μ λ_n. The decision is per step, not per sweep: within the sweeps a
+//   point's share of a sticking patch's friction can pass its own μ_s λ_n on the way to an
+//   answer that sticks, so breaking loose there let boxes slide that hold. A body that can no
+//   longer stick moves on at g (sin θ - μ_s cos θ) for the step or steps until its slip passes
+//   stick_speed, then slides at g (sin θ - μ cos θ); one slowing down sticks once its slip is
+//   below stick_speed. With μ_s = μ nothing changes.
 // - Restitution: from the relative normal velocity recorded by prepare(), which runs before
 //   the velocity integration, so a resting contact does not see the step's gravity as an impact;
 //   only above `restitution_threshold` (resting contact, Coutinho §3.6.3).
@@ -57,7 +68,8 @@ struct ContactPoint {
   Vec3 normal = Vec3::UnitZ();         ///< unit, world, from a to b
   double depth = 0.0;                  ///< (m) penetration along the normal (> 0), or -gap
   double restitution = 0.0;            ///< e in [0, 1]
-  double friction = 0.0;               ///< Coulomb μ >= 0 (static = dynamic)
+  double friction = 0.0;               ///< Coulomb μ >= 0 of sliding (kinetic)
+  double static_friction = -1.0;       ///< μ_s of sticking; < 0 or below μ: = friction
   double normal_impulse = 0.0;         ///< (N s) accumulated, >= 0: warm start in, result out
   double tangent_impulse[2] = {0.0, 0.0};  ///< (N s) along tangent_basis(normal): in and out
 };
@@ -72,6 +84,8 @@ struct ContactSolverSettings {
   /// (m/s) restitution only for approach speeds above this (resting contact below it).
   double restitution_threshold = 0.5;
   double slop = 0.001;       ///< (m) penetration left alone (keeps contacts alive, no jitter)
+  /// (m/s) slip at the step's start up to which a contact sticks (static friction μ_s).
+  double stick_speed = 1e-3;
   double split_beta = 0.2;   ///< fraction of penetration beyond slop removed per step, (0, 1]
   bool warm_start = true;    ///< apply the cached impulses before iterating
   // Soft step (solve_soft and friends; Catto 2024, Box2D v3's solver):
@@ -82,6 +96,10 @@ struct ContactSolverSettings {
   double damping_ratio = 10.0;    ///< ζ of the soft contact (heavily over-damped: no bounce from the push)
   double max_push_speed = 3.0;    ///< (m/s) largest speed at which overlap is pushed out
   double soft_slop = 0.0;         ///< (m) overlap the soft step leaves alone
+  /// (m/s) stick_speed of the soft step, decided once per step at its start: its three sweeps
+  /// per substep leave a sticking contact slipping at up to a few mm/s. A body breaking loose
+  /// slides with μ_s for at most that step (its last substeps' clamp was too noisy to go by).
+  double soft_stick_speed = 0.01;
   int substep_iterations = 2;     ///< biased sweeps per substep
   int relax_iterations = 1;       ///< unbiased sweeps per substep
 };
@@ -164,7 +182,11 @@ class ContactSolver {
     Axis n, t1, t2;
     double target_vn;        ///< (m/s) the normal velocity to reach: -e v_n⁻ or 0
     double target_bias;      ///< (m/s) pseudo-velocity to reach: β (depth - slop)/h or 0
-    double friction;
+    double sticking_mass[3]; ///< (kg) K_t⁻¹ of the 2×2 tangent block: [0] [1]; [1] [2]
+    double sliding_mass;     ///< (kg) 2 / trace K_t
+    double friction;         ///< μ (kinetic)
+    double static_friction;  ///< μ_s >= μ
+    bool sliding;            ///< slipping at the step's start: bounded by μ, not μ_s
     double bias_impulse;     ///< accumulated split impulse (N s), >= 0
   };
   /// A contact's soft-step data: lever arms at the step's start and the separation they give.

@@ -59,8 +59,10 @@ struct Material {
 
   double restitution = 0.5;  ///< coefficient of restitution e in [0, 1]: v_n' = -e v_n
   double friction = 0.3;     ///< dynamic Coulomb friction coefficient mu_d >= 0
-  /// Static Coulomb coefficient mu_s >= 0 for a resting contact that is not sliding: it holds a
-  /// particle on an incline of angle theta when mu_s >= tan theta. Negative: equal to `friction`.
+  /// Static Coulomb coefficient mu_s >= 0 for a contact that is not sliding: it holds a particle
+  /// or a body on an incline of angle theta when mu_s >= tan theta; once broken loose it slides
+  /// with `friction` (Coutinho §3.6.3). Negative: equal to `friction`. Body contacts take the
+  /// geometric mean of both sides' mu_s, and never less than their mixed `friction`.
   double static_friction = -1.0;
   HitAction on_hit = HitAction::bounce;
   SplitOnHit split;          ///< used when on_hit == split
