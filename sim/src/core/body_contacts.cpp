@@ -61,6 +61,11 @@ ConvexShape convex_of(const Collider& c) {
 
 namespace {
 
+/// (m) The radius of a sphere or capsule (its surface turns about its centre or segment), else 0.
+double round_radius(const Collider& c) {
+  return c.shape == Collider::Shape::sphere || c.shape == Collider::Shape::capsule ? c.radius : 0.0;
+}
+
 PosedShape posed(const Collider& c) { return {convex_of(c), c.R, c.center}; }
 
 /// Where each shape belongs: its body's dense index and its index within the body.
@@ -255,6 +260,8 @@ class Builder {
       c.restitution = e;
       c.friction = mu;
       c.static_friction = mu_s;
+      c.round_a = round_radius(w_.shapes[a]);
+      c.round_b = round_radius(w_.shapes[b]);
       c.normal_impulse = p.normal_impulse;
       c.tangent_impulse[0] = p.tangent_impulse.dot(t1);
       c.tangent_impulse[1] = p.tangent_impulse.dot(t2);

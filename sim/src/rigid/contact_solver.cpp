@@ -270,6 +270,10 @@ void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const Cont
     SoftRow& s = soft_[k];
     s.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - bodies.position[c.body_a]);
     s.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - bodies.position[c.body_b]);
+    // A round side's surface point under the contact is its centre -/+ radius along n: that
+    // centre turns with the body, the point does not (0 · n leaves other shapes' arms as they are).
+    s.turn_a = s.ra - c.round_a * c.normal;
+    s.turn_b = s.rb + c.round_b * c.normal;
     s.separation = -c.depth;
     s.current = s.separation;
     s.restitution = c.restitution;
@@ -308,8 +312,8 @@ void ContactSolver::track_separations(const RigidBodies& bodies) {
     const Row& r = rows_[k];
     SoftRow& s = soft_[k];
     Vec3 d = Vec3::Zero();
-    if (r.move_b) d += moved_x_[r.b] + turned_[r.b] * s.rb;
-    if (r.move_a) d -= moved_x_[r.a] + turned_[r.a] * s.ra;
+    if (r.move_b) d += moved_x_[r.b] + turned_[r.b] * s.turn_b;
+    if (r.move_a) d -= moved_x_[r.a] + turned_[r.a] * s.turn_a;
     s.current = s.separation + d.dot(r.n.d);
   }
 }

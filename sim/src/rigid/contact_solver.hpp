@@ -70,6 +70,10 @@ struct ContactPoint {
   double restitution = 0.0;            ///< e in [0, 1]
   double friction = 0.0;               ///< Coulomb μ >= 0 of sliding (kinetic)
   double static_friction = -1.0;       ///< μ_s of sticking; < 0 or below μ: = friction
+  /// (m) Radius of a round side (sphere, capsule; 0 otherwise): its surface point under the
+  /// contact stays below its centre (or segment) as it turns, so the soft step tracks that
+  /// centre, not a point fixed in the body (a ball rolling down a slope sank otherwise).
+  double round_a = 0.0, round_b = 0.0;
   double normal_impulse = 0.0;         ///< (N s) accumulated, >= 0: warm start in, result out
   double tangent_impulse[2] = {0.0, 0.0};  ///< (N s) along tangent_basis(normal): in and out
 };
@@ -192,6 +196,7 @@ class ContactSolver {
   /// A contact's soft-step data: lever arms at the step's start and the separation they give.
   struct SoftRow {
     Vec3 ra, rb;             ///< (m) contact point - centre of mass of a, b (zero for static)
+    Vec3 turn_a, turn_b;     ///< (m) the point of a, b that turns with it: ra, rb, or a round side's centre
     double separation;       ///< (m) -depth at the step's start
     double current;          ///< (m) separation at the bodies' current poses (track_separations)
     double restitution;      ///< e
