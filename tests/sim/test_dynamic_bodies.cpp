@@ -400,6 +400,45 @@ Incline add_incline(World& w, double theta, const Material& m) {
   return s;
 }
 
+TEST(DynamicBodies, ABoxSetExactlyOnASlopeHoldsByStaticFrictionFromTheFirstStep) {
+  // A user sets a crate on a ramp by computing its pose: its bottom face then lies on the ramp's
+  // top to rounding (separations of +-1e-17 m), and the solver's first step rocks it by ~1e-7 m.
+  // With contacts kept only at separation <= 0, the corners with a positive one were dropped in
+  // that first step: the crate fell freely for a step, met the ramp with 17 mm/s of slip, and a
+  // slipping contact is bounded by the kinetic mu = 0.3 < tan 25 deg, so it slid 3.4 m in 2 s
+  // though mu_s = 0.6 holds it. Contacts within kBodyContactMargin (1 um) now count from the first
+  // step. Several step sizes, the soft step, and the crate turned about the ramp's normal.
+  const double deg = std::numbers::pi / 180.0;
+  Material m{0.0, 0.3};
+  m.static_friction = 0.6;
+  struct Case { double h; int substeps; double yaw_deg; };
+  for (const Case c : {Case{1.0 / 60.0, 1, 0.0}, Case{1.0 / 240.0, 1, 0.0}, Case{1.0 / 1000.0, 1, 0.0},
+                       Case{1.0 / 240.0, 1, 30.0}, Case{1.0 / 60.0, 4, 0.0}, Case{1.0 / 60.0, 4, 30.0}}) {
+    WorldDef d = def_with_step(c.h);
+    d.body_substeps = c.substeps;
+    d.allow_sleeping = false;
+    World w(d);
+    const Incline s = add_incline(w, 25.0 * deg, m);
+    BodyDef box = dynamic_body(ShapeDef::box({0.2, 0.2, 0.2}), 0.2 * s.n, m);
+    box.pose.rotation = s.q * Quat(Eigen::AngleAxisd(c.yaw_deg * deg, Vec3::UnitZ()));
+    const BodyHandle bh = w.add_body(box);
+    const Vec3 start = w.pose(bh).translation;
+    const auto along = [&] {
+      const Vec3 moved = w.pose(bh).translation - start;
+      return (moved - moved.dot(s.n) * s.n).norm();
+    };
+    for (int i = 0; i < 60; ++i) w.advance(1.0 / 60.0);
+    const double at_1s = along();
+    for (int i = 0; i < 60; ++i) w.advance(1.0 / 60.0);
+    // Along the slope: sequential impulses hold it to ~0.2 um; the soft step's compliant contacts
+    // settle ~0.06 mm in the first 0.3 s (as far into the ramp), then hold. No creep after 1 s.
+    EXPECT_LT(along(), c.substeps > 1 ? 1e-4 : 1e-5)
+        << "h = " << c.h << ", substeps " << c.substeps << ", yaw " << c.yaw_deg << " deg";
+    EXPECT_LT(std::abs(along() - at_1s), 1e-7)
+        << "h = " << c.h << ", substeps " << c.substeps << ", yaw " << c.yaw_deg << " deg";
+  }
+}
+
 TEST(DynamicBodies, SphereRollsWithoutSlippingAtFiveSeventhsGSinTheta) {
   // A solid sphere rolling without slipping: a = (5/7) g sin θ, needing μ >= (2/7) tan θ (0.104
   // at 20°; μ = 0.5 here); its spin ω r equals its speed. Semi-implicit Euler from rest goes

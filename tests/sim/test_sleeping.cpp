@@ -61,15 +61,27 @@ TEST(Sleeping, AStackAtRestFallsAsleepAsOneIslandAndStopsExactly) {
   EXPECT_NEAR(top.z(), 0.25 + 0.5 * 4, 0.01);
 }
 
-TEST(Sleeping, WithoutSleepingTheSameStackStaysAwakeAndWithinAMillimetre) {
+TEST(Sleeping, WithoutSleepingTheSameStackStaysAwakeAndWithinAFewMillimetres) {
+  // At 1/60 s the sequential impulses leave this stack swaying sideways by a few mm while it
+  // settles (its top box moves < 0.1 mm per frame after 3 s, < 1 um after 8 s); sleeping freezes
+  // one moment of that sway. So the two stacks agree to the sway's size (2 mm at the top with
+  // contacts kept to 1 mm while touching; 1 mm when corners were dropped at zero separation),
+  // not to the solver's tolerance, and the awake stack comes to rest by itself.
   Stack awake(false), asleep(true);
   awake.run(3.0);
   asleep.run(3.0);
   for (std::size_t k = 0; k < awake.boxes.size(); ++k) {
     EXPECT_TRUE(awake.world.is_awake(awake.boxes[k]));
     EXPECT_LT((awake.world.pose(awake.boxes[k]).translation -
-               asleep.world.pose(asleep.boxes[k]).translation).norm(), 1e-3);
+               asleep.world.pose(asleep.boxes[k]).translation).norm(), 3e-3);
   }
+  awake.run(6.0);
+  const Vec3 top = awake.world.pose(awake.boxes.back()).translation;
+  awake.run(1.0 / 60.0);
+  EXPECT_LT((awake.world.pose(awake.boxes.back()).translation - top).norm(), 1e-5)
+      << "the awake stack settles";
+  EXPECT_NEAR(top.z(), 0.25 + 0.5 * 4, 0.01);
+  EXPECT_LT(std::hypot(top.x(), top.y()), 0.01);
 }
 
 TEST(Sleeping, ABoxDroppedOnASleepingStackWakesItWhole) {

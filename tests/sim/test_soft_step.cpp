@@ -84,8 +84,8 @@ TEST(SoftStep, StaticFrictionHoldsUntilTanThetaExceedsItThenKineticFrictionSlide
   // μ = 0.3, μ_s = 0.6 under gravity tilted by θ: holds at 25° (tan 0.466); at 35° (tan 0.700)
   // it breaks loose and, once sliding, moves with a = g (sin θ - μ cos θ) within 1 % (measured
   // from 0.25 s on: the soft step decides sticking once per step, so breaking loose lags by up
-  // to a step, and it starts 0.5 mm into the floor). Set exactly on the floor, a box falls
-  // freely for the first step (that contact is found a step late) and lands slipping.
+  // to a step, and it starts 0.5 mm into the floor). Set exactly on a slope it
+  // holds too (DynamicBodies.ABoxSetExactlyOnASlope...).
   auto slide = [](double theta, double mu, double mu_s, double T) {
     World w(soft_def(4, false));
     Material m{0.0, mu};

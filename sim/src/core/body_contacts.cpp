@@ -110,6 +110,24 @@ class Builder {
     };
     return fast(a) || fast(b) ? kSpeculativeMargin : kBodyContactMargin;
   }
+  /// The margin of pair key k of shapes a, b: a pair that touched in the previous step keeps its
+  /// points up to kKeptContactMargin.
+  [[nodiscard]] double margin(std::uint32_t a, std::uint32_t b, const PairKey& k) const {
+    const double m = margin(a, b);
+    return m < kKeptContactMargin && had_manifold(k) ? kKeptContactMargin : m;
+  }
+  [[nodiscard]] bool had_manifold(const PairKey& k) const {
+    const auto it = std::lower_bound(d_.previous.begin(), d_.previous.end(), k,
+                                     [](const BodyManifold& x, const PairKey& y) { return x.key < y; });
+    if (it == d_.previous.end() || it->key != k) return false;
+    // Only a pair that carried load: pairs that merely came within the margin (Newton's
+    // cradle's hanging balls after a collision passed) would otherwise keep speculative points
+    // for as long as they stay that close, and the next impact would be solved through the
+    // whole chain at once instead of ball by ball.
+    for (int i = 0; i < it->manifold.count; ++i)
+      if (it->manifold.points[i].normal_impulse > 0.0) return true;
+    return false;
+  }
   [[nodiscard]] bool frozen(std::uint32_t rigid) const {
     return rigid == kStaticBody || d_.rigid.asleep[rigid] ||
            (!d_.rigid.is_dynamic(rigid) && d_.rigid.linear_velocity[rigid].isZero(0.0) &&
@@ -145,9 +163,8 @@ class Builder {
       if (plane.shape != Collider::Shape::plane) continue;
       for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
         if (!dynamic(s) || !active(s) || no_collide(d_, owner_[p].body, owner_[s].body)) continue;
-        add(key(p, s, 0), collide_plane(plane.point, plane.normal, posed(w_.shapes[s]),
-                                        margin(p, s)),
-            p, s);
+        const PairKey k = key(p, s, 0);
+        add(k, collide_plane(plane.point, plane.normal, posed(w_.shapes[s]), margin(p, s, k)), p, s);
       }
     }
   }
@@ -188,8 +205,9 @@ class Builder {
     if (A.shape == Collider::Shape::mesh && !A.hull) return mesh(a, b);
     if (B.shape == Collider::Shape::mesh && !B.hull) return mesh(b, a);
     ManifoldOptions options;
-    options.margin = margin(a, b);
-    add(key(a, b, 0),
+    const PairKey k = key(a, b, 0);
+    options.margin = margin(a, b, k);
+    add(k,
         collide_manifold(posed(A), posed(B), options, A.hull ? &A.hull->faces : nullptr,
                          B.hull ? &B.hull->faces : nullptr),
         a, b);
@@ -199,7 +217,7 @@ class Builder {
     const Collider& M = w_.shapes[m];
     const Collider& S = w_.shapes[s];
     const PosedShape body = posed(S);
-    const double gap = margin(m, s);
+    const double new_gap = margin(m, s);
     // The convex's box in the mesh frame (a box around the rotated box).
     const Mat3 Rt = M.R.transpose();
     const Vec3 c = Rt * (S.aabb_center - M.center);
@@ -210,6 +228,8 @@ class Builder {
     const TrianglePlaneCull cull(M, S);
     M.mesh->bvh.query(c - half, c + half, [&](std::uint32_t t) {
       const Triangle& tri = M.mesh->triangles[t];
+      const PairKey k = key(m, s, t + 1);
+      const double gap = new_gap < kKeptContactMargin && had_manifold(k) ? kKeptContactMargin : new_gap;
       if (cull.apart(tri, gap)) return;
       const std::array<Vec3, 3> local{tri.a, tri.b, tri.c};
       const PosedShape T(ConvexShape::hull(local), M.R, M.center);
@@ -229,7 +249,7 @@ class Builder {
         man = collide_plane(wv[0], along > 0.0 ? n : Vec3(-n), body, gap, wv.data());
       }
       if (man.count == 0) man = manifold_from_contact(cc);
-      add(key(m, s, t + 1), man, m, s);
+      add(k, man, m, s);
     });
   }
 

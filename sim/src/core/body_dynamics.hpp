@@ -175,9 +175,19 @@ void apply_coupling(WorldState& w, double t0, double t1);
 /// non-zero force from a field over [t0, t1] (Box2D wakes a body a force is applied to).
 void wake_coupled(WorldState& w, double t0, double t1);
 
-/// (m) Contact margin: pairs closer than this give (speculative) points. Kept at zero-ish so
-/// restitution sees the true impact speed (a speculative point would slow the body first).
-inline constexpr double kBodyContactMargin = 0.0;
+/// (m) Contact margin of a new pair: pairs closer than this give (speculative) points. Kept
+/// small so restitution sees the true impact speed (a speculative point would slow the body
+/// first), but above zero: a body set on a surface by computing its pose lies on it only to
+/// rounding (separations of +-1e-17 m), and at exactly zero some of its corners were dropped.
+inline constexpr double kBodyContactMargin = 1e-6;
+/// (m) Contact margin of a pair that had a manifold in the previous step (a persistent contact;
+/// Bullet's contact breaking threshold plays this part). The solver leaves a resting body rocking
+/// by a few um (~1e-6 m at 1/60 s from its unconverged first step), and a corner dropped for it
+/// let the body fall freely for a step: it met the surface again slipping, and a slipping contact
+/// is bounded by the kinetic mu, so a crate that static friction holds on a ramp slid off. A kept
+/// point beyond contact is speculative (contact_solver.hpp): it only limits the approach to the
+/// gap, so it neither holds the body back nor pulls it.
+inline constexpr double kKeptContactMargin = 0.001;
 
 /// (m) Contact margin of a pair with a fast body (BodyDynamics::fast): a body stopped at its
 /// time of impact kTimeOfImpactGap short of a surface meets it in the next step's contacts as a
