@@ -153,13 +153,18 @@ TEST(DynamicBodies, FrictionIsTheSameInEveryDirectionOfSliding) {
   // A box sliding under gravity tilted by 25° (μ = 0.3) along the tangent axes of its contacts
   // and between them, on a plane and on a static box, the scene turned as a whole: every run
   // meets a = g (sin θ - μ cos θ). Solving the tangent rows one after the other gave μ 0.281 along
-  // one axis and 0.300 along the other.
+  // one axis and 0.300 along the other. The soft step too (4 substeps of 1/240 s): with its rows
+  // one after the other a box went up to 14 % further along the first tangent axis.
   const double theta = 25.0 * std::numbers::pi / 180.0, mu = 0.3, h = 1.0 / 240.0;
   const double a = kG * (std::sin(theta) - mu * std::cos(theta));
+  double worst_soft = 0.0;
+  for (const int substeps : {1, 4})
   for (const bool plane : {true, false})
     for (const double turn : {0.0, 0.7})
       for (const Vec3& dir : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.6, -0.8, 0)}) {
-        World w(def_with_step(h));
+        WorldDef d = def_with_step(substeps > 1 ? 1.0 / 60.0 : h);
+        d.body_substeps = substeps;
+        World w(d);
         const Quat q(Eigen::AngleAxisd(turn, Vec3(1, 2, 3).normalized()));
         BodyDef g;
         g.shapes.push_back(plane ? ShapeDef::plane() : ShapeDef::box({20.0, 20.0, 0.5}));
@@ -176,9 +181,12 @@ TEST(DynamicBodies, FrictionIsTheSameInEveryDirectionOfSliding) {
         const double x0 = along(w.pose(bh).translation), v0 = along(w.velocity(bh).first), T = 0.75;
         for (int i = 0; i < 45; ++i) w.advance(1.0 / 60.0);
         const double s = along(w.pose(bh).translation) - x0 - v0 * T;
-        EXPECT_NEAR(s, 0.5 * a * T * T * (1.0 + h / T), 0.002 * 0.5 * a * T * T)
-            << "plane " << plane << " turn " << turn << " dir " << dir.transpose();
+        const double expect = 0.5 * a * T * T * (1.0 + h / T);  // (the soft substep is h too)
+        if (substeps > 1) worst_soft = std::max(worst_soft, std::abs(s / expect - 1.0));
+        EXPECT_NEAR(s, expect, (substeps > 1 ? 0.01 : 0.002) * 0.5 * a * T * T)
+            << "substeps " << substeps << " plane " << plane << " turn " << turn << " dir " << dir.transpose();
       }
+  RecordProperty("soft_step_worst_relative_error", std::to_string(worst_soft));
 }
 
 TEST(DynamicBodies, ABoxPushedAlongTheFloorStopsAtTheKineticFrictionDistance) {

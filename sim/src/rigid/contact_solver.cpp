@@ -349,26 +349,7 @@ void ContactSolver::solve_soft(RigidBodies& bodies, std::span<ContactPoint> cont
       vb += (imb * lambda) * x.d;
       wb += lambda * x.ib_d;
     };
-    // Friction (no bias), bounded by the normal impulse so far (Catto 2005), then the normal.
-    const double limit = friction_bound(r, c.normal_impulse);
-    // The two rows one after the other (Gauss–Seidel), then the pair onto the disc. Solving them
-    // from the same velocities (iterate_velocities' friction_pair()) is isotropic, but with the
-    // substeps' three sweeps it left a 100 m/s box spinning at 35 rad/s off a wall; so here
-    // sliding along t1 off a box's corner still meets up to 6 % less friction (README).
-    double f0 = c.tangent_impulse[0] - r.t1.mass * speed(r.t1);
-    push(r.t1, f0 - c.tangent_impulse[0]);
-    double f1 = c.tangent_impulse[1] - r.t2.mass * speed(r.t2);
-    push(r.t2, f1 - c.tangent_impulse[1]);
-    const double mag = std::sqrt(f0 * f0 + f1 * f1);
-    if (mag > limit) {
-      const double f = mag > 0.0 ? limit / mag : 0.0;
-      push(r.t1, f0 * f - f0);
-      push(r.t2, f1 * f - f1);
-      f0 *= f;
-      f1 *= f;
-    }
-    c.tangent_impulse[0] = f0;
-    c.tangent_impulse[1] = f1;
+    // The normal first (soft, with the push-out bias when use_bias).
     const double vn = speed(r.n);
     const double old_n = c.normal_impulse;
     c.normal_impulse =
@@ -378,6 +359,17 @@ void ContactSolver::solve_soft(RigidBodies& bodies, std::span<ContactPoint> cont
     // (a body falling through the step hits faster than it moved at the step's start).
     if (s.max_normal == 0.0 && c.normal_impulse > 0.0) s.approach = std::min(s.approach, vn);
     s.max_normal = std::max(s.max_normal, c.normal_impulse);
+    // Then friction (no bias), bounded by this sweep's normal impulse (Box2D v3's order): the
+    // warm start carries an impact's whole impulse into the next substep, and a bound from it
+    // before the normal row has given it back let friction spin a 100 m/s box off a wall.
+    const double limit = friction_bound(r, c.normal_impulse);
+    // Both rows together, isotropic (friction_pair()).
+    double f0, f1;
+    friction_pair(r, c.tangent_impulse[0], c.tangent_impulse[1], speed(r.t1), speed(r.t2), limit, f0, f1);
+    push(r.t1, f0 - c.tangent_impulse[0]);
+    push(r.t2, f1 - c.tangent_impulse[1]);
+    c.tangent_impulse[0] = f0;
+    c.tangent_impulse[1] = f1;
     if (r.move_a) v[r.a] = va, w[r.a] = wa;
     if (r.move_b) v[r.b] = vb, w[r.b] = wb;
   }

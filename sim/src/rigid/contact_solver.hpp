@@ -10,7 +10,7 @@
 // on b and -λ n on a. Either body may be kStaticBody (infinite mass, not in RigidBodies).
 //
 // Choices (and why):
-// - Friction (sequential impulses; the soft step's differs, see solve_soft): the circular Coulomb
+// - Friction (both solvers; the soft step bounds it differently, see solve_soft): the circular Coulomb
 //   cone, both tangent rows of a contact solved together from the same velocities: the pair that stops the slip (the whole 2×2 tangent block inverted) when it
 //   lies in the disc of radius μ λ_n (sticking), else a pair on the disc's rim along p - m̄ v_t
 //   with one mass m̄ = 2 / trace K_t for both rows (sliding), which settles against the slip
@@ -160,9 +160,12 @@ class ContactSolver {
   void track_separations(const RigidBodies& bodies);
   /// Applies the accumulated impulses (of this step so far, or the cached ones at its start).
   void warm_start_soft(RigidBodies& bodies, std::span<ContactPoint> contacts) const;
-  /// One sweep: friction then normal per contact; with `use_bias` the overlap is pushed out
-  /// softly, without it only the approach is stopped (relax). A contact still apart (speculative)
-  /// lets the bodies close the gap within the substep but no more.
+  /// One sweep: per contact the normal row, then the tangent pair (friction_pair, isotropic)
+  /// bounded by the normal impulse just found (Box2D v3's order; bounded by the impulse the warm
+  /// start carried over from an impact, friction spun a 100 m/s box off a wall). With `use_bias`
+  /// the overlap is pushed out softly, without it only the approach is stopped (relax). A
+  /// contact still apart (speculative) lets the bodies close the gap within the substep but no
+  /// more.
   void solve_soft(RigidBodies& bodies, std::span<ContactPoint> contacts, bool use_bias);
   /// Newton's impact law once after the substeps for contacts that approached faster than
   /// restitution_threshold at the step's start and took an impulse.
