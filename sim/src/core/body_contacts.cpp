@@ -110,8 +110,8 @@ class Builder {
     };
     return fast(a) || fast(b) ? kSpeculativeMargin : kBodyContactMargin;
   }
-  /// The margin of pair key k of shapes a, b: a pair that touched in the previous step keeps its
-  /// points up to kKeptContactMargin.
+  /// The margin of pair key k of shapes a, b: a pair that carried load in the previous step
+  /// keeps its points up to kKeptContactMargin (body_dynamics.hpp).
   [[nodiscard]] double margin(std::uint32_t a, std::uint32_t b, const PairKey& k) const {
     const double m = margin(a, b);
     return m < kKeptContactMargin && had_manifold(k) ? kKeptContactMargin : m;
@@ -217,7 +217,6 @@ class Builder {
     const Collider& M = w_.shapes[m];
     const Collider& S = w_.shapes[s];
     const PosedShape body = posed(S);
-    const double new_gap = margin(m, s);
     // The convex's box in the mesh frame (a box around the rotated box).
     const Mat3 Rt = M.R.transpose();
     const Vec3 c = Rt * (S.aabb_center - M.center);
@@ -229,7 +228,7 @@ class Builder {
     M.mesh->bvh.query(c - half, c + half, [&](std::uint32_t t) {
       const Triangle& tri = M.mesh->triangles[t];
       const PairKey k = key(m, s, t + 1);
-      const double gap = new_gap < kKeptContactMargin && had_manifold(k) ? kKeptContactMargin : new_gap;
+      const double gap = margin(m, s, k);
       if (cull.apart(tri, gap)) return;
       const std::array<Vec3, 3> local{tri.a, tri.b, tri.c};
       const PosedShape T(ConvexShape::hull(local), M.R, M.center);
