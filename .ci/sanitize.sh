@@ -37,7 +37,19 @@ export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export LSAN_OPTIONS=suppressions=$supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-"$dir/tests/sim/test_sim" --gtest_brief=1
+# Under ASan/UBSan the physics runs ~30x slower: test_sim and test_demos took 26 min on the
+# 2-core machine, and the whole of .ci/run 72 min of CI's 90. These long-horizon tests repeat
+# code paths shorter tests run too (a 210-box pyramid for 10 s beside the 10-box stack; a cloth
+# folding onto itself beside the two-cloth drop; a ball caught by a pinned sheet, 226 s here,
+# beside the kinematic sphere through a sheet and the cloth on a light box; a 20-link chain for
+# 60 s beside the shorter chains); they all run in the Release suite. OpenMP's spinning wait
+# makes the 2- and 4-thread determinism tests crawl on 2 cores. Without the first three and with
+# the passive wait test_sim took 15 min.
+export OMP_WAIT_POLICY=passive
+heavy='DynamicBodies.PyramidOfTwentyRowsStandsTenSeconds:Cloth.SelfCollisionFoldsNeverIntersect'
+heavy+=':Joints.SwingingTwentyLinkChainDriftsLessThanATenthOfAMillimetreInSixtySeconds'
+heavy+=':BodyCoupling.ABallIsCaughtByAPinnedSheetNeverThrough'
+"$dir/tests/sim/test_sim" --gtest_brief=1 --gtest_filter="-$heavy"
 "$dir/tests/demos/test_demos" --gtest_brief=1
 t2=$(date +%s)
 echo "sanitize: unit tests took $((t2 - t1)) s"
