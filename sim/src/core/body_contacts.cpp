@@ -110,22 +110,27 @@ class Builder {
     };
     return fast(a) || fast(b) ? kSpeculativeMargin : kBodyContactMargin;
   }
-  /// The margin of pair key k of shapes a, b: a pair that carried load in the previous step
-  /// keeps its points up to kKeptContactMargin (body_dynamics.hpp).
-  [[nodiscard]] double margin(std::uint32_t a, std::uint32_t b, const PairKey& k) const {
-    const double m = margin(a, b);
-    return m < kKeptContactMargin && had_manifold(k) ? kKeptContactMargin : m;
-  }
-  [[nodiscard]] bool had_manifold(const PairKey& k) const {
+  /// Last step's manifold of pair key k, or nullptr (one binary search: the margin and the warm
+  /// start both read it).
+  [[nodiscard]] const BodyManifold* previous(const PairKey& k) const {
     const auto it = std::lower_bound(d_.previous.begin(), d_.previous.end(), k,
                                      [](const BodyManifold& x, const PairKey& y) { return x.key < y; });
-    if (it == d_.previous.end() || it->key != k) return false;
+    return it != d_.previous.end() && it->key == k ? &*it : nullptr;
+  }
+  /// The margin of shapes a, b whose last manifold is `last`: a pair that carried load in the
+  /// previous step keeps its points up to kKeptContactMargin (body_dynamics.hpp).
+  [[nodiscard]] double margin(std::uint32_t a, std::uint32_t b, const BodyManifold* last) const {
+    const double m = margin(a, b);
+    return m < kKeptContactMargin && carried_load(last) ? kKeptContactMargin : m;
+  }
+  [[nodiscard]] static bool carried_load(const BodyManifold* last) {
+    if (last == nullptr) return false;
     // Only a pair that carried load: pairs that merely came within the margin (Newton's
     // cradle's hanging balls after a collision passed) would otherwise keep speculative points
     // for as long as they stay that close, and the next impact would be solved through the
     // whole chain at once instead of ball by ball.
-    for (int i = 0; i < it->manifold.count; ++i)
-      if (it->manifold.points[i].normal_impulse > 0.0) return true;
+    for (int i = 0; i < last->manifold.count; ++i)
+      if (last->manifold.points[i].normal_impulse > 0.0) return true;
     return false;
   }
   [[nodiscard]] bool frozen(std::uint32_t rigid) const {
@@ -164,7 +169,9 @@ class Builder {
       for (std::uint32_t s = 0; s < w_.shapes.size(); ++s) {
         if (!dynamic(s) || !active(s) || no_collide(d_, owner_[p].body, owner_[s].body)) continue;
         const PairKey k = key(p, s, 0);
-        add(k, collide_plane(plane.point, plane.normal, posed(w_.shapes[s]), margin(p, s, k)), p, s);
+        const BodyManifold* last = previous(k);
+        add(k, last, collide_plane(plane.point, plane.normal, posed(w_.shapes[s]), margin(p, s, last)),
+            p, s);
       }
     }
   }
@@ -206,8 +213,9 @@ class Builder {
     if (B.shape == Collider::Shape::mesh && !B.hull) return mesh(b, a);
     ManifoldOptions options;
     const PairKey k = key(a, b, 0);
-    options.margin = margin(a, b, k);
-    add(k,
+    const BodyManifold* last = previous(k);
+    options.margin = margin(a, b, last);
+    add(k, last,
         collide_manifold(posed(A), posed(B), options, A.hull ? &A.hull->faces : nullptr,
                          B.hull ? &B.hull->faces : nullptr),
         a, b);
@@ -228,7 +236,8 @@ class Builder {
     M.mesh->bvh.query(c - half, c + half, [&](std::uint32_t t) {
       const Triangle& tri = M.mesh->triangles[t];
       const PairKey k = key(m, s, t + 1);
-      const double gap = margin(m, s, k);
+      const BodyManifold* last = previous(k);
+      const double gap = margin(m, s, last);
       if (cull.apart(tri, gap)) return;
       const std::array<Vec3, 3> local{tri.a, tri.b, tri.c};
       const PosedShape T(ConvexShape::hull(local), M.R, M.center);
@@ -248,16 +257,15 @@ class Builder {
         man = collide_plane(wv[0], along > 0.0 ? n : Vec3(-n), body, gap, wv.data());
       }
       if (man.count == 0) man = manifold_from_contact(cc);
-      add(k, man, m, s);
+      add(k, last, man, m, s);
     });
   }
 
-  /// Appends manifold `m` of shapes a (A) and b (B): warm-started, its points handed to the solver.
-  void add(const PairKey& k, Manifold m, std::uint32_t a, std::uint32_t b) {
+  /// Appends manifold `m` of shapes a (A) and b (B): warm-started from `last` (the pair's manifold
+  /// of the previous step, or nullptr), its points handed to the solver.
+  void add(const PairKey& k, const BodyManifold* last, Manifold m, std::uint32_t a, std::uint32_t b) {
     if (m.count == 0) return;
-    const auto it = std::lower_bound(d_.previous.begin(), d_.previous.end(), k,
-                                     [](const BodyManifold& x, const PairKey& y) { return x.key < y; });
-    if (it != d_.previous.end() && it->key == k) warm_start(it->manifold, m);
+    if (last != nullptr) warm_start(last->manifold, m);
     const Material& ma = w_.shapes[a].material;
     const Material& mb = w_.shapes[b].material;
     // Box2D's mixing: the bouncier side wins, friction is the geometric mean (static friction

@@ -180,8 +180,8 @@ void wake_coupled(WorldState& w, double t0, double t1);
 /// first), but above zero: a body set on a surface by computing its pose lies on it only to
 /// rounding (separations of +-1e-17 m), and at exactly zero some of its corners were dropped.
 inline constexpr double kBodyContactMargin = 1e-6;
-/// (m) Contact margin of a pair that had a manifold in the previous step (a persistent contact;
-/// Bullet's contact breaking threshold plays this part). The solver leaves a resting body rocking
+/// (m) Contact margin of a pair whose manifold carried load (a normal impulse) in the previous
+/// step (a persistent contact; Bullet's contact breaking threshold plays this part). The solver leaves a resting body rocking
 /// by a few um (~1e-6 m at 1/60 s from its unconverged first step), and a corner dropped for it
 /// let the body fall freely for a step: it met the surface again slipping, and a slipping contact
 /// is bounded by the kinetic mu, so a crate that static friction holds on a ramp slid off. A kept
