@@ -249,9 +249,7 @@ Image Renderer::render() {
   r.particles.draw_droplets(frame, *shadow, r.target.samples());
   bool opaque_drawables = false;
   r.table.for_each([&](const Drawable& d) { opaque_drawables |= d.kind != DrawableKind::particles; });
-  r.particles.draw_blended(frame, *shadow, r.target, opaque_drawables);
-
-  r.target.resolve();
+  if (!r.particles.draw_blended(frame, *shadow, r.target, opaque_drawables)) r.target.resolve();
   r.post.draw(r.target.resolve_texture(), r.empty_vao);
   Image image = r.post.read_back();
   detail::check_error(gl, "drawing a frame");

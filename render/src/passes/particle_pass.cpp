@@ -298,37 +298,42 @@ void ParticlePass::draw_droplets(const FrameView& frame, const ShadowView& shado
   gl.Disable(GL_SAMPLE_ALPHA_TO_COVERAGE);
 }
 
-void ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow,
+bool ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow,
                                 SceneTarget& target, bool opaque_drawables) {
-  if (soft_.count == 0 && additive_.count == 0 && streaks_.count == 0 && trails_.count == 0) return;
+  if (soft_.count == 0 && additive_.count == 0 && streaks_.count == 0 && trails_.count == 0) return false;
   const GlTable& gl = *gl_;
-  target.copy_depth(opaque_drawables || droplets_.count > 0);
+  const bool opaque = opaque_drawables || droplets_.count > 0;
+  target.copy_depth(opaque);
   gl.ActiveTexture(GL_TEXTURE5);
   gl.BindTexture(GL_TEXTURE_2D, noise_);
   gl.ActiveTexture(GL_TEXTURE0);
   gl.Enable(GL_BLEND);
   gl.DepthMask(GL_FALSE);
-  struct Layer {
-    const Stream* stream;
-    const Program* program;
-    bool premultiplied;
-  };
   const RenderSettings& s = frame.settings;
-  for (const Layer& layer : {Layer{&soft_, &program(smoke_ ? smoke_style : soft_style, s, shadow), true},
-                             Layer{&streaks_, &program(streak_style, s, shadow), true},
-                             Layer{&trails_, &program(trail_style, s, shadow), false},
-                             Layer{&additive_, &program(flame_ ? flame_style : additive_style, s, shadow), false}}) {
-    if (layer.stream->count == 0) continue;
-    set_uniforms(*layer.program, frame, shadow);
-    if (layer.premultiplied) {
+  auto draw = [&](const Stream& stream, const Program& program, bool premultiplied) {
+    if (stream.count == 0) return;
+    set_uniforms(program, frame, shadow);
+    if (premultiplied) {
       gl.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     } else {
       gl.BlendFunc(GL_ONE, GL_ONE);
     }
-    batch(*layer.stream).draw(gl, *layer.program);
-  }
+    batch(stream).draw(gl, program);
+  };
+  // Rain streaks are as narrow as 1.5 px: sampled at pixel centres alone their brightness would
+  // follow their sub-pixel position (crawling as they fall), so they keep the multisampled
+  // coverage and are drawn first. The sprites and the trails, whose light falls smoothly to
+  // zero at their rims over at least a pixel and a half, are drawn after the resolve at one
+  // sample per pixel.
+  draw(streaks_, program(streak_style, s, shadow), true);
+  target.resolve_for_blending(opaque);
+  gl.DepthMask(GL_FALSE);  // the resolve may have cleared its depth
+  draw(soft_, program(smoke_ ? smoke_style : soft_style, s, shadow), true);
+  draw(trails_, program(trail_style, s, shadow), false);
+  draw(additive_, program(flame_ ? flame_style : additive_style, s, shadow), false);
   gl.DepthMask(GL_TRUE);
   gl.Disable(GL_BLEND);
+  return true;
 }
 
 }  // namespace simreel::render::detail

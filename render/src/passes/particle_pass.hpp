@@ -34,9 +34,11 @@ class ParticlePass {
   /// Draws the droplets (opaque lit spheres) into the bound scene framebuffer; `samples` > 0
   /// turns on alpha-to-coverage.
   void draw_droplets(const FrameView& frame, const ShadowView& shadow, int samples);
-  /// Draws soft, streak and additive particles, blended; first copies the scene depth
-  /// (`opaque_drawables`: a plane, box or mesh was drawn). Nothing to draw: no GL call.
-  void draw_blended(const FrameView& frame, const ShadowView& shadow, SceneTarget& target,
+  /// Draws soft, streak and additive particles, blended, into the resolved scene target
+  /// (SceneTarget::resolve_for_blending: the scene depth copied, `opaque_drawables`: a plane,
+  /// box or mesh was drawn, the colour resolved). @return false when there was nothing to draw
+  /// (then no GL call: the caller resolves the target).
+  [[nodiscard]] bool draw_blended(const FrameView& frame, const ShadowView& shadow, SceneTarget& target,
                     bool opaque_drawables);
 
  private:
