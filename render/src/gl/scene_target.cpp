@@ -20,12 +20,12 @@ void SceneTarget::create(const GlTable& gl, int width, int height, int samples) 
   gl.GenFramebuffers(1, &resolve_fbo_);
   gl.BindFramebuffer(GL_FRAMEBUFFER, resolve_fbo_);
   gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, resolve_tex_, 0);
-  // With multisampling too: blended particles are drawn into the resolved target, tested
-  // against a single-sample copy of the scene's depth (resolve_for_blending).
-  gl.GenRenderbuffers(1, &resolve_depth_);
-  gl.BindRenderbuffer(GL_RENDERBUFFER, resolve_depth_);
-  gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
-  gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth_);
+  if (samples == 0) {
+    gl.GenRenderbuffers(1, &resolve_depth_);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, resolve_depth_);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth_);
+  }
   check_framebuffer(gl, "resolve", w, h);
 
   depth_tex_ = make_texture_2d(gl, w, h, GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT,
@@ -89,20 +89,9 @@ void SceneTarget::copy_depth(bool opaque) {
   gl.BindTexture(GL_TEXTURE_2D, depth_tex_);
 }
 
-void SceneTarget::resolve_for_blending(bool opaque) {
-  if (samples_ == 0) return;  // the scene was drawn into the resolve target
-  const GlTable& gl = *gl_;
+void SceneTarget::resolve_for_blending() {
   resolve();
-  if (opaque) {
-    gl.BindFramebuffer(GL_READ_FRAMEBUFFER, depth_fbo_);
-    gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_fbo_);
-    gl.BlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-    gl.BindFramebuffer(GL_FRAMEBUFFER, resolve_fbo_);
-  } else {
-    gl.BindFramebuffer(GL_FRAMEBUFFER, resolve_fbo_);
-    gl.DepthMask(GL_TRUE);
-    gl.Clear(GL_DEPTH_BUFFER_BIT);
-  }
+  gl_->BindFramebuffer(GL_FRAMEBUFFER, resolve_fbo_);
 }
 
 void SceneTarget::resolve() {

@@ -26,12 +26,11 @@ class SceneTarget {
   void copy_depth(bool opaque);
   /// Resolves the multisampled colour into the resolve texture (nothing without MSAA).
   void resolve();
-  /// After copy_depth(opaque): resolves the colour and gives the resolve target the copy's
-  /// depth, then binds the resolve target. Blended sprites are drawn there, one sample per
-  /// pixel: their edges are soft (alpha falloff, depth fade), so multisampling only multiplied
-  /// their blending and depth-test work by the sample count (a third of the explosion demo's
-  /// frame at 4 samples). After it the frame counts as resolved.
-  void resolve_for_blending(bool opaque);
+  /// Resolves the colour and binds the resolve target. Blended sprites are drawn there, one
+  /// sample per pixel, after copy_depth: their light falls smoothly to zero at their rims, so
+  /// multisampling only multiplied their blending work by the sample count (a third of the
+  /// explosion demo's frame at 4 samples). After it the frame counts as resolved.
+  void resolve_for_blending();
 
  private:
   const GlTable* gl_ = nullptr;

@@ -326,11 +326,14 @@ bool ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow
   // zero at their rims over at least a pixel and a half, are drawn after the resolve at one
   // sample per pixel.
   draw(streaks_, program(streak_style, s, shadow), true);
-  target.resolve_for_blending(opaque);
-  gl.DepthMask(GL_FALSE);  // the resolve may have cleared its depth
+  // Each sprite's shader fades it by the scene depth copy (visible_fraction, the trails'
+  // fade), which is 0 wherever the hardware test would have rejected the fragment.
+  target.resolve_for_blending();
+  gl.Disable(GL_DEPTH_TEST);
   draw(soft_, program(smoke_ ? smoke_style : soft_style, s, shadow), true);
   draw(trails_, program(trail_style, s, shadow), false);
   draw(additive_, program(flame_ ? flame_style : additive_style, s, shadow), false);
+  gl.Enable(GL_DEPTH_TEST);
   gl.DepthMask(GL_TRUE);
   gl.Disable(GL_BLEND);
   return true;

@@ -104,7 +104,9 @@ void write_sphere_depth(float h) {
 }
 // Fraction of the sphere's chord through this fragment that lies in front of the opaque
 // scene: 1 in open air, falling smoothly to 0 where the sphere sinks into a surface (no hard
-// intersection line: soft particles).
+// intersection line: soft particles). It is 0 exactly where the sphere's front surface lies
+// behind the scene, so it is the blended sprites' whole depth test: they are drawn with the
+// hardware test off and write no depth (ParticlePass::draw_blended).
 float visible_fraction(float h) {
   float front = -(v_center_view.z + v_center_view.w * h);
   float chord = 2.0 * v_center_view.w * h;
@@ -126,7 +128,6 @@ void main() {
   float r2 = dot(v_corner, v_corner);
   if (r2 >= 1.0) discard;
   float h = sqrt(1.0 - r2);
-  write_sphere_depth(h);
   float visible = visible_fraction(h);
   if (visible <= 0.0) discard;
   float r = sqrt(r2);
@@ -325,7 +326,6 @@ void main() {
   float r2 = dot(v_corner, v_corner);
   if (r2 >= 1.0) discard;
   float h = sqrt(1.0 - r2);
-  write_sphere_depth(h);
   // Bright core with a long falloff; exactly zero at the rim so quads leave no edges. Its
   // integral over the disc is 0.6123 (in radii squared), which the trails match.
   vec2 q = v_corner * v_spark.y;  // in radii of the glow disc
