@@ -152,29 +152,23 @@ TEST_F(RenderScene, BoxHidesParticleBehindIt) {
   EXPECT_TRUE(is_warm(centre(r().render())));
 }
 
-// Blended particles are drawn after the multisampled scene is resolved, tested against a
-// single-sample copy of its depth (SceneTarget::resolve_for_blending): a soft particle in front
-// of the box covers it, one behind it is hidden, with and without multisampling.
-TEST(RenderSceneDepth, BlendedParticlesMeetTheBoxesDepthAfterTheResolve) {
+// Blended particles are drawn after the multisampled scene is resolved, their depth test in
+// their shaders against a single-sample copy of the scene depth (ParticlePass::draw_blended): a
+// soft particle in front of the box covers it, one behind it is hidden, with and without
+// multisampling.
+TEST_F(RenderScene, BlendedParticlesMeetTheBoxesDepthAfterTheResolve) {
   for (const int samples : {4, 0}) {
     SCOPED_TRACE(samples);
-    auto context = create_context(Backend::osmesa);
     RenderSettings s = test::small_settings();
     s.msaa_samples = samples;
-    Renderer r(*context, s);
-    r.set_camera(test::front_camera());
-    BoxDesc box;
-    box.half_extents = Vec3f::Constant(0.6f);
-    r.add_box(10, box);
-    r.set_transform(10, Vec3f::Zero(), Mat3f::Identity());
+    renderer_ = std::make_unique<Renderer>(*context_, s);
+    r().set_camera(test::front_camera());
+    add_box_at(10, Vec3f::Zero(), 0.6f);
     auto blue = [](const std::uint8_t* p) { return int(p[2]) > int(p[0]) + 60; };
     for (const float y : {-2.f, 3.f}) {
-      const float pos[] = {0.f, y, 0.f};
-      const float col[] = {0.f, 0.f, 1.f, 1.f};
-      const float radius = 0.4f;
-      r.set_particles(20, ParticleBatch{1, pos, col, &radius, ParticleStyle::soft});
-      const Image img = r.render();
-      const std::uint8_t* c = img.pixel(img.width / 2, img.height / 2);
+      add_particle(20, Vec3f(0.f, y, 0.f), 0.4f, Vec4f(0.f, 0.f, 1.f, 1.f), ParticleStyle::soft);
+      const Image img = r().render();
+      const std::uint8_t* c = centre(img);
       if (y < 0.f) {
         EXPECT_TRUE(blue(c)) << "in front: " << int(c[0]) << " " << int(c[1]) << " " << int(c[2]);
       } else {

@@ -302,8 +302,7 @@ bool ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow
                                 SceneTarget& target, bool opaque_drawables) {
   if (soft_.count == 0 && additive_.count == 0 && streaks_.count == 0 && trails_.count == 0) return false;
   const GlTable& gl = *gl_;
-  const bool opaque = opaque_drawables || droplets_.count > 0;
-  target.copy_depth(opaque);
+  target.copy_depth(opaque_drawables || droplets_.count > 0);
   gl.ActiveTexture(GL_TEXTURE5);
   gl.BindTexture(GL_TEXTURE_2D, noise_);
   gl.ActiveTexture(GL_TEXTURE0);

@@ -34,12 +34,13 @@ class ParticlePass {
   /// Draws the droplets (opaque lit spheres) into the bound scene framebuffer; `samples` > 0
   /// turns on alpha-to-coverage.
   void draw_droplets(const FrameView& frame, const ShadowView& shadow, int samples);
-  /// Draws soft, streak and additive particles, blended, into the resolved scene target
-  /// (SceneTarget::resolve_for_blending: the scene depth copied, `opaque_drawables`: a plane,
-  /// box or mesh was drawn, the colour resolved). @return false when there was nothing to draw
-  /// (then no GL call: the caller resolves the target).
+  /// Draws the blended particles: copies the scene depth (`opaque_drawables`: a plane, box or
+  /// mesh was drawn), draws the rain streaks into the multisampled target, resolves it
+  /// (SceneTarget::resolve_for_blending) and draws soft, trail and additive sprites into the
+  /// resolved target, their depth test in their shaders against the copy. @return false when
+  /// there was nothing to draw (then no GL call: the caller resolves the target).
   [[nodiscard]] bool draw_blended(const FrameView& frame, const ShadowView& shadow, SceneTarget& target,
-                    bool opaque_drawables);
+                                  bool opaque_drawables);
 
  private:
   /// One particle stream: a growing vertex buffer, `vertices` per particle (an indexed quad for
