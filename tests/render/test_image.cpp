@@ -44,6 +44,32 @@ TEST(RenderImage, PngRoundTripsBytesExactly) {
   EXPECT_FALSE(has_temp_files(dir.path()));
 }
 
+// The colour type byte of a PNG file's IHDR (offset 25): 2 = RGB, 6 = RGBA.
+int png_colour_type(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char header[26] = {};
+  in.read(header, sizeof header);
+  return in ? static_cast<unsigned char>(header[25]) : -1;
+}
+
+TEST(RenderImage, OpaqueImagesAreWrittenWithoutAlphaAndReadBackTheSame) {
+  const test::TempDir dir("png-rgb");
+  Image img = pattern(37, 23);
+  for (std::size_t i = 3; i < img.rgba.size(); i += 4) img.rgba[i] = 255;
+  for (const int level : {1, 9}) {
+    const fs::path path = dir.path() / ("opaque" + std::to_string(level) + ".png");
+    write_png(path, img, level);
+    EXPECT_EQ(png_colour_type(path), 2) << "level " << level;
+    EXPECT_EQ(read_image(path).rgba, img.rgba) << "level " << level;
+  }
+  // One pixel short of opaque, at the very end: the alpha channel is kept.
+  img.rgba.back() = 254;
+  const fs::path path = dir.path() / "last_pixel.png";
+  write_png(path, img, 1);
+  EXPECT_EQ(png_colour_type(path), 6);
+  EXPECT_EQ(read_image(path).rgba, img.rgba);
+}
+
 TEST(RenderImage, WritePngReplacesAnExistingFile) {
   const test::TempDir dir("png-replace");
   const fs::path path = dir.path() / "a.png";
