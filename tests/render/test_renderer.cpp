@@ -154,25 +154,36 @@ TEST_F(RenderScene, BoxHidesParticleBehindIt) {
 
 // Blended particles are drawn after the multisampled scene is resolved, their depth test in
 // their shaders against a single-sample copy of the scene depth (ParticlePass::draw_blended): a
-// soft particle in front of the box covers it, one behind it is hidden, with and without
-// multisampling.
+// soft particle or a rain streak in front of the box covers it, one behind it is hidden, with
+// and without multisampling.
 TEST_F(RenderScene, BlendedParticlesMeetTheBoxesDepthAfterTheResolve) {
   for (const int samples : {4, 0}) {
-    SCOPED_TRACE(samples);
-    RenderSettings s = test::small_settings();
-    s.msaa_samples = samples;
-    renderer_ = std::make_unique<Renderer>(*context_, s);
-    r().set_camera(test::front_camera());
-    add_box_at(10, Vec3f::Zero(), 0.6f);
-    auto blue = [](const std::uint8_t* p) { return int(p[2]) > int(p[0]) + 60; };
-    for (const float y : {-2.f, 3.f}) {
-      add_particle(20, Vec3f(0.f, y, 0.f), 0.4f, Vec4f(0.f, 0.f, 1.f, 1.f), ParticleStyle::soft);
-      const Image img = r().render();
-      const std::uint8_t* c = centre(img);
-      if (y < 0.f) {
-        EXPECT_TRUE(blue(c)) << "in front: " << int(c[0]) << " " << int(c[1]) << " " << int(c[2]);
-      } else {
-        EXPECT_TRUE(is_warm(c)) << "behind: " << int(c[0]) << " " << int(c[1]) << " " << int(c[2]);
+    for (const ParticleStyle style : {ParticleStyle::soft, ParticleStyle::streak}) {
+      SCOPED_TRACE(testing::Message() << "samples " << samples << ", style " << int(style));
+      RenderSettings s = test::small_settings();
+      s.msaa_samples = samples;
+      renderer_ = std::make_unique<Renderer>(*context_, s);
+      r().set_camera(test::front_camera());
+      add_box_at(10, Vec3f::Zero(), 0.6f);
+      auto blue = [](const std::uint8_t* p) { return int(p[2]) > int(p[0]) + 60; };
+      for (const float y : {-2.f, 3.f}) {
+        if (style == ParticleStyle::soft) {
+          add_particle(20, Vec3f(0.f, y, 0.f), 0.4f, Vec4f(0.f, 0.f, 1.f, 1.f), style);
+        } else {
+          // Falling at 20 m/s: the streak runs from its head 0.2 m below the centre to 0.2 m above.
+          const float pos[] = {0.f, y, -0.2f}, col[] = {0.f, 0.f, 1.f, 1.f}, vel[] = {0.f, 0.f, -20.f};
+          const float radius = 0.3f;
+          ParticleBatch batch{1, pos, col, &radius, style};
+          batch.velocity = vel;
+          r().set_particles(20, batch);
+        }
+        const Image img = r().render();
+        const std::uint8_t* c = centre(img);
+        if (y < 0.f) {
+          EXPECT_TRUE(blue(c)) << "in front: " << int(c[0]) << " " << int(c[1]) << " " << int(c[2]);
+        } else {
+          EXPECT_TRUE(is_warm(c)) << "behind: " << int(c[0]) << " " << int(c[1]) << " " << int(c[2]);
+        }
       }
     }
   }

@@ -319,16 +319,16 @@ bool ParticlePass::draw_blended(const FrameView& frame, const ShadowView& shadow
     }
     batch(stream).draw(gl, program);
   };
-  // Rain streaks are as narrow as 1.5 px: sampled at pixel centres alone their brightness would
-  // follow their sub-pixel position (crawling as they fall), so they keep the multisampled
-  // coverage and are drawn first. The sprites and the trails, whose light falls smoothly to
-  // zero at their rims over at least a pixel and a half, are drawn after the resolve at one
-  // sample per pixel.
-  draw(streaks_, program(streak_style, s, shadow), true);
+  // Everything blended is drawn after the resolve at one sample per pixel. Multisampling would
+  // give each pixel's covered samples the one value its shader takes at the pixel centre, and
+  // every one of these shaders brings its light smoothly to zero at the rim of its shape (a
+  // rain streak: 1 - smoothstep(0.35, 1) across a half-width of at least 0.75 px), so the
+  // resolve would give back the same pixel after four times the blending.
   // Each sprite's shader fades it by the scene depth copy (visible_fraction, the trails'
   // fade), which is 0 wherever the hardware test would have rejected the fragment.
   target.resolve_for_blending();
   gl.Disable(GL_DEPTH_TEST);
+  draw(streaks_, program(streak_style, s, shadow), true);
   draw(soft_, program(smoke_ ? smoke_style : soft_style, s, shadow), true);
   draw(trails_, program(trail_style, s, shadow), false);
   draw(additive_, program(flame_ ? flame_style : additive_style, s, shadow), false);
