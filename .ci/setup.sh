@@ -4,7 +4,7 @@
 # `--sanitize` adds what CI's sanitizer and fuzzing job (.ci/sanitize.sh) needs: clang and its
 # sanitizer/libFuzzer runtimes.
 set -euo pipefail
-PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev libpng-dev
+PKGS=(cmake g++ make pkg-config libeigen3-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev libstb-dev libdeflate-dev
       libassimp-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev ffmpeg
       assimp-testmodels python3-jsonschema libbullet-dev slurm-wlm munge)
 if [ "${1:-}" = "--sanitize" ]; then

@@ -70,6 +70,31 @@ TEST(RenderImage, OpaqueImagesAreWrittenWithoutAlphaAndReadBackTheSame) {
   EXPECT_EQ(read_image(path).rgba, img.rgba);
 }
 
+// Smooth ramps with some noise: from level 6 each row takes the filter that predicts it best
+// (Sub, Up, Average or Paeth, PNG specification 9.2), so every filter is decoded back here.
+TEST(RenderImage, PngRowFiltersRoundTripSmoothImages) {
+  const test::TempDir dir("png-filters");
+  for (const bool opaque : {true, false}) {
+    Image img(61, 47);
+    unsigned state = 777u;
+    for (int y = 0; y < img.height; ++y) {
+      for (int x = 0; x < img.width; ++x) {
+        state = state * 1103515245u + 12345u;
+        std::uint8_t* p = img.pixel(x, y);
+        p[0] = std::uint8_t(3 * x + y);
+        p[1] = std::uint8_t(x * y / 7 + (state >> 30));
+        p[2] = std::uint8_t(y % 13 == 0 ? state >> 24 : 4 * y);
+        p[3] = opaque ? 255 : std::uint8_t(255 - x);
+      }
+    }
+    for (const int level : {1, 6, 9}) {
+      const fs::path path = dir.path() / ("ramp" + std::to_string(level) + (opaque ? "o" : "a") + ".png");
+      write_png(path, img, level);
+      EXPECT_EQ(read_image(path).rgba, img.rgba) << "level " << level << (opaque ? " opaque" : " with alpha");
+    }
+  }
+}
+
 TEST(RenderImage, WritePngReplacesAnExistingFile) {
   const test::TempDir dir("png-replace");
   const fs::path path = dir.path() / "a.png";
