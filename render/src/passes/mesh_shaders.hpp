@@ -74,7 +74,7 @@ void main() {
   float ndl = max(dot(n, l), 0.0);
   float sun = ndl > 0.0 ? sun_visibility(v_world, n) : 0.0;
   vec3 h = normalize(l + v);
-  float spec = u_specular * pow(max(dot(n, h), 0.0), 48.0) * ndl;
+  float spec = u_specular * pow48(max(dot(n, h), 0.0)) * ndl;
   vec3 ambient = hemisphere(n.z);
   vec3 color = albedo * (ambient + u_light_color * (ndl * sun)) + u_light_color * (spec * sun);
   // Aerial perspective: fog towards the sky seen behind the point (its horizon colour for
