@@ -5,10 +5,10 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <cstdlib>
-#include <new>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -23,14 +23,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The PNG row filters (PNG specification §9.2), applied to one row of `n` bytes with `bpp`
-/// bytes per pixel; `prev` is the row above (zeros for the first row).
+/// The Paeth predictor (PNG specification §9.4): of left, above and upper-left, the one closest
+/// to left + above - upper-left.
 std::uint8_t paeth(int a, int b, int c) {
   const int p = a + b - c;
   const int pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
   return std::uint8_t(pa <= pb && pa <= pc ? a : pb <= pc ? b : c);
 }
 
+/// Row filter `type` (0 None, 1 Sub, 2 Up, 3 Average, 4 Paeth; PNG specification §9.2) of one
+/// row of `n` bytes with `bpp` bytes per pixel into `out`; `prev` is the row above (zeros for
+/// the first row).
 void filter_row(int type, const std::uint8_t* row, const std::uint8_t* prev, std::size_t n, std::size_t bpp,
                 std::uint8_t* out) {
   for (std::size_t i = 0; i < n; ++i) {
@@ -67,7 +70,7 @@ void put_chunk(std::string& out, const char* type, const std::uint8_t* data, std
   put_u32(out, std::uint32_t(n));
   const std::size_t type_at = out.size();
   out.append(type, 4);
-  out.append(reinterpret_cast<const char*>(data), n);
+  if (n > 0) out.append(reinterpret_cast<const char*>(data), n);
   put_u32(out, libdeflate_crc32(0, out.data() + type_at, n + 4));
 }
 
@@ -85,12 +88,9 @@ std::string encode_png(const Image& image, int level) {
   const std::size_t bpp = rgb ? 3 : 4;
   const std::size_t stride = w * bpp;
   // The rows as stored (RGB drops every fourth byte), then each filtered behind its filter byte.
-  std::vector<std::uint8_t> rows(stride * h);
-  if (rgb) {
-    for (std::size_t p = 0; p < w * h; ++p) std::memcpy(&rows[3 * p], rgba + 4 * p, 3);
-  } else {
-    std::memcpy(rows.data(), rgba, rows.size());
-  }
+  std::vector<std::uint8_t> packed(rgb ? stride * h : 0);
+  for (std::size_t p = 0; p < packed.size() / 3; ++p) std::memcpy(&packed[3 * p], rgba + 4 * p, 3);
+  const std::uint8_t* rows = rgb ? packed.data() : rgba;
   std::vector<std::uint8_t> filtered((stride + 1) * h);
   const std::vector<std::uint8_t> zeros(stride, 0);
   std::vector<std::uint8_t> trial(level >= 6 ? stride : 0);
