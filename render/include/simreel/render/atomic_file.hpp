@@ -27,7 +27,7 @@ class AtomicFile {
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
-  /// The open temporary (for writers that need a FILE*, e.g. libpng); null after commit/discard.
+  /// The open temporary (for writers that need a FILE*); null after commit/discard.
   [[nodiscard]] std::FILE* file() const { return file_; }
   /// The temporary's path (for a child process that writes it, e.g. ffmpeg).
   [[nodiscard]] const std::filesystem::path& temporary() const { return tmp_; }
