@@ -93,25 +93,28 @@ std::string encode_png(const Image& image, int level) {
   const std::uint8_t* rows = rgb ? packed.data() : rgba;
   std::vector<std::uint8_t> filtered((stride + 1) * h);
   const std::vector<std::uint8_t> zeros(stride, 0);
-  std::vector<std::uint8_t> trial(level >= 6 ? stride : 0);
+  // From level 6 each filter is tried into `trial`; the best so far is kept in `best_row`.
+  std::vector<std::uint8_t> trial(level >= 6 ? stride : 0), best_row(trial.size());
   for (std::size_t y = 0; y < h; ++y) {
     const std::uint8_t* row = &rows[y * stride];
     const std::uint8_t* prev = y > 0 ? row - stride : zeros.data();
     std::uint8_t* out = &filtered[y * (stride + 1)];
-    int best = 2;
-    if (level >= 6) {
-      std::uint64_t best_cost = ~std::uint64_t{0};
-      for (int type = 0; type < 5; ++type) {
-        filter_row(type, row, prev, stride, bpp, trial.data());
-        const std::uint64_t cost = filtered_cost(trial.data(), stride);
-        if (cost < best_cost) {
-          best_cost = cost;
-          best = type;
-        }
+    if (level < 6) {
+      out[0] = 2;
+      filter_row(2, row, prev, stride, bpp, out + 1);
+      continue;
+    }
+    std::uint64_t best_cost = ~std::uint64_t{0};
+    for (int type = 0; type < 5; ++type) {
+      filter_row(type, row, prev, stride, bpp, trial.data());
+      const std::uint64_t cost = filtered_cost(trial.data(), stride);
+      if (cost < best_cost) {
+        best_cost = cost;
+        out[0] = std::uint8_t(type);
+        trial.swap(best_row);
       }
     }
-    out[0] = std::uint8_t(best);
-    filter_row(best, row, prev, stride, bpp, out + 1);
+    std::memcpy(out + 1, best_row.data(), stride);
   }
   libdeflate_compressor* compressor = libdeflate_alloc_compressor(std::clamp(level, 0, 9));
   if (compressor == nullptr) throw std::bad_alloc();

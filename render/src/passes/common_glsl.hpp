@@ -10,10 +10,7 @@ uniform vec3 u_ground_ambient;   // facing -z
 vec3 hemisphere(float nz) { return mix(u_ground_ambient, u_ambient, 0.5 + 0.5 * nz); }
 // x^48 by squaring (x^32 x^16): pow() is exp2(log2) on llvmpipe, several times the cost.
 float pow48(float x) {
-  float x4 = x * x;
-  x4 *= x4;
-  float x16 = x4 * x4;
-  x16 *= x16;
+  float x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
   return x16 * x16 * x16;
 }
 )";

@@ -37,8 +37,8 @@ class ParticlePass {
   /// Draws the blended particles: copies the scene depth (`opaque_drawables`: a plane, box or
   /// mesh was drawn), resolves the multisampled target (SceneTarget::resolve_for_blending) and
   /// draws rain streaks, soft, trail and additive sprites into the resolved target, their depth
-  /// test in their shaders against the copy. @return false when
-  /// there was nothing to draw (then no GL call: the caller resolves the target).
+  /// test in their shaders against the copy. @return false when there was nothing to draw (then
+  /// no GL call: the caller resolves the target).
   [[nodiscard]] bool draw_blended(const FrameView& frame, const ShadowView& shadow, SceneTarget& target,
                                   bool opaque_drawables);
 

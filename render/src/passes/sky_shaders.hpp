@@ -26,10 +26,8 @@ vec3 sky_color(vec3 dir, float disk) {
   float haze = 1.0 - 0.6 * el;
   // Powers by squaring (mu^6, mu^180 = mu^128 mu^32 mu^16 mu^4): pow() is exp2(log2) on
   // llvmpipe, and this runs for every sky pixel and every fogged mesh fragment.
-  float mu2 = mu * mu, mu4 = mu2 * mu2, mu16 = mu4 * mu4;
-  mu16 *= mu16;
-  float mu32 = mu16 * mu16, mu128 = mu32 * mu32;
-  mu128 *= mu128;
+  float mu2 = mu * mu, mu4 = mu2 * mu2, mu8 = mu4 * mu4, mu16 = mu8 * mu8;
+  float mu32 = mu16 * mu16, mu64 = mu32 * mu32, mu128 = mu64 * mu64;
   c += u_sun_color * (0.10 * haze * (mu4 * mu2) + 0.25 * (mu128 * mu32 * mu16 * mu4));
   // The disk: 0.8 degrees in radius, its edge smoothed over a few hundredths of a degree.
   if (disk > 0.0) c += u_sun_color * (24.0 * disk * smoothstep(0.999893, 0.999912, mu));
