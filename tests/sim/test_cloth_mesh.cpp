@@ -59,7 +59,9 @@ TEST(ClothMesh, SpringFamiliesFromEdgesAndTrianglePairs) {
   EXPECT_EQ(t.vertex_count(), k * k);
   EXPECT_EQ(t.edges.size() / 2, stretch);  // every edge is a stretch spring and a contact edge
   for (std::size_t s = 0; s < t.spring_count(); ++s) {
-    if (t.kind[s] == SpringKind::bend) EXPECT_NEAR(t.rest_length[s], std::sqrt(5.0) * 0.25, 1e-12);
+    if (t.kind[s] == SpringKind::bend) {
+      EXPECT_NEAR(t.rest_length[s], std::sqrt(5.0) * 0.25, 1e-12);
+    }
   }
 }
 
@@ -104,6 +106,12 @@ Shape run_sheet(bool mesh, bool draped) {
     d.width = d.height = 1.0;
   }
   d.mass = 0.2;
+  // The drape (free fall onto the sphere, sliding, settling) amplifies the solver's residual:
+  // at the default 1e-2 the mean drop moved by up to 2 % with the choice of preconditioner
+  // (grid 0.5896 / 0.5913 m, mesh 0.5936 / 0.6092 m, block Jacobi / two-level). This test
+  // compares the two discretisations, so it solves them closely (converged at 1e-5: grid
+  // 0.5847 m, mesh 0.5963 m).
+  d.cg_tolerance = 1e-4;
   d.transform.translation = Vec3(0, 0, 1.0);
   if (draped) {
     w.add_plane(PlaneDef{});

@@ -9,6 +9,7 @@
 
 #include "cloth/cloth_collide.hpp"
 #include "cloth/cloth_contacts.hpp"
+#include "cloth/coarse_space.hpp"
 #include "cloth/sym3.hpp"
 #include "simreel/sim/cloth.hpp"
 
@@ -40,6 +41,8 @@ struct Cloth::State {
   std::vector<Vec3> dv, b, r, z, p, Ap;
   std::vector<Vec3> spring_work;     // per spring: force (forces()), h² K Δv0 or S y (implicit)
   std::vector<double> vertex_work, vertex_work2;  // per vertex: terms of the CG sums
+  detail::CoarseSpace coarse;        // the CG's coarse level, built at the first implicit step
+  bool coarse_built = false;
   /// OpenMP threads for the spring and vertex loops (WorldDef::threads); every loop writes only
   /// its own element and every sum runs in index order, so any count gives the same bits.
   int threads = 1;
