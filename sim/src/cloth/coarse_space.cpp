@@ -169,7 +169,7 @@ bool CoarseSpace::factorize(double diag_m, const Sym3* aero, double h, const Sym
   return ok_;
 }
 
-void CoarseSpace::apply_add(const Vec3* r, Vec3* z) {
+void CoarseSpace::apply_add(const Vec3* r, Vec3* z, double* rz) {
   if (!ok_) return;
   rc_.setZero();
   for (std::size_t i = 0; i < n_; ++i) {
@@ -181,9 +181,11 @@ void CoarseSpace::apply_add(const Vec3* r, Vec3* z) {
   }
   ec_ = llt_.solve(rc_);
   for (std::size_t i = 0; i < n_; ++i) {
-    if (agg_[i] < 0) continue;
-    const auto k = Eigen::Index(3 * agg_[i]);
-    z[i] += Vec3(ec_[k], ec_[k + 1], ec_[k + 2]);
+    if (agg_[i] >= 0) {
+      const auto k = Eigen::Index(3 * agg_[i]);
+      z[i] += Vec3(ec_[k], ec_[k + 1], ec_[k + 2]);
+    }
+    if (rz != nullptr) rz[i] = r[i].dot(z[i]);
   }
 }
 

@@ -157,11 +157,7 @@ void Cloth::State::integrate_implicit(double h, double t1) {
       pd[i] = rp[i].dot(zp[i]);
       pd2[i] = rp[i].squaredNorm();
     }
-    if (two_level) {
-      coarse.apply_add(rp, zp);
-#pragma omp parallel for schedule(static) num_threads(th) if (par)
-      for (std::size_t i = 0; i < n; ++i) pd[i] = rp[i].dot(zp[i]);
-    }
+    if (two_level) coarse.apply_add(rp, zp, pd);  // pd[i] = r_i · z_i again, with the correction
     double rz_new = 0.0;
     rr = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
