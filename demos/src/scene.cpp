@@ -192,7 +192,7 @@ sim::BodyDef dynamic_body_def(const ColliderScene& c) {
 SceneWorld build_world(const Scene& scene) {
   sim::WorldDef def = scene.world;
   def.seed = scene.seed;
-  SceneWorld out{sim::World(def), {}, {}, {}, {}, {}, {}};
+  SceneWorld out{sim::World(def), {}, {}, {}, {}, {}, {}, {}};
   try {
     for (const auto& c : scene.colliders) {
       if (c.type == ColliderScene::Type::body) {
