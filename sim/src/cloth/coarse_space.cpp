@@ -73,7 +73,7 @@ void CoarseSpace::build(const ClothTopology& T, const std::vector<std::uint8_t>&
   // factorisation and solves cost more than they saved; the stretch graph once (704), 7.5
   // iterations and slower still; twice (88), 14.4 iterations and the least time; three times
   // (128 x 128), slower than block Jacobi alone.
-  std::vector<std::vector<std::uint32_t>> nb{std::size_t(m)};
+  std::vector<std::vector<std::uint32_t>> nb(static_cast<std::size_t>(m));
   for (std::size_t i = 0; i < n_; ++i) {
     if (agg_[i] < 0) continue;
     for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) {
