@@ -81,6 +81,25 @@
 // (OMP_WAIT_POLICY unset) the same run took 1.24 s wall on 2 threads against 1.47 s on 1, a
 // gain of 1.19x. The results are bit-identical at 1 and 2 threads (same counters; test
 // ClothSolver.SameBitsAtOneAndTwoThreads).
+//
+// Measured 2026-11-24, stop 37 (issue 16): the CG's product as a stencil over the grid's six
+// spring offsets (sim/src/cloth/spring_stencil.hpp: blocks, forces and CG vectors as structures
+// of arrays, loops vectorised with AVX2 clones), the CG's element-wise updates and the vertex
+// sums of the right-hand side and preconditioner in the same layout, the CG's sums in a fixed
+// 8-lane order, the aerodynamic loop's divisions turned into reciprocals. 64x64, 1 thread, four
+// runs of both engines one after the other on the otherwise idle machine (CPU s, simreel /
+// Bullet): 0.874/1.642 (0.53), 0.883/1.631 (0.54), 0.874/1.619 (0.54), 0.865/1.629 (0.53) —
+// 14.2 CG iterations and 7.2 strain passes per step, max strain 0.100. The whole benchmark once
+// (first run in the process, machine noisier):
+//   size     simreel 1 thr   simreel 2 thr   Bullet 3.24   ratio (1 thr)
+//   64x64    1.02 s          2.03 s          1.74 s        0.58
+//   128x128  6.29 s          6.90 s          8.33 s        0.75
+//   256x256  34.2 s          35.6 s          30.4 s        1.12
+// Where the 64x64 time goes now (perf): the stencil product 28 % (spring forces 18 %, sums
+// 11 %), the spring blocks 9 %, forces 14 % (aerodynamics 7 %), the coarse level 17 % (solve 5 %,
+// factorisation 6 %, restriction and prolongation 6 %), the strain pass 7 %, CG updates 7 %.
+// The aim (half of Bullet's time) is not met: 0.53-0.54 at best. Two threads still cost more
+// CPU than one with passive waits (the parallel loops are short at 64x64).
 #include <benchmark/benchmark.h>
 #include <time.h>
 

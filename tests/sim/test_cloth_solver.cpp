@@ -14,12 +14,14 @@
 #include <vector>
 
 #include "cloth/coarse_space.hpp"
+#include "cloth/spring_stencil.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace {
 
 using namespace simreel::sim;
 using detail::CoarseSpace;
+using detail::SpringStencil;
 using detail::Sym3;
 
 std::vector<std::uint8_t> free_but_two_corners(const ClothTopology& t) {
@@ -139,11 +141,134 @@ TEST(ClothCoarseSpace, CorrectionIsTheDenseGalerkinSolve) {
   }
   const Eigen::MatrixXd Ac = P.transpose() * A * P;
   const Eigen::VectorXd expected = P * Ac.llt().solve(P.transpose() * rv);
-  c.apply_add(r.data(), z.data());
+  // Structure of arrays, as the solver holds its vectors: x, y, z components n apart.
+  std::vector<double> rs(3 * n), zs(3 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < 3; ++k) rs[k * n + i] = r[i][Eigen::Index(k)];
+  c.apply_add(rs.data(), zs.data(), n);
+  for (std::size_t i = 0; i < n; ++i) z[i] = Vec3(zs[i], zs[n + i], zs[2 * n + i]);
   double err = 0.0;
   for (std::size_t i = 0; i < n; ++i)
     err = std::max(err, (z[i] - Vec3(expected.segment<3>(3 * Eigen::Index(i)))).cwiseAbs().maxCoeff());
   EXPECT_LT(err, 1e-9 * expected.cwiseAbs().maxCoeff()) << "largest difference " << err;
+}
+
+// The stencil product (cloth/spring_stencil) against the spring-by-spring sum it replaces:
+// random blocks, a random diagonal, some pinned rows, on grids whose classes and padding differ
+// (rectangular; one row; one column; 3 x 3, where the shear offset columns - 1 = 2 is the bend
+// offset), at 1 and 2 threads (the same bits).
+TEST(ClothStencil, GridProductIsTheSpringBySpringProduct) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto random_sym = [&] {
+    const Vec3 d = Vec3(u(rng), u(rng), u(rng));
+    Sym3 m = Sym3::outer(d, 2.0);
+    m.add_diagonal(0.5 + 0.5 * u(rng));
+    return m;
+  };
+  struct Size {
+    std::size_t rows, columns, classes;
+  };
+  for (const Size sz : {Size{17, 23, 6}, Size{1, 40, 2}, Size{40, 1, 2}, Size{3, 3, 5}}) {
+    const ClothTopology t(sz.rows, sz.columns, 1.0, 1.0);
+    SpringStencil st;
+    st.build(t);
+    ASSERT_EQ(st.class_count(), sz.classes) << sz.rows << " x " << sz.columns;
+    const std::size_t n = t.vertex_count(), ns = t.spring_count(), S = st.stride(), P = st.pad();
+    ASSERT_GE(S, n + 2 * P);
+    std::vector<Sym3> blocks(ns), diag(n);
+    for (std::size_t s = 0; s < ns; ++s) {
+      blocks[s] = s % 7 == 3 ? Sym3{} : random_sym();  // some springs left out (zero blocks)
+      st.set(s, blocks[s]);
+    }
+    std::vector<double> y(3 * S, 0.0), dg(6 * S, 0.0), out(3 * S, 0.0), mask(n), yAy(n);
+    std::vector<Vec3> yv(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      diag[i] = random_sym();
+      const double d[6] = {diag[i].xx, diag[i].xy, diag[i].xz, diag[i].yy, diag[i].yz, diag[i].zz};
+      for (std::size_t k = 0; k < 6; ++k) dg[k * S + P + i] = d[k];
+      mask[i] = i % 5 == 0 ? 0.0 : 1.0;
+      yv[i] = Vec3(u(rng), u(rng), u(rng));
+      for (std::size_t k = 0; k < 3; ++k) y[k * S + P + i] = yv[i][Eigen::Index(k)];
+    }
+    // Reference: each spring's S (y_a - y_b) added at a and subtracted at b.
+    std::vector<Vec3> ref(n);
+    for (std::size_t i = 0; i < n; ++i) ref[i] = diag[i] * yv[i];
+    for (std::size_t s = 0; s < ns; ++s) {
+      const Vec3 w = blocks[s] * Vec3(yv[t.spring_a[s]] - yv[t.spring_b[s]]);
+      ref[t.spring_a[s]] += w;
+      ref[t.spring_b[s]] -= w;
+    }
+    std::vector<double> first;
+    for (const int threads : {1, 2}) {
+      st.apply(y.data() + P, dg.data() + P, mask.data(), out.data() + P, yAy.data(), threads);
+      double err = 0.0, scale = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 o(out[P + i], out[S + P + i], out[2 * S + P + i]);
+        const Vec3 expect = mask[i] * ref[i];
+        err = std::max(err, (o - expect).cwiseAbs().maxCoeff());
+        scale = std::max(scale, ref[i].cwiseAbs().maxCoeff());
+        EXPECT_NEAR(yAy[i], yv[i].dot(expect), 1e-12 * (1.0 + std::abs(yv[i].dot(expect))));
+      }
+      EXPECT_LT(err, 1e-13 * scale) << sz.rows << " x " << sz.columns << ", " << threads
+                                    << " threads: largest difference " << err;
+      if (threads == 1) first = out;
+      else EXPECT_TRUE(first == out) << "2 threads changed the bits";
+    }
+    // assemble(): each vertex's inverse diagonal block D_i + Σ S_s and its right-hand side
+    // h f_i + Σ ±w_s, zero at pinned vertices.
+    std::vector<Vec3> w(ns), f(n), bref(n);
+    std::vector<Sym3> Pref(diag);
+    const double h = 0.02;
+    for (std::size_t i = 0; i < n; ++i) {
+      f[i] = Vec3(u(rng), u(rng), u(rng));
+      bref[i] = h * f[i];
+    }
+    for (std::size_t s = 0; s < ns; ++s) {
+      w[s] = Vec3(u(rng), u(rng), u(rng));
+      st.set_rhs(s, w[s]);
+      for (const std::uint32_t e : {t.spring_a[s], t.spring_b[s]}) Pref[e] += blocks[s];
+      bref[t.spring_a[s]] += w[s];
+      bref[t.spring_b[s]] -= w[s];
+    }
+    std::vector<double> pc(6 * S, 0.0), b(3 * S, 0.0);
+    st.assemble(dg.data() + P, mask.data(), h, f.data()->data(), pc.data() + P, b.data() + P, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Sym3 inv = Pref[i].inverse();
+      const double e[6] = {inv.xx, inv.xy, inv.xz, inv.yy, inv.yz, inv.zz};
+      for (std::size_t k = 0; k < 6; ++k)
+        EXPECT_NEAR(pc[k * S + P + i], mask[i] * e[k], 1e-12 * (1.0 + std::abs(e[k])))
+            << "vertex " << i << " entry " << k;
+      for (std::size_t k = 0; k < 3; ++k)
+        EXPECT_NEAR(b[k * S + P + i], mask[i] * bref[i][Eigen::Index(k)], 1e-13)
+            << "vertex " << i << " component " << k;
+    }
+  }
+}
+
+// A grid has six spring offsets; springs of scattered offsets (a fan of triangles around a
+// centre vertex) or two springs joining the same vertices leave the stencil empty.
+TEST(ClothStencil, OnlyFewOffsetClassesTakeTheStencil) {
+  ClothMesh fan;
+  fan.vertices.push_back(Vec3::Zero());
+  constexpr int kRim = 16;
+  for (int k = 0; k < kRim; ++k) {
+    const double a = 2.0 * 3.141592653589793 * k / kRim;
+    fan.vertices.push_back(Vec3(std::cos(a), std::sin(a), 0.0));
+  }
+  for (std::uint32_t k = 0; k < kRim; ++k)
+    fan.triangles.insert(fan.triangles.end(), {0, 1 + k, 1 + (k + 1) % kRim});
+  SpringStencil st;
+  st.build(ClothTopology(fan));
+  EXPECT_TRUE(st.empty());
+  EXPECT_EQ(st.pad(), 0u);
+  ClothTopology twice(8, 8, 1.0, 1.0);
+  twice.spring_a.push_back(twice.spring_a[0]);
+  twice.spring_b.push_back(twice.spring_b[0]);
+  twice.rest_length.push_back(twice.rest_length[0]);
+  twice.kind.push_back(twice.kind[0]);
+  st.build(twice);
+  EXPECT_TRUE(st.empty());
 }
 
 struct Hang {

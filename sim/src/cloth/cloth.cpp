@@ -159,13 +159,12 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
   S.vertex_work.assign(n, 0.0);
   S.vertex_work2.assign(n, 0.0);
   S.spring_dir.assign(ns, Vec3::Zero());
-  S.precond.assign(n, Sym3{});
   for (std::size_t i = 0; i < n; ++i)
     if (!S.free[i]) S.pinned.push_back(std::uint32_t(i));
   S.aero_active = def.aero.air_density > 0.0 &&
                   (def.aero.drag_coefficient > 0.0 || def.aero.lift_coefficient > 0.0);
   S.aero_damping.assign(S.aero_active ? n : 0, Sym3{});
-  for (auto* w : {&S.dv, &S.b, &S.r, &S.z, &S.p, &S.Ap, &S.origin, &S.path, &S.nacc})
+  for (auto* w : {&S.dv, &S.origin, &S.path, &S.nacc})
     w->assign(n, Vec3::Zero());
   S.t.assign(n, 1.0);
   S.t_next.assign(n, 1.0);

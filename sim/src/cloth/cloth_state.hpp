@@ -10,6 +10,7 @@
 #include "cloth/cloth_collide.hpp"
 #include "cloth/cloth_contacts.hpp"
 #include "cloth/coarse_space.hpp"
+#include "cloth/spring_stencil.hpp"
 #include "cloth/sym3.hpp"
 #include "simreel/sim/cloth.hpp"
 
@@ -34,15 +35,20 @@ struct Cloth::State {
   std::vector<double> spring_length; // per spring: current length (m), set by forces()
   std::vector<Vec3> spring_dir;      // per spring: unit a -> b, set by forces()
   std::vector<Sym3> S;               // per spring: h k_d nnᵀ + h² ∂f/∂x block
-  std::vector<Sym3> precond;         // per vertex: inverse of the diagonal block (0 if pinned)
   std::vector<Sym3> aero_damping;    // per vertex: -∂f_aero/∂v, lumped (implicit Euler only)
   std::vector<std::uint32_t> pinned;  // pinned vertex indices
   bool aero_active = false;
-  std::vector<Vec3> dv, b, r, z, p, Ap;
+  std::vector<Vec3> dv;              // Δv of the last implicit step (the next one's warm start)
+  // The CG's vectors (solution, residual, preconditioned residual, direction, product, right-hand
+  // side); the inverse diagonal blocks and each vertex's own block m' I + h aero (2 x 6 arrays
+  // xx xy xz yy yz zz), in the stencil's layout; 1/0 per free/pinned vertex. Sized at the first
+  // implicit step.
+  std::vector<double> cg_vectors, cg_precond, free_mask;
   std::vector<Vec3> spring_work;     // per spring: force (forces()), h² K Δv0 or S y (implicit)
   std::vector<double> vertex_work, vertex_work2;  // per vertex: terms of the CG sums
   detail::CoarseSpace coarse;        // the CG's coarse level, built at the first implicit step
-  bool coarse_built = false;
+  detail::SpringStencil stencil;     // the CG's product as a stencil (grid cloths) and layout
+  bool coarse_built = false;         // coarse, stencil and cg_* are set at the first implicit step
   /// OpenMP threads for the spring and vertex loops (WorldDef::threads); every loop writes only
   /// its own element and every sum runs in index order, so any count gives the same bits.
   int threads = 1;

@@ -2,6 +2,8 @@
 // spring graph (Vaněk, Mandel & Brezina 1996) and a sparse Cholesky solve of Pᵀ A P.
 #include "cloth/coarse_space.hpp"
 
+#include "core/vector_clones.hpp"
+
 #include <algorithm>
 #include <map>
 #include <utility>
@@ -136,8 +138,14 @@ void CoarseSpace::build(const ClothTopology& T, const std::vector<std::uint8_t>&
         blocks_[k].value[3 * r + c] = I != J || r >= c ? offset(3 * I + r, 3 * J + c) : -1;
   }
   llt_.analyzePattern(Ac_);
-  rc_.setZero(N);
+  // Pinned vertices point at a dummy aggregate past the last (its sums are discarded, its
+  // correction is zero): the restriction and prolongation loops then have no branch.
+  slot_.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i)
+    slot_[i] = agg_[i] >= 0 ? 3 * agg_[i] : std::int32_t(N);
+  rc_.setZero(N + 3);
   ec_.setZero(N);
+  ex_.assign(std::size_t(N) + 3, 0.0);
 }
 
 void CoarseSpace::add(const Block& blk, const Sym3& s, double sign) {
@@ -169,24 +177,42 @@ bool CoarseSpace::factorize(double diag_m, const Sym3* aero, double h, const Sym
   return ok_;
 }
 
-void CoarseSpace::apply_add(const Vec3* r, Vec3* z, double* rz) {
+namespace {
+
+/// z_i += e[slot_i .. slot_i + 2] (components `stride` apart), then rz_i = r_i · z_i if rz is
+/// not null: the prolongation P e and the CG's terms of rᵀz, element-wise.
+SIMREEL_VECTOR_CLONES
+void prolong(std::size_t n, const std::int32_t* __restrict slot, const double* __restrict e,
+             const double* __restrict r, double* __restrict z, std::size_t stride,
+             double* __restrict rz) {
+  const double *rx = r, *ry = r + stride, *rzc = r + 2 * stride;
+  double *zx = z, *zy = z + stride, *zz = z + 2 * stride;
+  for (std::size_t i = 0; i < n; ++i) {
+    zx[i] += e[slot[i]];
+    zy[i] += e[slot[i] + 1];
+    zz[i] += e[slot[i] + 2];
+  }
+  if (rz != nullptr)
+    for (std::size_t i = 0; i < n; ++i) rz[i] = rx[i] * zx[i] + ry[i] * zy[i] + rzc[i] * zz[i];
+}
+
+}  // namespace
+
+void CoarseSpace::apply_add(const double* r, double* z, std::size_t stride, double* rz) {
   if (!ok_) return;
+  const double *rx = r, *ry = r + stride, *rzc = r + 2 * stride;
   rc_.setZero();
+  double* rc = rc_.data();
   for (std::size_t i = 0; i < n_; ++i) {
-    if (agg_[i] < 0) continue;
-    const auto k = Eigen::Index(3 * agg_[i]);
-    rc_[k] += r[i].x();
-    rc_[k + 1] += r[i].y();
-    rc_[k + 2] += r[i].z();
+    const std::int32_t k = slot_[i];
+    rc[k] += rx[i];
+    rc[k + 1] += ry[i];
+    rc[k + 2] += rzc[i];
   }
-  ec_ = llt_.solve(rc_);
-  for (std::size_t i = 0; i < n_; ++i) {
-    if (agg_[i] >= 0) {
-      const auto k = Eigen::Index(3 * agg_[i]);
-      z[i] += Vec3(ec_[k], ec_[k + 1], ec_[k + 2]);
-    }
-    if (rz != nullptr) rz[i] = r[i].dot(z[i]);
-  }
+  const Eigen::Index N = ec_.size();
+  ec_ = llt_.solve(rc_.head(N));
+  std::copy(ec_.data(), ec_.data() + N, ex_.begin());  // ex_'s last 3 (the dummy) stay zero
+  prolong(n_, slot_.data(), ex_.data(), r, z, stride, rz);
 }
 
 }  // namespace simreel::sim::detail

@@ -60,9 +60,10 @@ class CoarseSpace {
   /// then skipped this step) if the factorisation fails, which needs A not positive definite.
   bool factorize(double diag_m, const Sym3* aero, double h, const Sym3* S, const double* len);
 
-  /// z += P A_c⁻¹ Pᵀ r over the free vertices (r, z: n entries); then, if rz is not null,
-  /// rz[i] = r[i] · z[i] for every vertex (the CG's terms of rᵀz, in the same pass).
-  void apply_add(const Vec3* r, Vec3* z, double* rz = nullptr);
+  /// z += P A_c⁻¹ Pᵀ r over the free vertices; then, if rz is not null, rz[i] = r_i · z_i for
+  /// every vertex (the CG's terms of rᵀz, in the same pass). r and z are structures of arrays
+  /// (vertex i's x, y, z at [i], [stride + i], [2 stride + i]; SpringStencil's layout).
+  void apply_add(const double* r, double* z, std::size_t stride, double* rz = nullptr);
 
   static constexpr std::size_t kMinVertices = 256;
 
@@ -85,7 +86,9 @@ class CoarseSpace {
   std::vector<Block> blocks_;  // diagonal blocks first (index = aggregate), then off-diagonal
   Eigen::SparseMatrix<double> Ac_;  // lower triangle
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt_;
-  Eigen::VectorXd rc_, ec_;
+  Eigen::VectorXd rc_, ec_;        // Pᵀ r (and 3 dummy entries for pinned vertices), A_c⁻¹ Pᵀ r
+  std::vector<std::int32_t> slot_;  // per vertex: 3 × its aggregate, or the dummy's 3 N if pinned
+  std::vector<double> ex_;          // ec_ and 3 zeros (the dummy's correction)
   bool ok_ = false;  // the last factorisation succeeded
 };
 
