@@ -114,14 +114,7 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   double* __restrict b = vec + 15 * st;
   double* __restrict pc = cg_precond.data() + stencil.pad();
   double* __restrict dg = pc + 6 * st;  // each vertex's own block m' I + h aero_i
-  auto put_sym = [st](double* u, std::size_t i, const Sym3& m) {
-    u[i] = m.xx;
-    u[st + i] = m.xy;
-    u[2 * st + i] = m.xz;
-    u[3 * st + i] = m.yy;
-    u[4 * st + i] = m.yz;
-    u[5 * st + i] = m.zz;
-  };
+  auto put_sym = [st](double* u, std::size_t i, const Sym3& m) { m.store(u + i, st); };
   auto get = [st](const double* u, std::size_t i) { return Vec3(u[i], u[st + i], u[2 * st + i]); };
   auto put = [st](double* u, std::size_t i, const Vec3& w) {
     u[i] = w.x();

@@ -45,15 +45,7 @@ class SpringStencil {
   [[nodiscard]] std::size_t pad() const { return pad_; }
 
   /// Stores spring s's block for the next products (a zero block leaves the spring out).
-  void set(std::size_t s, const Sym3& b) {
-    double* p = blocks_.data() + slot_[s];
-    p[0] = b.xx;
-    p[stride_] = b.xy;
-    p[2 * stride_] = b.xz;
-    p[3 * stride_] = b.yy;
-    p[4 * stride_] = b.yz;
-    p[5 * stride_] = b.zz;
-  }
+  void set(std::size_t s, const Sym3& b) { b.store(blocks_.data() + slot_[s], stride_); }
 
   /// Stores spring s's term of the right-hand side, w = h² K (v_b - v_a) (assemble() adds it at
   /// its first vertex a and subtracts it at b). Shares its storage with apply()'s forces.

@@ -1,6 +1,8 @@
 #pragma once
 // A symmetric 3x3 block for the cloth's implicit solver (private to cloth/).
 
+#include <cstddef>
+
 #include "simreel/sim/types.hpp"
 
 namespace simreel::sim::detail {
@@ -29,6 +31,16 @@ struct Sym3 {
     const double id = 1.0 / det;
     return {c_xx * id, c_xy * id, c_xz * id, (xx * zz - xz * xz) * id,
             (xz * xy - xx * yz) * id, (xx * yy - xy * xy) * id};
+  }
+  /// Writes the 6 numbers to p[0], p[stride], ... p[5 stride] (xx xy xz yy yz zz): one entry of
+  /// a structure of arrays (the implicit solver's layout, spring_stencil.hpp).
+  void store(double* p, std::size_t stride) const {
+    p[0] = xx;
+    p[stride] = xy;
+    p[2 * stride] = xz;
+    p[3 * stride] = yy;
+    p[4 * stride] = yz;
+    p[5 * stride] = zz;
   }
 };
 
