@@ -4,7 +4,10 @@
 // SceneList glue (no GL).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <numbers>
 #include <string>
 
@@ -18,12 +21,14 @@ using simreel::app::append_moved;
 using simreel::app::build_world;
 using simreel::app::dynamic_body_def;
 using simreel::app::json;
+using simreel::app::load_scene;
 using simreel::app::Scene;
 using simreel::app::scene_from_json;
 using simreel::app::SceneError;
 using simreel::app::SceneWorld;
 namespace render = simreel::render;
 namespace sim = simreel::sim;
+namespace fs = std::filesystem;
 
 std::string errors_of(const char* text) {
   try {
@@ -176,6 +181,35 @@ TEST(SceneBodies, BoxFallsOntoThePlaneAndRests) {
   EXPECT_NEAR(p.translation.y(), 0.0, 1e-2);
   // Still upright: the body z axis stays along the world z axis.
   EXPECT_NEAR(p.rotation(2, 2), 1.0, 1e-3);
+}
+
+// The cloth_pile demo (a free sheet dropped over a pile of bodies; two-way coupling, §3.7) over
+// its whole length: nothing diverges and no body is spun up wildly. Its capsule, squeezed between
+// the sheet's edge and the ground, used to be spun from 22 to 205 rad/s in two frames (~frame 71)
+// and on until the simulation stopped as diverged at frame 113: every round of the cloth's
+// contact passes logged its push on the body again. Known and still open (issue 16): the first
+// round's pushes, which undo position errors rather than stop an approach, still spin it to
+// ~60 rad/s for a few frames; the bound here is the one the fixed build must keep.
+TEST(SceneBodies, ClothPileDemoKeepsEveryBodyCalm) {
+  const Scene scene = load_scene(fs::path(SIMREEL_SOURCE_DIR) / "demos" / "scenes" / "cloth_pile.json");
+  SceneWorld sw = build_world(scene);
+  double fastest_spin = 0.0, fastest = 0.0;
+  int at = -1;
+  for (int frame = 0; frame < scene.frames; ++frame) {
+    ASSERT_NO_THROW(sw.world.advance(1.0 / scene.fps)) << "frame " << frame;
+    for (const sim::BodyHandle h : sw.colliders) {
+      const auto [v, w] = sw.world.velocity(h);
+      if (w.norm() > fastest_spin) {
+        fastest_spin = w.norm();
+        at = frame;
+      }
+      fastest = std::max(fastest, v.norm());
+    }
+  }
+  std::printf("cloth_pile: fastest spin %.1f rad/s (frame %d), fastest body %.2f m/s\n",
+              fastest_spin, at, fastest);
+  EXPECT_LT(fastest_spin, 100.0) << "frame " << at;
+  EXPECT_LT(fastest, 6.0);  // the bodies fall from at most 1.6 m: sqrt(2 g 1.6) = 5.6 m/s
 }
 
 TEST(SceneBodies, CouplingKeysReachTheDefinitions) {

@@ -13,6 +13,7 @@
 #include <random>
 #include <vector>
 
+#include "cloth/aero.hpp"
 #include "cloth/coarse_space.hpp"
 #include "cloth/spring_stencil.hpp"
 #include "simreel/sim/world.hpp"
@@ -172,14 +173,19 @@ TEST(ClothStencil, GridProductIsTheSpringBySpringProduct) {
   for (const Size sz : {Size{17, 23, 6}, Size{1, 40, 2}, Size{40, 1, 2}, Size{3, 3, 5}}) {
     const ClothTopology t(sz.rows, sz.columns, 1.0, 1.0);
     SpringStencil st;
-    st.build(t);
+    st.build(t, {}, {});
     ASSERT_EQ(st.class_count(), sz.classes) << sz.rows << " x " << sz.columns;
     const std::size_t n = t.vertex_count(), ns = t.spring_count(), S = st.stride(), P = st.pad();
     ASSERT_GE(S, n + 2 * P);
+    // Blocks q qᵀ + β I, some springs left out (zero blocks).
     std::vector<Sym3> blocks(ns), diag(n);
     for (std::size_t s = 0; s < ns; ++s) {
-      blocks[s] = s % 7 == 3 ? Sym3{} : random_sym();  // some springs left out (zero blocks)
-      st.set(s, blocks[s]);
+      const bool out = s % 7 == 3;
+      const Vec3 q = out ? Vec3::Zero() : Vec3(u(rng), u(rng), u(rng));
+      const double beta = out ? 0.0 : 0.5 + 0.5 * u(rng);
+      blocks[s] = Sym3::outer(q, 1.0);
+      blocks[s].add_diagonal(beta);
+      st.set(s, q, beta);
     }
     std::vector<double> y(3 * S, 0.0), dg(6 * S, 0.0), out(3 * S, 0.0), mask(n), yAy(n);
     std::vector<Vec3> yv(n);
@@ -218,10 +224,12 @@ TEST(ClothStencil, GridProductIsTheSpringBySpringProduct) {
     // assemble(): each vertex's inverse diagonal block D_i + Σ S_s and its right-hand side
     // h f_i + Σ ±w_s, zero at pinned vertices.
     std::vector<Vec3> w(ns), f(n), bref(n);
+    std::vector<double> fs(3 * S, 0.0);
     std::vector<Sym3> Pref(diag);
     const double h = 0.02;
     for (std::size_t i = 0; i < n; ++i) {
       f[i] = Vec3(u(rng), u(rng), u(rng));
+      for (std::size_t k = 0; k < 3; ++k) fs[k * S + P + i] = f[i][Eigen::Index(k)];
       bref[i] = h * f[i];
     }
     for (std::size_t s = 0; s < ns; ++s) {
@@ -232,7 +240,7 @@ TEST(ClothStencil, GridProductIsTheSpringBySpringProduct) {
       bref[t.spring_b[s]] -= w[s];
     }
     std::vector<double> pc(6 * S, 0.0), b(3 * S, 0.0);
-    st.assemble(dg.data() + P, mask.data(), h, f.data()->data(), pc.data() + P, b.data() + P, 1);
+    st.assemble(dg.data() + P, mask.data(), h, fs.data() + P, pc.data() + P, b.data() + P, 1);
     for (std::size_t i = 0; i < n; ++i) {
       const Sym3 inv = Pref[i].inverse();
       const double e[6] = {inv.xx, inv.xy, inv.xz, inv.yy, inv.yz, inv.zz};
@@ -243,6 +251,108 @@ TEST(ClothStencil, GridProductIsTheSpringBySpringProduct) {
         EXPECT_NEAR(b[k * S + P + i], mask[i] * bref[i][Eigen::Index(k)], 1e-13)
             << "vertex " << i << " component " << k;
     }
+  }
+}
+
+// The stencil's spring forces, blocks and right-hand side against the plain per-spring formulas
+// (Coutinho §3.9.2; Baraff & Witkin 1998, eq. 6): a perturbed 13 x 9 grid with springs
+// stretched and compressed (the transverse term only when stretched), a few springs stored
+// high index first and one of length 0 (no force, no block), at 1 and 2 threads.
+TEST(ClothStencil, ForcesAndBlocksAreTheSpringBySpringOnes) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ClothTopology t(13, 9, 1.2, 0.8);
+  const std::size_t n = t.vertex_count(), ns = t.spring_count();
+  for (std::size_t s = 0; s < ns; s += 5) std::swap(t.spring_a[s], t.spring_b[s]);
+  std::vector<double> ks(ns), kds(ns);
+  for (std::size_t s = 0; s < ns; ++s) {
+    ks[s] = 500.0 * (1.5 + u(rng));
+    kds[s] = 0.2 * (1.0 + u(rng));
+  }
+  std::vector<Vec3> x(n), v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = Vec3(t.local_rest[i].x(), t.local_rest[i].y(), 0.0) * 1.05 +
+           0.02 * Vec3(u(rng), u(rng), u(rng));
+    v[i] = Vec3(u(rng), u(rng), u(rng));
+  }
+  const std::uint32_t z0 = t.spring_a[3], z1 = t.spring_b[3];
+  x[z1] = x[z0];  // spring 3 has length 0
+  SpringStencil st;
+  st.build(t, ks, kds);
+  ASSERT_FALSE(st.empty());
+  const std::size_t S = st.stride(), P = st.pad();
+  auto soa = [&](const std::vector<Vec3>& a) {
+    std::vector<double> o(3 * S, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = 0; k < 3; ++k) o[k * S + P + i] = a[i][Eigen::Index(k)];
+    return o;
+  };
+  const std::vector<double> xs = soa(x), vs = soa(v);
+  const double m = 0.01, c = 0.3, h = 1.0 / 60;
+  const Vec3 g(0.1, -0.2, -9.81);
+  // Reference, spring by spring.
+  std::vector<Vec3> fref(n), bref(n, Vec3::Zero());
+  std::vector<Sym3> Sref(ns), Dref(n);
+  for (std::size_t i = 0; i < n; ++i) fref[i] = m * (g - c * v[i]);
+  std::size_t stretched = 0, compressed = 0;
+  for (std::size_t s = 0; s < ns; ++s) {
+    const std::uint32_t a = t.spring_a[s], b = t.spring_b[s];
+    const Vec3 d = x[b] - x[a];
+    const double l = d.norm();
+    if (!(l > 0.0)) continue;
+    const Vec3 uu = d / l;
+    const Vec3 F = (ks[s] * (l - t.rest_length[s]) + kds[s] * (v[b] - v[a]).dot(uu)) * uu;
+    fref[a] += F;
+    fref[b] -= F;
+    const double tau = ks[s] * std::max(0.0, 1.0 - t.rest_length[s] / l);
+    (tau > 0.0 ? stretched : compressed) += 1;
+    Sref[s] = Sym3::outer(uu, h * h * (ks[s] - tau) + h * kds[s]);
+    Sref[s].add_diagonal(h * h * tau);
+    const Vec3 w = h * h * ((ks[s] - tau) * uu.dot(v[b] - v[a]) * uu + tau * (v[b] - v[a]));
+    bref[a] += w;
+    bref[b] -= w;
+    Dref[a] += Sref[s];
+    Dref[b] += Sref[s];
+  }
+  ASSERT_GT(stretched, 20u);
+  ASSERT_GT(compressed, 20u);
+  for (std::size_t i = 0; i < n; ++i) {
+    bref[i] += h * fref[i];
+    Dref[i].add_diagonal(m);
+  }
+  std::vector<double> first;
+  for (const int threads : {1, 2}) {
+    std::vector<double> fs(3 * S, 0.0);
+    st.forces(xs.data() + P, vs.data() + P, m, g, c, fs.data() + P, threads);
+    st.blocks(h, vs.data() + P, threads);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = 0; k < 3; ++k)
+        ASSERT_NEAR(fs[k * S + P + i], fref[i][Eigen::Index(k)], 1e-11 * (1.0 + fref[i].norm()))
+            << "force at vertex " << i << ", " << threads << " threads";
+    for (std::size_t s = 0; s < ns; ++s) {
+      const Sym3 b = st.block(s), r = Sref[s];
+      const double e[6] = {b.xx - r.xx, b.xy - r.xy, b.xz - r.xz, b.yy - r.yy, b.yz - r.yz,
+                           b.zz - r.zz};
+      for (const double d : e) ASSERT_NEAR(d, 0.0, 1e-12) << "block of spring " << s;
+    }
+    EXPECT_EQ(st.length(3), 0.0);
+    EXPECT_NEAR(st.length(0), (x[t.spring_b[0]] - x[t.spring_a[0]]).norm(), 1e-15);
+    // The right-hand side and inverse diagonal blocks assembled from these (no pinned vertex).
+    std::vector<double> dg(6 * S, 0.0), mask(n, 1.0), pc(6 * S, 0.0), bb(3 * S, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (const std::size_t k : {0u, 3u, 5u}) dg[k * S + P + i] = m;
+    st.assemble(dg.data() + P, mask.data(), h, fs.data() + P, pc.data() + P, bb.data() + P,
+                threads);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = 0; k < 3; ++k)
+        ASSERT_NEAR(bb[k * S + P + i], bref[i][Eigen::Index(k)], 1e-12)
+            << "right-hand side at vertex " << i << ", " << threads << " threads";
+      const Sym3 inv = Dref[i].inverse();
+      ASSERT_NEAR(pc[P + i], inv.xx, 1e-9 * std::abs(inv.xx)) << "vertex " << i;
+      ASSERT_NEAR(pc[4 * S + P + i], inv.yz, 1e-9 * (std::abs(inv.xx) + std::abs(inv.yz)));
+    }
+    if (threads == 1) first = fs;
+    else EXPECT_TRUE(first == fs) << "2 threads changed the forces' bits";
   }
 }
 
@@ -259,7 +369,7 @@ TEST(ClothStencil, OnlyFewOffsetClassesTakeTheStencil) {
   for (std::uint32_t k = 0; k < kRim; ++k)
     fan.triangles.insert(fan.triangles.end(), {0, 1 + k, 1 + (k + 1) % kRim});
   SpringStencil st;
-  st.build(ClothTopology(fan));
+  st.build(ClothTopology(fan), {}, {});
   EXPECT_TRUE(st.empty());
   EXPECT_EQ(st.pad(), 0u);
   ClothTopology twice(8, 8, 1.0, 1.0);
@@ -267,8 +377,104 @@ TEST(ClothStencil, OnlyFewOffsetClassesTakeTheStencil) {
   twice.spring_b.push_back(twice.spring_b[0]);
   twice.rest_length.push_back(twice.rest_length[0]);
   twice.kind.push_back(twice.kind[0]);
-  st.build(twice);
+  st.build(twice, {}, {});
   EXPECT_TRUE(st.empty());
+}
+
+// The aerodynamic force and damping block of each triangle (Coutinho §3.9.2's wind force with
+// lift; aero.hpp) against the per-triangle formula written with Eigen, summed per vertex: the
+// general loop over a triangle list and the grid loop by cell, at 1 and 2 threads. A 7 x 5 grid
+// with a crumpled sheet (normals both ways to the wind), one triangle of zero area and one
+// moving with the wind (still air): those two add nothing.
+TEST(ClothAero, GridAndTriangleLoopsAreThePerTriangleFormula) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const ClothTopology t(7, 5, 1.0, 0.8);
+  const std::size_t n = t.vertex_count(), C = t.columns, nt = t.triangles.size() / 3;
+  const detail::AeroCoefficients k{1.225, 1.1, 0.6};
+  const Vec3 wind(6.0, -2.0, 1.0);
+  std::vector<Vec3> x(n), v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = t.local_rest[i] + 0.08 * Vec3(u(rng), u(rng), u(rng));
+    v[i] = 2.0 * Vec3(u(rng), u(rng), u(rng));
+  }
+  x[1] = x[0];  // triangle (0, 6, 1) of cell 0 has zero area
+  v[C + 3] = v[2 * C + 4] = v[C + 4] = wind;  // cell (1, 3)'s first triangle: still air
+  std::vector<Vec3> fref(n, Vec3::Zero());
+  std::vector<Sym3> Dref(n);
+  std::size_t live = 0, turned = 0;
+  for (std::size_t k3 = 0; k3 < t.triangles.size(); k3 += 3) {
+    const std::uint32_t i0 = t.triangles[k3], i1 = t.triangles[k3 + 1], i2 = t.triangles[k3 + 2];
+    const Vec3 uu = wind - (v[i0] + v[i1] + v[i2]) / 3.0;
+    Vec3 nrm = (x[i1] - x[i0]).cross(x[i2] - x[i0]);
+    const double area2 = nrm.norm();
+    if (!(uu.squaredNorm() > 0.0) || !(area2 > 0.0)) continue;
+    ++live;
+    nrm /= area2;
+    const Vec3 uh = uu.normalized();
+    double c = nrm.dot(uh);
+    if (c < 0.0) {
+      nrm = -nrm;
+      c = -c;
+      ++turned;
+    }
+    const double q = 0.5 * k.rho * uu.squaredNorm() * 0.5 * area2;
+    Vec3 F = q * k.cd * c * nrm;
+    const Vec3 l = nrm - c * uh;
+    if (l.squaredNorm() > 1e-24) F += q * k.cl * c * l;
+    const Sym3 D = Sym3::outer(nrm, q * k.cd / uu.norm() * (1.0 + c) / 3.0);
+    for (const std::uint32_t i : {i0, i1, i2}) {
+      fref[i] += F / 3.0;
+      Dref[i] += D;
+    }
+  }
+  ASSERT_EQ(live, nt - 2);
+  ASSERT_GT(turned, 3u);
+  ASSERT_LT(turned, live - 3);
+  // The layout the grid loop needs: columns + 1 of padding on both sides.
+  const std::size_t P = C + 1, S = n + 2 * P;
+  std::vector<double> xs(3 * S, 0.0), vs(3 * S, 0.0), winds(6 * S, 0.0), cells(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t e = 0; e < 3; ++e) {
+      xs[e * S + P + i] = x[i][Eigen::Index(e)];
+      vs[e * S + P + i] = v[i][Eigen::Index(e)];
+      winds[e * S + P + i] = winds[(3 + e) * S + P + i] = wind[Eigen::Index(e)];
+    }
+  for (std::size_t r = 0; r + 1 < t.rows; ++r)
+    for (std::size_t c = 0; c + 1 < C; ++c) cells[r * C + c] = 1.0;
+  auto check = [&](const double* f, std::size_t fs, const double* D, std::size_t ds,
+                   const char* what) {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t e = 0; e < 3; ++e)
+        ASSERT_NEAR(f[e * fs + i], fref[i][Eigen::Index(e)], 1e-13) << what << ", vertex " << i;
+      const double d[6] = {Dref[i].xx, Dref[i].xy, Dref[i].xz, Dref[i].yy, Dref[i].yz, Dref[i].zz};
+      for (std::size_t e = 0; e < 6; ++e)
+        ASSERT_NEAR(D[e * ds + i], d[e], 1e-13) << what << ", block entry " << e << " at " << i;
+    }
+  };
+  std::vector<double> first;
+  for (const int threads : {1, 2}) {
+    std::vector<double> work(18 * S, 0.0), f(3 * S, 0.0), D(6 * S, 0.0);
+    detail::aero_grid(t.rows, C, xs.data() + P, vs.data() + P, std::ptrdiff_t(S),
+                      winds.data() + P, cells.data(), k, work.data() + P, f.data() + P,
+                      D.data() + P, threads);
+    check(f.data() + P, S, D.data() + P, S, threads == 1 ? "grid, 1 thread" : "grid, 2 threads");
+    if (threads == 1) first = f;
+    else EXPECT_TRUE(first == f) << "2 threads changed the bits";
+  }
+  // The general loop over the triangle list, its terms added in triangle order.
+  std::vector<double> tw(3 * nt), out(9 * nt), f(3 * n, 0.0), D(6 * n, 0.0);
+  for (std::size_t j = 0; j < nt; ++j)
+    for (std::size_t e = 0; e < 3; ++e) tw[e * nt + j] = wind[Eigen::Index(e)];
+  detail::aero_triangles(nt, t.triangles.data(), xs.data() + P, vs.data() + P, std::ptrdiff_t(S),
+                         tw.data(), k, out.data());
+  for (std::size_t j = 0; j < nt; ++j)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::uint32_t i = t.triangles[3 * j + c];
+      for (std::size_t e = 0; e < 3; ++e) f[e * n + i] += out[e * nt + j];
+      for (std::size_t e = 0; e < 6; ++e) D[e * n + i] += out[(3 + e) * nt + j];
+    }
+  check(f.data(), n, D.data(), n, "triangle list");
 }
 
 struct Hang {

@@ -154,6 +154,8 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
     S.ks[s] = S.k_of(s);
     S.kds[s] = S.kd_of(s);
   }
+  S.stencil.build(*S.topo, S.ks, S.kds);
+  S.soa.assign(3 * 3 * S.stencil.stride(), 0.0);
   S.spring_length.assign(ns, 0.0);
   S.spring_work.assign(ns, Vec3::Zero());
   S.vertex_work.assign(n, 0.0);
@@ -164,6 +166,18 @@ Cloth::Cloth(const ClothDef& def, std::shared_ptr<const ClothTopology> topology,
   S.aero_active = def.aero.air_density > 0.0 &&
                   (def.aero.drag_coefficient > 0.0 || def.aero.lift_coefficient > 0.0);
   S.aero_damping.assign(S.aero_active ? n : 0, Sym3{});
+  const ClothTopology& T = *S.topo;
+  S.aero_grid = S.aero_active && !T.from_mesh && T.rows >= 2 && T.columns >= 2 &&
+                !S.stencil.empty() && S.stencil.pad() >= T.columns + 1;
+  if (S.aero_grid) {
+    const std::size_t st = S.stencil.stride();
+    S.aero_work.assign(31 * st, 0.0);
+    double* cells = S.aero_work.data() + S.stencil.pad() + 6 * st;
+    for (std::size_t r = 0; r + 1 < T.rows; ++r)
+      for (std::size_t c = 0; c + 1 < T.columns; ++c) cells[r * T.columns + c] = 1.0;
+  } else {
+    S.aero_work.assign(S.aero_active ? 12 * (T.triangles.size() / 3) : 0, 0.0);
+  }
   for (auto* w : {&S.dv, &S.origin, &S.path, &S.nacc})
     w->assign(n, Vec3::Zero());
   S.t.assign(n, 1.0);
@@ -222,23 +236,27 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     S.contact_views.assign(1, S.contact_view());
     S.contact_views[0].self = S.contact_views[0].others = false;
     for (int round = 0; round <= kFeatureRounds; ++round) {
-      // On a pinned sheet these rounds undo the strain pass's pull back into a dynamic body:
-      // logging each round's push would hand the body the sheet's tension once per round (a
-      // light body resting on the sheet was thrown off it); hold_dynamic_bodies hands it over
-      // once, as the impulse that stops the body. (The first vertex pass, the vertices' own
-      // momentum change against the body, is logged.)
-      if (held_bodies != nullptr) impulses->muted = true;
+      // These rounds undo the strain pass's pull back into the colliders. What a dynamic body
+      // takes is logged once: the first vertex pass (the vertices' own momentum against it) and
+      // the first round's feature contacts. Logging every round's push handed the body the same
+      // correction once per round: a light body resting on a pinned sheet was thrown off it, and
+      // the capsule of the cloth_pile demo, squeezed between a free sheet and the ground, was
+      // spun up to 200 rad/s and on until the simulation diverged. On a pinned sheet no round
+      // logs: hold_dynamic_bodies hands the tension over once, as the impulse that stops the
+      // body.
+      if (impulses != nullptr) impulses->muted = held_bodies != nullptr || round > 0;
       const detail::ContactStats st = detail::collide_cloth_features(
           S.contact_views, colliders, false, h, S.contact_scratch, impulses);
       S.contact_stats.contacts += st.contacts;
       if (st.contacts == 0) break;
+      if (impulses != nullptr) impulses->muted = true;
       detail::collide_cloth(S.x, S.v, S.x_start, S.free, *colliders, S.def.thickness,
                             S.def.friction, S.hit, S.vertex_mass, impulses, &S.pushed_normal,
                             held_bodies);
       if (!S.max_deformation_pass()) break;
     }
   }
-  if (held_bodies != nullptr) impulses->muted = false;
+  if (impulses != nullptr) impulses->muted = false;
   if (held_bodies != nullptr)
     detail::hold_dynamic_bodies(S.x, S.v, S.free, S.def.thickness, h, *held_bodies, *impulses);
   bool finite = true;

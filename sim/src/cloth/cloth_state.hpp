@@ -44,11 +44,22 @@ struct Cloth::State {
   // xx xy xz yy yz zz), in the stencil's layout; 1/0 per free/pinned vertex. Sized at the first
   // implicit step.
   std::vector<double> cg_vectors, cg_precond, free_mask;
+  // x, v and f as structures of arrays in the stencil's layout (3 vectors), for the stencil's
+  // spring loops (grid cloths) and the aerodynamic kernel; sized at construction.
+  std::vector<double> soa;
+  // Aerodynamics workspace (aero.hpp): a grid cloth's (aero_grid: 31 arrays in the stencil's
+  // layout: the wind at both triangles of each cell, the cells' mask, their terms, the damping
+  // blocks), or a mesh cloth's (12 arrays of one per triangle: wind, force, damping block).
+  std::vector<double> aero_work;
+  bool aero_grid = false;
+  // Springs whose block and length the coarse level and the pinned columns read one by one
+  // (stencil path: copied into S and spring_length after the blocks are made).
+  std::vector<std::uint32_t> listed_springs;
   std::vector<Vec3> spring_work;     // per spring: force (forces()), h² K Δv0 or S y (implicit)
   std::vector<double> vertex_work, vertex_work2;  // per vertex: terms of the CG sums
   detail::CoarseSpace coarse;        // the CG's coarse level, built at the first implicit step
-  detail::SpringStencil stencil;     // the CG's product as a stencil (grid cloths) and layout
-  bool coarse_built = false;         // coarse, stencil and cg_* are set at the first implicit step
+  detail::SpringStencil stencil;     // springs as a stencil (grid cloths) and the CG's layout
+  bool coarse_built = false;         // coarse and cg_* are set at the first implicit step
   /// OpenMP threads for the spring and vertex loops (WorldDef::threads); every loop writes only
   /// its own element and every sum runs in index order, so any count gives the same bits.
   int threads = 1;

@@ -126,6 +126,7 @@ void CoarseSpace::build(const ClothTopology& T, const std::vector<std::uint8_t>&
   Ac_.setFromTriplets(entries.begin(), entries.end());
   Ac_.makeCompressed();
   blocks_.assign(block_ij.size(), Block{});
+  sums_.assign(block_ij.size(), Sym3{});
   const auto offset = [&](Eigen::Index row, Eigen::Index col) {
     const int* first = Ac_.innerIndexPtr() + Ac_.outerIndexPtr()[col];
     const int* last = Ac_.innerIndexPtr() + Ac_.outerIndexPtr()[col + 1];
@@ -158,20 +159,26 @@ void CoarseSpace::add(const Block& blk, const Sym3& s, double sign) {
 bool CoarseSpace::factorize(double diag_m, const Sym3* aero, double h, const Sym3* S,
                             const double* len) {
   if (empty()) return false;
-  std::fill(Ac_.valuePtr(), Ac_.valuePtr() + Ac_.nonZeros(), 0.0);
+  // Each block's terms summed as Sym3 first, then written to A_c once: the writes go through
+  // the CSC offsets one entry at a time, and per vertex and spring they were most of this
+  // function's time.
+  std::fill(sums_.begin(), sums_.end(), Sym3{});
   for (std::size_t i = 0; i < n_; ++i) {
     if (agg_[i] < 0) continue;
-    Sym3 d = aero != nullptr ? aero[i].scaled(h) : Sym3{};
+    Sym3& d = sums_[std::size_t(agg_[i])];
+    if (aero != nullptr) d += aero[i].scaled(h);
     d.add_diagonal(diag_m);
-    add(blocks_[std::size_t(agg_[i])], d, 1.0);
   }
   for (const Crossing& c : crossing_) {
     if (!(len[c.spring] > 0.0)) continue;
     const Sym3& b = S[c.spring];
-    if (c.diag_a >= 0) add(blocks_[std::size_t(c.diag_a)], b, 1.0);
-    if (c.diag_b >= 0) add(blocks_[std::size_t(c.diag_b)], b, 1.0);
-    if (c.off >= 0) add(blocks_[std::size_t(c.off)], b, -1.0);
+    if (c.diag_a >= 0) sums_[std::size_t(c.diag_a)] += b;
+    if (c.diag_b >= 0) sums_[std::size_t(c.diag_b)] += b;
+    if (c.off >= 0) sums_[std::size_t(c.off)] += b;  // enters with a minus sign
   }
+  std::fill(Ac_.valuePtr(), Ac_.valuePtr() + Ac_.nonZeros(), 0.0);
+  for (std::size_t k = 0; k < blocks_.size(); ++k)
+    add(blocks_[k], sums_[k], k < aggregates_ ? 1.0 : -1.0);
   llt_.factorize(Ac_);
   ok_ = llt_.info() == Eigen::Success;
   return ok_;

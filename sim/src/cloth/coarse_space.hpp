@@ -65,6 +65,12 @@ class CoarseSpace {
   /// (vertex i's x, y, z at [i], [stride + i], [2 stride + i]; SpringStencil's layout).
   void apply_add(const double* r, double* z, std::size_t stride, double* rz = nullptr);
 
+  /// Appends to `out` the springs whose blocks factorize() reads (those that join two
+  /// aggregates or an aggregate and a pinned vertex).
+  void list_springs(std::vector<std::uint32_t>& out) const {
+    for (const Crossing& c : crossing_) out.push_back(c.spring);
+  }
+
   static constexpr std::size_t kMinVertices = 256;
 
  private:
@@ -84,6 +90,7 @@ class CoarseSpace {
   };
   std::vector<Crossing> crossing_;
   std::vector<Block> blocks_;  // diagonal blocks first (index = aggregate), then off-diagonal
+  std::vector<Sym3> sums_;     // per block: its sum of vertex and spring blocks (factorize)
   Eigen::SparseMatrix<double> Ac_;  // lower triangle
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt_;
   Eigen::VectorXd rc_, ec_;        // Pᵀ r (and 3 dummy entries for pinned vertices), A_c⁻¹ Pᵀ r

@@ -92,16 +92,35 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   const double diag_m = vertex_mass * (1.0 + h * def.damping);
   const int th = threads;
   const bool par = parallel();
+  const bool use_stencil = !stencil.empty();
   if (!coarse_built) {
     coarse.build(T, free);
-    stencil.build(T);
     cg_vectors.assign(6 * 3 * stencil.stride(), 0.0);
     cg_precond.assign(2 * 6 * stencil.stride(), 0.0);
     free_mask.assign(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) free_mask[i] = free[i] ? 1.0 : 0.0;
+    listed_springs.clear();
+    if (use_stencil) {
+      coarse.list_springs(listed_springs);
+      for (const std::uint32_t c : pinned)
+        for (std::uint32_t k = T.adj_start[c]; k < T.adj_start[c + 1]; ++k)
+          listed_springs.push_back(T.adj_spring[k]);
+      std::sort(listed_springs.begin(), listed_springs.end());
+      listed_springs.erase(std::unique(listed_springs.begin(), listed_springs.end()),
+                           listed_springs.end());
+    }
     coarse_built = true;
   }
-  const bool use_stencil = !stencil.empty();
+  if (use_stencil) {
+    // The blocks and right-hand-side terms of every spring, vectorised by offset class
+    // (spring_stencil.hpp); the few the coarse level and the pinned columns read one by one are
+    // copied out.
+    stencil.blocks(h, soa.data() + stencil.pad() + 3 * stencil.stride(), par ? th : 1);
+    for (const std::uint32_t s : listed_springs) {
+      S[s] = stencil.block(s);
+      spring_length[s] = stencil.length(s);
+    }
+  }
   const std::size_t st = stencil.stride();
   const auto sst = std::ptrdiff_t(st);
   // The CG's vectors, each pointing at its x component's vertex 0 (padding before it).
@@ -135,44 +154,20 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   // Known Δv of the pinned vertices (from their targets); the free ones keep the previous step's
   // Δv as the CG warm start.
   for (const std::uint32_t i : pinned) dv[i] = (pin_target(i, t1) - x[i]) / h - v[i];
-  // Spring blocks and their share of the h² ∂f/∂x v0 term, one spring at a time ...
-#pragma omp parallel for schedule(static) num_threads(th) if (par)
-  for (std::size_t s = 0; s < ns; ++s) {
-    const double l = len[s];  // from forces(), same x
-    if (!(l > 0.0)) {
-      Sp[s] = Sym3{};
-      if (use_stencil) {
-        stencil.set(s, Sym3{});
-        stencil.set_rhs(s, Vec3::Zero());
-      }
-      continue;
-    }
-    // S = h² K + h k_d uuᵀ = α uuᵀ + β I with K = (k - τ) uuᵀ + τ I (τ: the transverse
-    // stiffness), and h² K (v_b - v_a) from the same two numbers.
-    const Vec3& u = spring_dir[s];
-    const double k = ks[s];
-    const double transverse = k * std::max(0.0, 1.0 - T.rest_length[s] / l);
-    const double along = h2 * (k - transverse), beta = h2 * transverse;
-    Sym3 Ss = Sym3::outer(u, along + h * kds[s]);
-    Ss.add_diagonal(beta);
-    Sp[s] = Ss;
-    if (use_stencil) stencil.set(s, Ss);
-    const Vec3 dvs = v[sb[s]] - v[sa[s]];
-    const Vec3 w = (along * u.dot(dvs)) * u + beta * dvs;
-    if (use_stencil) stencil.set_rhs(s, w);
-    else W[s] = w;
-  }
   if (use_stencil) {
-    // ... then summed per vertex by the stencil (spring_stencil.hpp), and the pinned columns
-    // moved to the right-hand side (-A_ac Δv_c with A_ac = -S), one pinned vertex at a time.
+    // Each vertex's own block, the forces (aerodynamics included) in the stencil's layout, and
+    // the stencil's sums (spring_stencil.hpp); then the pinned columns move to the right-hand
+    // side (-A_ac Δv_c with A_ac = -S), one pinned vertex at a time.
+    double* __restrict fs = soa.data() + stencil.pad() + 6 * st;
 #pragma omp parallel for schedule(static) num_threads(th) if (par)
     for (std::size_t i = 0; i < n; ++i) {
       Sym3 D{};
       D.add_diagonal(diag_m);
       if (aero != nullptr) D += aero[i].scaled(h);
       put_sym(dg, i, D);
+      put(fs, i, f[i]);
     }
-    stencil.assemble(dg, free_mask.data(), h, f.data()->data(), pc, b, par ? th : 1);
+    stencil.assemble(dg, free_mask.data(), h, fs, pc, b, par ? th : 1);
     for (const std::uint32_t c : pinned)
       for (std::uint32_t k = adj_start[c]; k < adj_start[c + 1]; ++k) {
         const std::uint32_t s = adj_spring[k];
@@ -180,6 +175,26 @@ void Cloth::State::integrate_implicit(double h, double t1) {
         if (fr[i] && len[s] > 0.0) put(b, i, get(b, i) + Sp[s] * dv[c]);
       }
   } else {
+    // Spring blocks and their share of the h² ∂f/∂x v0 term, one spring at a time ...
+#pragma omp parallel for schedule(static) num_threads(th) if (par)
+    for (std::size_t s = 0; s < ns; ++s) {
+      const double l = len[s];  // from forces(), same x
+      if (!(l > 0.0)) {
+        Sp[s] = Sym3{};
+        continue;
+      }
+      // S = h² K + h k_d uuᵀ = α uuᵀ + β I with K = (k - τ) uuᵀ + τ I (τ: the transverse
+      // stiffness), and h² K (v_b - v_a) from the same two numbers.
+      const Vec3& u = spring_dir[s];
+      const double k = ks[s];
+      const double transverse = k * std::max(0.0, 1.0 - T.rest_length[s] / l);
+      const double along = h2 * (k - transverse), beta = h2 * transverse;
+      Sym3 Ss = Sym3::outer(u, along + h * kds[s]);
+      Ss.add_diagonal(beta);
+      Sp[s] = Ss;
+      const Vec3 dvs = v[sb[s]] - v[sa[s]];
+      W[s] = (along * u.dot(dvs)) * u + beta * dvs;
+    }
     // ... then gathered by each vertex over its springs in spring order: the same additions in
     // the same order as a scatter over the springs, so the result is that of one thread at any
     // count. The pinned columns move to the right-hand side (-A_ac Δv_c with A_ac = -S).

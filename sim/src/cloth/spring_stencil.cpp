@@ -1,6 +1,8 @@
 #include "cloth/spring_stencil.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <utility>
 
 #include "core/vector_clones.hpp"
 
@@ -8,8 +10,87 @@ namespace simreel::sim::detail {
 
 namespace {
 
-/// The springs' forces W_c[a] = S_c[a] (y_a - y_{a+o_c}) for a in [i0, i1), every class
-/// (vectors and blocks in the stencil's layout: components `stride` apart, padded).
+/// Spring state for a in [i0, i1), one class of offset o (arrays at the class's entries; x, v:
+/// vectors, components `st` apart): length, direction (a to a + o) and the force on a.
+SIMREEL_VECTOR_CLONES
+void spring_state(std::ptrdiff_t i0, std::ptrdiff_t i1, std::ptrdiff_t o, std::ptrdiff_t st,
+                  const double* __restrict x, const double* __restrict v,
+                  const double* __restrict rest, const double* __restrict ks,
+                  const double* __restrict kds, double* __restrict len, double* __restrict u,
+                  double* __restrict F) {
+  for (std::ptrdiff_t i = i0; i < i1; ++i) {
+    const double dx = x[i + o] - x[i], dy = x[st + i + o] - x[st + i],
+                 dz = x[2 * st + i + o] - x[2 * st + i];
+    const double l = std::sqrt(dx * dx + dy * dy + dz * dz);
+    // l = 0 only where d = 0: u = 0 then, and so is the force (no division by zero to mask).
+    const double il = 1.0 / (l > 0.0 ? l : 1.0);
+    const double ux = dx * il, uy = dy * il, uz = dz * il;
+    const double vrel = (v[i + o] - v[i]) * ux + (v[st + i + o] - v[st + i]) * uy +
+                        (v[2 * st + i + o] - v[2 * st + i]) * uz;
+    const double mag = ks[i] * (l - rest[i]) + kds[i] * vrel;
+    len[i] = l;
+    u[i] = ux;
+    u[st + i] = uy;
+    u[2 * st + i] = uz;
+    F[i] = mag * ux;
+    F[st + i] = mag * uy;
+    F[2 * st + i] = mag * uz;
+  }
+}
+
+/// f_i = m (g - c v_i) + Σ_c (F_c[i] - F_c[i - o_c]) for i in [i0, i1) (F: per class 3 arrays,
+/// `st` apart).
+SIMREEL_VECTOR_CLONES
+void gather_spring_forces(std::ptrdiff_t i0, std::ptrdiff_t i1, std::ptrdiff_t st,
+                          const double* __restrict v, double m, double gx, double gy, double gz,
+                          double c, const double* __restrict F, const std::size_t* offsets,
+                          std::size_t classes, double* __restrict f) {
+  for (std::ptrdiff_t i = i0; i < i1; ++i) {
+    f[i] = m * (gx - c * v[i]);
+    f[st + i] = m * (gy - c * v[st + i]);
+    f[2 * st + i] = m * (gz - c * v[2 * st + i]);
+  }
+  for (std::size_t k = 0; k < classes; ++k) {
+    const auto o = std::ptrdiff_t(offsets[k]);
+    const double* Fc = F + std::ptrdiff_t(3 * k) * st;
+    for (std::ptrdiff_t i = i0; i < i1; ++i)
+      for (std::ptrdiff_t d = 0; d < 3; ++d)
+        f[d * st + i] = (f[d * st + i] + Fc[d * st + i]) - Fc[d * st + i - o];
+  }
+}
+
+/// Blocks and right-hand-side terms for a in [i0, i1), one class of offset o (see blocks()):
+/// q, β into B (4 arrays) and w = h² K (v_{a+o} - v_a) into W (3 arrays).
+SIMREEL_VECTOR_CLONES
+void spring_blocks(std::ptrdiff_t i0, std::ptrdiff_t i1, std::ptrdiff_t o, std::ptrdiff_t st,
+                   double h, const double* __restrict v, const double* __restrict rest,
+                   const double* __restrict ks, const double* __restrict kds,
+                   const double* __restrict len, const double* __restrict u,
+                   double* __restrict B, double* __restrict W) {
+  const double h2 = h * h;
+  for (std::ptrdiff_t i = i0; i < i1; ++i) {
+    const double l = len[i], k = ks[i];
+    const double live = l > 0.0 ? 1.0 : 0.0;
+    const double transverse = live * k * std::max(0.0, 1.0 - rest[i] / (l > 0.0 ? l : 1.0));
+    const double along = h2 * (k - transverse) * live, beta = h2 * transverse;
+    const double sq = std::sqrt(std::max(0.0, along + h * kds[i] * live));
+    const double ux = u[i], uy = u[st + i], uz = u[2 * st + i];
+    B[i] = sq * ux;
+    B[st + i] = sq * uy;
+    B[2 * st + i] = sq * uz;
+    B[3 * st + i] = beta;
+    const double dx = v[i + o] - v[i], dy = v[st + i + o] - v[st + i],
+                 dz = v[2 * st + i + o] - v[2 * st + i];
+    const double a = along * (ux * dx + uy * dy + uz * dz);
+    W[i] = a * ux + beta * dx;
+    W[st + i] = a * uy + beta * dy;
+    W[2 * st + i] = a * uz + beta * dz;
+  }
+}
+
+/// The springs' forces W_c[a] = S_c[a] (y_a - y_{a+o_c}) = q (q · d) + β d for a in [i0, i1),
+/// every class (vectors in the stencil's layout: components `stride` apart, padded; blocks: per
+/// class 4 arrays q, β).
 SIMREEL_VECTOR_CLONES
 void spring_forces(std::ptrdiff_t i0, std::ptrdiff_t i1, const double* __restrict y,
                    const double* __restrict blocks, const std::size_t* offsets,
@@ -19,20 +100,19 @@ void spring_forces(std::ptrdiff_t i0, std::ptrdiff_t i1, const double* __restric
   const double* yz = yy + stride;
   for (std::size_t c = 0; c < classes; ++c) {
     const auto o = std::ptrdiff_t(offsets[c]);
-    const double* bxx = blocks + std::ptrdiff_t(6 * c) * stride;
-    const double* bxy = bxx + stride;
-    const double* bxz = bxy + stride;
-    const double* byy = bxz + stride;
-    const double* byz = byy + stride;
-    const double* bzz = byz + stride;
+    const double* qx = blocks + std::ptrdiff_t(4 * c) * stride;
+    const double* qy = qx + stride;
+    const double* qz = qy + stride;
+    const double* bt = qz + stride;
     double* wx = w + std::ptrdiff_t(3 * c) * stride;
     double* wy = wx + stride;
     double* wz = wy + stride;
     for (std::ptrdiff_t i = i0; i < i1; ++i) {
       const double dx = yx[i] - yx[i + o], dy = yy[i] - yy[i + o], dz = yz[i] - yz[i + o];
-      wx[i] = bxx[i] * dx + bxy[i] * dy + bxz[i] * dz;
-      wy[i] = bxy[i] * dx + byy[i] * dy + byz[i] * dz;
-      wz[i] = bxz[i] * dx + byz[i] * dy + bzz[i] * dz;
+      const double p = qx[i] * dx + qy[i] * dy + qz[i] * dz;
+      wx[i] = qx[i] * p + bt[i] * dx;
+      wy[i] = qy[i] * p + bt[i] * dy;
+      wz[i] = qz[i] * p + bt[i] * dz;
     }
   }
 }
@@ -81,7 +161,7 @@ void gather_forces(std::ptrdiff_t i0, std::ptrdiff_t i1, const double* __restric
 }
 
 /// For i in [i0, i1): pc_i = mask_i (D_i + Σ_c (S_c[i] + S_c[i - o_c]))⁻¹ and b_i = mask_i
-/// (h f_i + Σ_c (W_c[i] - W_c[i - o_c])) (layout as spring_forces; D, pc: 6 arrays; f: AoS).
+/// (h f_i + Σ_c (W_c[i] - W_c[i - o_c])) (layout as spring_forces; D, pc: 6 arrays; f: a vector).
 SIMREEL_VECTOR_CLONES
 void assemble_rows(std::ptrdiff_t i0, std::ptrdiff_t i1, const double* __restrict D,
                    const double* __restrict blocks, const double* __restrict w,
@@ -91,15 +171,25 @@ void assemble_rows(std::ptrdiff_t i0, std::ptrdiff_t i1, const double* __restric
   const std::ptrdiff_t st = stride;
   for (std::ptrdiff_t i = i0; i < i1; ++i) {
     for (std::ptrdiff_t k = 0; k < 6; ++k) pc[k * st + i] = D[k * st + i];
-    for (std::ptrdiff_t k = 0; k < 3; ++k) b[k * st + i] = h * f[3 * i + k];
+    for (std::ptrdiff_t k = 0; k < 3; ++k) b[k * st + i] = h * f[k * st + i];
   }
   for (std::size_t c = 0; c < classes; ++c) {
     const auto o = std::ptrdiff_t(offsets[c]);
-    const double* bc = blocks + std::ptrdiff_t(6 * c) * st;
+    const double* qx = blocks + std::ptrdiff_t(4 * c) * st;
+    const double* qy = qx + st;
+    const double* qz = qy + st;
+    const double* bt = qz + st;
     const double* wc = w + std::ptrdiff_t(3 * c) * st;
     for (std::ptrdiff_t i = i0; i < i1; ++i) {
-      for (std::ptrdiff_t k = 0; k < 6; ++k)
-        pc[k * st + i] = (pc[k * st + i] + bc[k * st + i]) + bc[k * st + i - o];
+      // The blocks q qᵀ + β I of the spring from i and of the spring into i.
+      const double ax = qx[i], ay = qy[i], az = qz[i], ab = bt[i];
+      const double cx = qx[i - o], cy = qy[i - o], cz = qz[i - o], cb = bt[i - o];
+      pc[i] = (pc[i] + (ax * ax + ab)) + (cx * cx + cb);
+      pc[st + i] = (pc[st + i] + ax * ay) + cx * cy;
+      pc[2 * st + i] = (pc[2 * st + i] + ax * az) + cx * cz;
+      pc[3 * st + i] = (pc[3 * st + i] + (ay * ay + ab)) + (cy * cy + cb);
+      pc[4 * st + i] = (pc[4 * st + i] + ay * az) + cy * cz;
+      pc[5 * st + i] = (pc[5 * st + i] + (az * az + ab)) + (cz * cz + cb);
       for (std::ptrdiff_t k = 0; k < 3; ++k)
         b[k * st + i] = (b[k * st + i] + wc[k * st + i]) - wc[k * st + i - o];
     }
@@ -123,12 +213,14 @@ constexpr std::ptrdiff_t kChunk = 512;  // vertices per task (a multiple of the 
 
 }  // namespace
 
-void SpringStencil::build(const ClothTopology& topo) {
+void SpringStencil::build(const ClothTopology& topo, const std::vector<double>& ks,
+                          const std::vector<double>& kds) {
   *this = SpringStencil{};
   const std::size_t ns = topo.spring_count();
   n_ = topo.local_rest.size();
   stride_ = n_;
-  std::vector<std::size_t> first(ns), class_of(ns), offsets;
+  std::vector<std::uint32_t> first(ns), class_of(ns);
+  std::vector<std::size_t> offsets;
   for (std::size_t s = 0; s < ns; ++s) {
     const std::uint32_t a = std::min(topo.spring_a[s], topo.spring_b[s]);
     const std::uint32_t b = std::max(topo.spring_a[s], topo.spring_b[s]);
@@ -140,7 +232,7 @@ void SpringStencil::build(const ClothTopology& topo) {
       offsets.push_back(o);
       it = offsets.end() - 1;
     }
-    class_of[s] = std::size_t(it - offsets.begin());
+    class_of[s] = std::uint32_t(it - offsets.begin());
     first[s] = a;
   }
   if (offsets.empty()) return;
@@ -158,14 +250,68 @@ void SpringStencil::build(const ClothTopology& topo) {
   // different offsets modulo 4 KiB (a load that aliases an earlier store there waits for it).
   stride_ = (2 * pad_ + n_ + 7) / 8 * 8;
   if ((stride_ / 8) % 2 == 0) stride_ += 8;
-  slot_.resize(ns);
-  rhs_slot_.resize(ns);
-  for (std::size_t s = 0; s < ns; ++s) {
-    slot_[s] = 6 * class_of[s] * stride_ + pad_ + first[s];
-    rhs_slot_[s] = 3 * class_of[s] * stride_ + pad_ + first[s];
-  }
-  blocks_.assign(6 * classes_ * stride_, 0.0);
+  class_ = std::move(class_of);
+  first_ = std::move(first);
+  for (auto* a : {&rest_, &ks_, &kds_, &len_}) a->assign(classes_ * stride_, 0.0);
+  dir_.assign(3 * classes_ * stride_, 0.0);
+  blocks_.assign(4 * classes_ * stride_, 0.0);
   forces_.assign(3 * classes_ * stride_, 0.0);
+  for (std::size_t s = 0; s < ns; ++s) {
+    rest_[at(s, 1, 0)] = topo.rest_length[s];
+    ks_[at(s, 1, 0)] = ks.empty() ? 0.0 : ks[s];
+    kds_[at(s, 1, 0)] = kds.empty() ? 0.0 : kds[s];
+  }
+}
+
+Sym3 SpringStencil::block(std::size_t s) const {
+  const Vec3 q(blocks_[at(s, 4, 0)], blocks_[at(s, 4, 1)], blocks_[at(s, 4, 2)]);
+  Sym3 b = Sym3::outer(q, 1.0);
+  b.add_diagonal(blocks_[at(s, 4, 3)]);
+  return b;
+}
+
+void SpringStencil::set(std::size_t s, const Vec3& q, double beta) {
+  for (std::size_t k = 0; k < 3; ++k) blocks_[at(s, 4, k)] = q[Eigen::Index(k)];
+  blocks_[at(s, 4, 3)] = beta;
+}
+
+void SpringStencil::set_rhs(std::size_t s, const Vec3& w) {
+  for (std::size_t k = 0; k < 3; ++k) forces_[at(s, 3, k)] = w[Eigen::Index(k)];
+}
+
+void SpringStencil::forces(const double* x, const double* v, double m, const Vec3& g, double c,
+                           double* f, int threads) {
+  const auto n = std::ptrdiff_t(n_), st = std::ptrdiff_t(stride_), pad = std::ptrdiff_t(pad_);
+  const std::ptrdiff_t chunks = (n + kChunk - 1) / kChunk;
+  const auto cls = std::ptrdiff_t(classes_);
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+#pragma omp for schedule(static) collapse(2)
+    for (std::ptrdiff_t k = 0; k < cls; ++k)
+      for (std::ptrdiff_t j = 0; j < chunks; ++j)
+        spring_state(j * kChunk, std::min(n, (j + 1) * kChunk), std::ptrdiff_t(offset_[k]), st, x,
+                     v, rest_.data() + k * st + pad, ks_.data() + k * st + pad,
+                     kds_.data() + k * st + pad, len_.data() + k * st + pad,
+                     dir_.data() + 3 * k * st + pad, forces_.data() + 3 * k * st + pad);
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t j = 0; j < chunks; ++j)
+      gather_spring_forces(j * kChunk, std::min(n, (j + 1) * kChunk), st, v, m, g.x(), g.y(),
+                           g.z(), c, forces_.data() + pad, offset_.data(), classes_, f);
+  }
+}
+
+void SpringStencil::blocks(double h, const double* v, int threads) {
+  const auto n = std::ptrdiff_t(n_), st = std::ptrdiff_t(stride_), pad = std::ptrdiff_t(pad_);
+  const std::ptrdiff_t chunks = (n + kChunk - 1) / kChunk;
+  const auto cls = std::ptrdiff_t(classes_);
+#pragma omp parallel for schedule(static) collapse(2) num_threads(threads) if (threads > 1)
+  for (std::ptrdiff_t k = 0; k < cls; ++k)
+    for (std::ptrdiff_t j = 0; j < chunks; ++j)
+      spring_blocks(j * kChunk, std::min(n, (j + 1) * kChunk), std::ptrdiff_t(offset_[k]), st, h,
+                    v, rest_.data() + k * st + pad, ks_.data() + k * st + pad,
+                    kds_.data() + k * st + pad, len_.data() + k * st + pad,
+                    dir_.data() + 3 * k * st + pad, blocks_.data() + 4 * k * st + pad,
+                    forces_.data() + 3 * k * st + pad);
 }
 
 void SpringStencil::assemble(const double* diag, const double* mask, double h, const double* f,
