@@ -100,6 +100,20 @@
 // factorisation 6 %, restriction and prolongation 6 %), the strain pass 7 %, CG updates 7 %.
 // The aim (half of Bullet's time) is not met: 0.53-0.54 at best. Two threads still cost more
 // CPU than one with passive waits (the parallel loops are short at 64x64).
+//
+// Measured 2026-11-24, stop 38 (issue 16): the spring forces, the implicit step's spring blocks
+// (stored as q qᵀ + β I) and the aerodynamics (by grid cell, cloth/aero.hpp) moved to vectorised
+// loops by offset class; the coarse level's blocks summed before the CSC writes. 64x64, 1 thread,
+// the build before (24bbe0c), this build and Bullet one after the other, four rounds (CPU s):
+// before 1.041/0.913/1.052/1.045, this 0.972/0.833/0.879/0.880, Bullet 1.762/1.727/1.706/1.769:
+// this build / Bullet 0.55, 0.48, 0.52, 0.50 (the build before 0.59, 0.53, 0.62, 0.59); this /
+// before 0.84-0.93 (0.63-0.78 in quieter runs an hour earlier). 14.6 CG iterations and 7.3 strain
+// passes per step, max strain 0.100. The whole benchmark once:
+//   size     simreel 1 thr   simreel 2 thr   Bullet 3.24   ratio (1 thr)
+//   64x64    0.90 s          2.03 s          1.70 s        0.53
+//   128x128  5.42 s          6.55 s          7.76 s        0.70
+//   256x256  33.8 s          40.0 s          25.0 s        1.35
+// The aim is met in some runs and not in others on this noisy machine (0.48-0.55): not met.
 #include <benchmark/benchmark.h>
 #include <time.h>
 
