@@ -32,9 +32,12 @@ struct Cloth::State {
   std::vector<Vec3> pin_rest;        // fixed pins: initial world position
   // Implicit Euler workspace (n or spring_count entries; allocated once).
   std::vector<double> ks, kds;       // per spring: k_s, k_d of its family
-  std::vector<double> spring_length; // per spring: current length (m), set by forces()
-  std::vector<Vec3> spring_dir;      // per spring: unit a -> b, set by forces()
-  std::vector<Sym3> S;               // per spring: h k_d nnᵀ + h² ∂f/∂x block
+  // Per spring (the spring-by-spring loops of a mesh cloth; a grid cloth keeps these in the
+  // stencil and copies out only listed_springs' length and block): current length (m) and unit
+  // direction a -> b, set by forces(); the h k_d nnᵀ + h² ∂f/∂x block, set by the implicit step.
+  std::vector<double> spring_length;
+  std::vector<Vec3> spring_dir;
+  std::vector<Sym3> S;
   std::vector<Sym3> aero_damping;    // per vertex: -∂f_aero/∂v, lumped (implicit Euler only)
   std::vector<std::uint32_t> pinned;  // pinned vertex indices
   bool aero_active = false;
