@@ -105,8 +105,7 @@ void Cloth::State::forces(double t) {
                       fs, Dg, par ? th : 1);
     if (jac)
       for (std::size_t i = 0; i < n; ++i)
-        aero_damping[i] = Sym3{Dg[i], Dg[st + i], Dg[2 * st + i], Dg[3 * st + i], Dg[4 * st + i],
-                               Dg[5 * st + i]};
+        aero_damping[i] = Sym3::load(Dg + i, st);
   }
   if (!stencil.empty())
     for (std::size_t i = 0; i < n; ++i) f[i] = Vec3(fs[i], fs[st + i], fs[2 * st + i]);
@@ -126,8 +125,7 @@ void Cloth::State::forces(double t) {
   if (jac) std::fill(aero_damping.begin(), aero_damping.end(), Sym3{});
   for (std::size_t k = 0; k < nt; ++k) {
     const Vec3 F(out[k], out[nt + k], out[2 * nt + k]);
-    const Sym3 D{out[3 * nt + k], out[4 * nt + k], out[5 * nt + k],
-                 out[6 * nt + k], out[7 * nt + k], out[8 * nt + k]};
+    const Sym3 D = Sym3::load(out + 3 * nt + k, nt);
     for (std::size_t e = 0; e < 3; ++e) {
       const std::uint32_t i = T.triangles[3 * k + e];
       f[i] += F;

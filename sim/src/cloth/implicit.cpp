@@ -155,17 +155,19 @@ void Cloth::State::integrate_implicit(double h, double t1) {
   // Δv as the CG warm start.
   for (const std::uint32_t i : pinned) dv[i] = (pin_target(i, t1) - x[i]) / h - v[i];
   if (use_stencil) {
-    // Each vertex's own block, the forces (aerodynamics included) in the stencil's layout, and
-    // the stencil's sums (spring_stencil.hpp); then the pinned columns move to the right-hand
-    // side (-A_ac Δv_c with A_ac = -S), one pinned vertex at a time.
+    // Each vertex's own block and the stencil's sums (spring_stencil.hpp) with the forces in
+    // the stencil's layout, where forces() left them (a triangle-list aerodynamics pass added to
+    // f only: copied over); then the pinned columns move to the right-hand side (-A_ac Δv_c with
+    // A_ac = -S), one pinned vertex at a time.
     double* __restrict fs = soa.data() + stencil.pad() + 6 * st;
+    const bool copy_f = aero_active && !aero_grid;
 #pragma omp parallel for schedule(static) num_threads(th) if (par)
     for (std::size_t i = 0; i < n; ++i) {
       Sym3 D{};
       D.add_diagonal(diag_m);
       if (aero != nullptr) D += aero[i].scaled(h);
       put_sym(dg, i, D);
-      put(fs, i, f[i]);
+      if (copy_f) put(fs, i, f[i]);
     }
     stencil.assemble(dg, free_mask.data(), h, fs, pc, b, par ? th : 1);
     for (const std::uint32_t c : pinned)

@@ -32,6 +32,11 @@ struct Sym3 {
     return {c_xx * id, c_xy * id, c_xz * id, (xx * zz - xz * xz) * id,
             (xz * xy - xx * yz) * id, (xx * yy - xy * xy) * id};
   }
+  /// Reads the 6 numbers from p[0], p[stride], ... p[5 stride] (xx xy xz yy yz zz): the inverse
+  /// of store().
+  static Sym3 load(const double* p, std::size_t stride) {
+    return {p[0], p[stride], p[2 * stride], p[3 * stride], p[4 * stride], p[5 * stride]};
+  }
   /// Writes the 6 numbers to p[0], p[stride], ... p[5 stride] (xx xy xz yy yz zz): one entry of
   /// a structure of arrays (the implicit solver's layout, spring_stencil.hpp).
   void store(double* p, std::size_t stride) const {
