@@ -122,6 +122,63 @@ TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
   EXPECT_GT(hits, 100);  // the test exercises hits, not only misses (168 with this seed)
 }
 
+// The cloth contacts' tree (issue 14/16: tablecloth): its traversal against itself gives every
+// pair of overlapping boxes exactly once, and after the boxes move, a refitted tree's queries
+// and pairs are the brute-force ones again (only its shape is the old one's).
+TEST(SimCollisionMesh, BvhSelfPairsAndRefitEqualBruteForce) {
+  Rng rng(23, 2);
+  auto random_boxes = [&](std::vector<detail::Triangle>& tris, double spread) {
+    for (auto& t : tris) {
+      const Vec3 c(rng.uniform(-1, 1), rng.uniform(-1, 1), spread * rng.uniform(-1, 1));
+      const Vec3 e(rng.uniform(0, .08), rng.uniform(0, .08), rng.uniform(0, .08));
+      t = detail::Triangle{c - e, c + e, c - e, Vec3::Zero()};
+    }
+  };
+  auto meet = [](const detail::Triangle& a, const detail::Triangle& b) {
+    return (a.a.array() <= b.b.array()).all() && (b.a.array() <= a.b.array()).all();
+  };
+  auto brute_pairs = [&](const std::vector<detail::Triangle>& tris) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+    for (std::uint32_t i = 0; i < tris.size(); ++i)
+      for (std::uint32_t j = i + 1; j < tris.size(); ++j)
+        if (meet(tris[i], tris[j])) out.emplace_back(i, j);
+    return out;
+  };
+  auto tree_pairs = [&](const detail::Bvh& bvh, const std::vector<detail::Triangle>& tris) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+    bvh.self_pairs([&](std::uint32_t i, std::uint32_t j) {
+      if (meet(tris[i], tris[j])) out.emplace_back(std::min(i, j), std::max(i, j));
+    });
+    std::sort(out.begin(), out.end());  // duplicates stay: each pair must come once
+    return out;
+  };
+  std::vector<detail::Triangle> tris(700);
+  random_boxes(tris, 0.1);  // a sheet-like layer: many overlaps
+  detail::Bvh bvh(tris);
+  const auto first = brute_pairs(tris);
+  EXPECT_GT(first.size(), 500u);  // 837 with this seed
+  EXPECT_EQ(tree_pairs(bvh, tris), first);
+  // Every box moved (another random layer, tilted): the refitted tree is still exact.
+  random_boxes(tris, 1.0);
+  bvh.refit(tris);
+  const auto second = brute_pairs(tris);
+  EXPECT_NE(second, first);
+  EXPECT_EQ(tree_pairs(bvh, tris), second);
+  for (int q = 0; q < 300; ++q) {
+    const Vec3 c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const Vec3 lo = c - Vec3::Constant(0.1), hi = c + Vec3::Constant(0.1);
+    std::vector<std::uint32_t> brute, tree;
+    const detail::Triangle box{lo, hi, lo, Vec3::Zero()};
+    for (std::uint32_t t = 0; t < tris.size(); ++t)
+      if (meet(tris[t], box)) brute.push_back(t);
+    bvh.query(lo, hi, [&](std::uint32_t t) {
+      if (meet(tris[t], box)) tree.push_back(t);
+    });
+    std::sort(tree.begin(), tree.end());
+    ASSERT_EQ(tree, brute) << q;
+  }
+}
+
 TEST(SimCollisionMesh, CulledTriangleSweepEqualsEveryFeatureTested) {
   // sweep_triangle skips the features a segment cannot come within r of; it must give the bits
   // of testing them all. Segments aimed at the hard places: lying on the face (the resting

@@ -235,6 +235,7 @@ bool Cloth::step(double t0, double t1, const std::vector<detail::Collider>* coll
     // into a dynamic body then hold the body (hold_dynamic_bodies, below).
     S.contact_views.assign(1, S.contact_view());
     S.contact_views[0].self = S.contact_views[0].others = false;
+    S.contact_scratch.rebuild = true;  // the contact tree: built once this step, then refitted
     for (int round = 0; round <= kFeatureRounds; ++round) {
       // These rounds undo the strain pass's pull back into the colliders. What a dynamic body
       // takes is logged once: the first vertex pass (the vertices' own momentum against it) and

@@ -76,6 +76,12 @@ struct ContactScratch {
   /// side is the one the pair started on.
   std::vector<Vec3> segment_out, point_out;
   std::vector<Triangle> boxes;  // swept triangle boxes encoded as triangles for Bvh
+  /// The tree over `boxes`: built at the first round after `rebuild` is set (the caller sets it
+  /// at the start of every step, so the tree is a function of the step's state, and a loaded
+  /// state continues bit-identically), refitted in the rounds and calls after that.
+  Bvh bvh;
+  bool rebuild = true;
+  std::vector<Vec3> edge_lo, edge_hi;  // swept boxes of the cloth edges (global edge order)
   struct Contact {
     std::array<std::uint32_t, 4> id{};
     std::array<double, 4> w{};

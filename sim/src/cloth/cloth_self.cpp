@@ -32,6 +32,7 @@ ContactStats collide_cloths(std::vector<Cloth>& cloths, const std::vector<Collid
   // are shared, so only pass them when every cloth collides.
   for (Cloth& c : cloths) collide &= c.definition().collide;
   const std::vector<Collider>* cs = collide && !colliders.empty() ? &colliders : nullptr;
+  scratch.rebuild = true;  // a new step: the contact tree is rebuilt once, then refitted
   ContactStats st = collide_cloth_features(views, cs, true, h, scratch, impulses);
   // The contacts may stretch springs past the limit: the strain pass again, then the contacts
   // again, a few times; the contacts have the last word (folds never cross).

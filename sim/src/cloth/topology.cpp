@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -85,6 +86,8 @@ void ClothTopology::finish() {
       triangle_edges[e[k][2]] = std::uint32_t(edge_triangle.size() - 1);
     }
   }
+  vertex_triangle.assign(local_rest.size(), std::numeric_limits<std::uint32_t>::max());
+  for (std::size_t k = triangles.size(); k-- > 0;) vertex_triangle[triangles[k]] = std::uint32_t(k / 3);
   // Adjacency in CSR form, springs of each vertex in spring order (a fixed summation order).
   const std::size_t n = local_rest.size();
   adj_start.assign(n + 1, 0);

@@ -23,6 +23,26 @@ Bvh::Bvh(const std::vector<Triangle>& tris) {
   build(boxes, centroids, 0, n, 1);
 }
 
+void Bvh::refit(const std::vector<Triangle>& tris) {
+  // Nodes are in depth-first order, children after their parent: backwards, children first.
+  for (std::size_t k = nodes_.size(); k-- > 0;) {
+    Node& n = nodes_[k];
+    Aabb box;
+    if (n.count > 0) {
+      for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+        const Triangle& t = tris[order_[i]];
+        box.grow(t.a);
+        box.grow(t.b);
+        box.grow(t.c);
+      }
+    } else {
+      box = nodes_[n.first].box;
+      box.grow(nodes_[n.right].box);
+    }
+    n.box = box;
+  }
+}
+
 std::uint32_t Bvh::build(std::vector<Aabb>& boxes, std::vector<Vec3>& centroids,
                          std::uint32_t begin, std::uint32_t end, int depth) {
   depth_ = std::max(depth_, depth);

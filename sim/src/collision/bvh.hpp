@@ -31,8 +31,7 @@ struct Aabb {
     hi = hi.cwiseMax(b.hi);
   }
   [[nodiscard]] bool overlaps(const Vec3& qlo, const Vec3& qhi) const {
-    return (lo.array() <= qhi.array()).all() && (qhi.array() >= lo.array()).all() &&
-           (hi.array() >= qlo.array()).all();
+    return (lo.array() <= qhi.array()).all() && (hi.array() >= qlo.array()).all();
   }
 };
 
@@ -65,6 +64,19 @@ class Bvh {
       }
     }
   }
+  /// Calls f(i, j) once for every unordered pair of distinct triangles i, j whose leaves' boxes
+  /// overlap (a superset of the pairs whose own boxes overlap; the caller runs the exact test):
+  /// the tree against itself, O(n + pairs) instead of a query per triangle. Fixed order.
+  template <class F>
+  void self_pairs(F&& f) const {
+    if (!nodes_.empty()) self_pairs_within(0, f);
+  }
+  /// Recomputes every node's box from `tris` (the same count and order as at construction),
+  /// keeping the tree's structure: O(n), for boxes that moved a little since the build. The
+  /// tree is then as valid as a new one (queries find the same triangles) but may be looser.
+  void refit(const std::vector<Triangle>& tris);
+  /// Triangles the tree was built over.
+  [[nodiscard]] std::size_t size() const { return order_.size(); }
   /// Triangle indices in the order query() visits them (leaf by leaf, depth first).
   [[nodiscard]] const std::vector<std::uint32_t>& visit_order() const { return order_; }
   [[nodiscard]] const Aabb& bounds() const { return nodes_.front().box; }
@@ -78,6 +90,39 @@ class Bvh {
     std::uint32_t right = 0;  ///< inner: right child index
     std::uint32_t count = 0;  ///< leaf: entries; inner: 0
   };
+  template <class F>
+  void self_pairs_within(std::uint32_t a, F& f) const {
+    const Node& n = nodes_[a];
+    if (n.count > 0) {
+      for (std::uint32_t i = 0; i < n.count; ++i)
+        for (std::uint32_t j = i + 1; j < n.count; ++j) f(order_[n.first + i], order_[n.first + j]);
+      return;
+    }
+    self_pairs_within(n.first, f);
+    self_pairs_within(n.right, f);
+    self_pairs_across(n.first, n.right, f);
+  }
+  template <class F>
+  void self_pairs_across(std::uint32_t a, std::uint32_t b, F& f) const {
+    const Node& A = nodes_[a];
+    const Node& B = nodes_[b];
+    if (!A.box.overlaps(B.box.lo, B.box.hi)) return;
+    if (A.count > 0 && B.count > 0) {
+      for (std::uint32_t i = 0; i < A.count; ++i)
+        for (std::uint32_t j = 0; j < B.count; ++j) f(order_[A.first + i], order_[B.first + j]);
+      return;
+    }
+    // Split the bigger inner node: the pairs' recursion then stays near the tree's depth.
+    const bool split_a =
+        B.count > 0 || (A.count == 0 && (A.box.hi - A.box.lo).sum() >= (B.box.hi - B.box.lo).sum());
+    if (split_a) {
+      self_pairs_across(A.first, b, f);
+      self_pairs_across(A.right, b, f);
+    } else {
+      self_pairs_across(a, B.first, f);
+      self_pairs_across(a, B.right, f);
+    }
+  }
   std::uint32_t build(std::vector<Aabb>& boxes, std::vector<Vec3>& centroids, std::uint32_t begin,
                       std::uint32_t end, int depth);
   std::vector<Node> nodes_;

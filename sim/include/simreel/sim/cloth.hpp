@@ -165,6 +165,9 @@ class ClothTopology {
   /// Unique triangle edges (e x 2, a < b), for the edge–edge contacts; edge_triangle[e] is the
   /// first triangle holding edge e, triangle_edges (t x 3) the edges of each triangle.
   std::vector<std::uint32_t> edges, edge_triangle, triangle_edges;
+  /// (n) the first triangle holding each vertex, or UINT32_MAX for a vertex in none: the
+  /// self-contacts test a vertex from that triangle only, as an edge from edge_triangle.
+  std::vector<std::uint32_t> vertex_triangle;
   std::vector<Vec3> local_rest;          ///< (n) rest positions in the local frame (m)
 
   [[nodiscard]] std::size_t vertex_count() const { return rows * columns; }
