@@ -114,6 +114,22 @@
 //   128x128  5.42 s          6.55 s          7.76 s        0.70
 //   256x256  33.8 s          40.0 s          25.0 s        1.35
 // The aim is met in some runs and not in others on this noisy machine (0.48-0.55): not met.
+//
+// Measured 2026-11-24, stop 39 (issue 16), on the machine of that session (AMD EPYC, 1 MB L2 per
+// core where the earlier one had 512 KB), same code as stop 38 for the peer scene (it has no
+// contacts), idle machine, OMP_WAIT_POLICY=passive, CPU s, the whole benchmark in one run:
+//   size     simreel 1 thr   simreel 2 thr   Bullet 3.24   ratio (1 thr)
+//   64x64    0.397 s         1.038 s         1.109 s       0.36
+//   128x128  2.507 s         3.193 s         4.817 s       0.52
+//   256x256  17.52 s         19.53 s         19.07 s       0.92
+// A second run: 64x64 0.382 s (0.34). Max strain 0.100 at every size (Bullet: 11.8, 105, 2372;
+// 99th percentile 0.47, 2.2, 86). Two threads with OpenMP's default (spinning) wait: wall
+// 0.288 s against 0.401 s at 64x64 (1.39x), 1.91 s against 2.57 s at 128x128 (1.35x); with
+// passive waits every parallel loop wakes a sleeping thread, and two threads are slower up to
+// 128x128. Self-collision (CLOTH_SELF=1) at 64x64: 2.44 s against 0.39 s, after the contacts'
+// tree became one build per step, refitted, and traversed against itself for the pairs.
+// Spring blocks in float tried again: 0.382/0.397 s against 0.399/0.409 s, within the noise;
+// dropped.
 #include <benchmark/benchmark.h>
 #include <time.h>
 
