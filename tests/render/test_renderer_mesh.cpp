@@ -326,8 +326,11 @@ TEST_F(MeshScene, EachPartIsDrawnInItsOwnMaterial) {
   const int cx = test::kWidth / 2, cy = test::kHeight / 2;
   const auto check = [&](const Image& img, int x, int y, int channel) {
     const auto* p = img.pixel(x, y);
-    for (int c = 0; c < 3; ++c)
-      if (c != channel) EXPECT_GT(int(p[channel]), int(p[c]) + 40) << "at " << x << "," << y << " channel " << c;
+    for (int c = 0; c < 3; ++c) {
+      if (c != channel) {
+        EXPECT_GT(int(p[channel]), int(p[c]) + 40) << "at " << x << "," << y << " channel " << c;
+      }
+    }
   };
   const Image a = r().render();
   check(a, cx + 6, cy + 6, 0);  // below the diagonal, right: triangle 0

@@ -28,6 +28,8 @@ out vec2 v_corner;
 out vec4 v_color;
 out float v_sun;
 flat out vec4 v_center_view;  // sprite centre, view frame (m), and drawn radius (m)
+// Soft sprites' Beer-Lambert terms, per particle: log2(1 - alpha) and 1 - alpha (alpha <= 0.999).
+flat out vec2 v_optics;
 #if defined(SPARK) && SPARK
 // Small sparks: (corner -> pixels, corner -> glow radii, weight of the pixel-tent splat, its light)
 flat out vec4 v_spark;
@@ -59,6 +61,8 @@ void main() {
 #else
   v_color = vec4(a_color.rgb, (u_opaque != 0 ? 1.0 : a_color.a) / (grow * grow));
 #endif
+  float a0 = min(v_color.a, 0.999);
+  v_optics = vec2(log2(1.0 - a0), 1.0 - a0);
   v_center_view = vec4(c.xyz, r * grow);
   c.xy += a_corner * (r * grow);
   v_corner = a_corner;
@@ -116,6 +120,7 @@ float visible_fraction(float h) {
 
 inline constexpr char kParticleSoftFs[] = R"(
 out vec4 o_color;
+flat in vec2 v_optics;
 #if defined(TEXTURED) && TEXTURED
 uniform sampler2D u_noise;
 in vec2 v_uv;
@@ -132,20 +137,25 @@ void main() {
   if (visible <= 0.0) discard;
   float r = sqrt(r2);
   float aa = fwidth(r);
-  // Beer-Lambert through the sphere: the centre has the given opacity, thinner chords less,
-  // and only the part of the chord in front of the scene counts. Optical depth ~ h^e: e = 1
-  // for a uniform sphere (dense droplets keep a crisp rim), rising to 3 for a density that
-  // falls off as 1 - r^2 (thin smoke puffs blur into each other).
+  // Beer-Lambert through the sphere: the centre has the given opacity alpha, thinner chords
+  // less, and only the part of the chord in front of the scene counts. The sphere's density is
+  // a blend of uniform (weight alpha: dense droplets keep a crisp rim) and 1 - r^2 (weight
+  // 1 - alpha: thin smoke puffs blur into each other), whose optical depths along the chord at
+  // r are h and h^3 (normalised to 1 at the centre): tau = alpha h + (1 - alpha) h^3 =
+  // h (1 - (1 - alpha) r^2). One exp2 per fragment (the log2 is per particle).
   float a = min(v_color.a, 0.999);
+  float density = 1.0;
 #if defined(TEXTURED) && TEXTURED
-  // Smoke: the noise thins the puff where it is low, dissolving it from its thin parts as the
-  // threshold rises with age; `shade` darkens dense parts, more so on the side away from the sun.
+  // Smoke: the noise thins the puff's density where it is low, dissolving it from its thin parts
+  // as the threshold rises with age; `shade` darkens dense parts, more so on the side away from
+  // the sun.
   float nz = texture(u_noise, v_uv).r;
   float tex = smoothstep(v_texture.x, v_texture.x + 0.45, nz) * (0.55 + 0.9 * nz);
-  a = min(a * mix(1.0, tex, v_texture.y), 0.999);
+  density = mix(1.0, tex, v_texture.y);
+  a = min(a * density, 0.999);
 #endif
-  float e = 3.0 - 2.0 * a;
-  float alpha = (1.0 - exp2(log2(1.0 - a) * exp2(e * log2(max(h, 1e-6))) * visible)) *
+  float tau = h * (1.0 - v_optics.y * r2);
+  float alpha = (1.0 - exp2(v_optics.x * (density * tau * visible))) *
                 (1.0 - smoothstep(1.0 - aa, 1.0, r));
   // A sphere's normal from the sprite coordinates, in the view frame: the side away from the
   // sun is darker, which is what makes a cloud of sprites read as a volume.

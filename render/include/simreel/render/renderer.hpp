@@ -117,9 +117,11 @@ struct BoxDesc {
 /// How particles are drawn.
 enum class ParticleStyle {
   /// Camera-facing sprites standing for translucent spheres (smoke, spray): opacity follows
-  /// Beer-Lambert through the sphere, 1 - (1 - alpha)^(h^e) with h = chord / diameter and
-  /// e = 3 - 2 alpha, so the centre has the given alpha and the rim fades to 0 — crisply for
-  /// dense droplets (uniform sphere, e -> 1), softly for thin smoke (density 1 - r^2, e -> 3); lit from the sun with a sphere normal (the far
+  /// Beer-Lambert through the sphere, 1 - (1 - alpha)^tau with the chord's optical depth
+  /// tau = h (1 - (1 - alpha) r^2) (h = chord / diameter at r radii from the centre: a density
+  /// blending uniform, weight alpha, with 1 - r^2, weight 1 - alpha, whose chords give h and
+  /// h^3), so the centre has the given alpha and the rim fades to 0 — crisply for dense
+  /// droplets, softly for thin smoke; lit from the sun with a sphere normal (the far
   /// side darker); faded where the sphere dips into opaque geometry (soft particles); alpha
   /// blended back to front over all soft batches.
   soft,
