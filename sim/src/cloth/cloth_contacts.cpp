@@ -512,7 +512,9 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
           for (int j2 = 0; j2 < 3; ++j2) {
             const std::uint32_t e2 = T2.triangle_edges[3 * t2 + std::uint32_t(j2)];
             if (T2.edge_triangle[e2] != t2) continue;
-            // The lower global edge first, as its query found the higher one before.
+            // The lower global edge first: edge_edge's weights and the normal's side are
+            // those of the first edge, so the pair is tested the same way whichever triangle
+            // owns which edge.
             std::uint32_t ka = k1, kb = k2, ea = e1, eb = e2;
             if (S.edge_offset[kb] + eb < S.edge_offset[ka] + ea) {
               std::swap(ka, kb);

@@ -12,9 +12,7 @@ Bvh::Bvh(const std::vector<Triangle>& tris) {
   std::vector<Aabb> boxes(n);
   std::vector<Vec3> centroids(n);
   for (std::uint32_t i = 0; i < n; ++i) {
-    boxes[i].grow(tris[i].a);
-    boxes[i].grow(tris[i].b);
-    boxes[i].grow(tris[i].c);
+    boxes[i] = triangle_box(tris[i]);
     centroids[i] = (tris[i].a + tris[i].b + tris[i].c) / 3.0;
   }
   order_.resize(n);
@@ -29,12 +27,7 @@ void Bvh::refit(const std::vector<Triangle>& tris) {
     Node& n = nodes_[k];
     Aabb box;
     if (n.count > 0) {
-      for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
-        const Triangle& t = tris[order_[i]];
-        box.grow(t.a);
-        box.grow(t.b);
-        box.grow(t.c);
-      }
+      for (std::uint32_t i = n.first; i < n.first + n.count; ++i) box.grow(triangle_box(tris[order_[i]]));
     } else {
       box = nodes_[n.first].box;
       box.grow(nodes_[n.right].box);

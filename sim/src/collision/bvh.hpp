@@ -35,6 +35,15 @@ struct Aabb {
   }
 };
 
+/// The box of a triangle's three corners.
+inline Aabb triangle_box(const Triangle& t) {
+  Aabb b;
+  b.grow(t.a);
+  b.grow(t.b);
+  b.grow(t.c);
+  return b;
+}
+
 /// Binary AABB tree: nodes in depth-first order, each leaf holding up to kLeafSize consecutive
 /// entries of `order` (triangle indices). Split at the median of the longest axis of the
 /// centroid bounds, so the depth is O(log n) whatever the mesh.

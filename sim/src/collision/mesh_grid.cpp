@@ -15,11 +15,7 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   Aabb all;
   double extent = 0.0;  // mean of the triangles' largest box side
   for (std::size_t r = 0; r < n; ++r) {
-    const Triangle& t = tris[visit[r]];
-    Aabb b;
-    b.grow(t.a);
-    b.grow(t.b);
-    b.grow(t.c);
+    const Aabb b = triangle_box(tris[visit[r]]);
     all.grow(b);
     for (int k = 0; k < 3; ++k) {
       box_[6 * r + std::size_t(k)] = b.lo[k];
