@@ -82,10 +82,8 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     permute(restitution, order_, tmp1_);
     permute(friction, order_, tmp1_);
     permute(half_dt_, order_, tmp1_);
-    std::vector<std::uint64_t> tk;
-    permute(key, order_, tk);
-    std::vector<std::uint8_t> tc;
-    permute(collides, order_, tc);
+    permute(key, order_, tmp_key_);
+    permute(collides, order_, tmp_byte_);
     perm_.swap(order_);
     order_.resize(n);
     for (std::size_t q = 0; q < n; ++q) order_[q] = std::uint32_t(q);

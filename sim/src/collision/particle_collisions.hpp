@@ -212,8 +212,10 @@ class ParticleCollider {
   std::vector<std::uint64_t> key_flat_;
   std::vector<std::uint32_t> warm_first_;  ///< (flat particle) first cache entry with its key
   std::vector<double> half_dt_;            ///< (sorted) min(age, h) / 2
-  std::vector<Vec3> tmp3_;
+  std::vector<Vec3> tmp3_;  ///< permute() scratch, kept so that a step allocates nothing
   std::vector<double> tmp1_;
+  std::vector<std::uint64_t> tmp_key_;
+  std::vector<std::uint8_t> tmp_byte_;
 
   std::vector<std::uint32_t> bucket_start_, cursor_, sorted_, cell_hash_;
   std::vector<std::int64_t> cell_xyz_;
