@@ -641,10 +641,8 @@ TEST(SimCollisionMesh, SurfaceContactsGiveTheClosestFeatureOfEachShape) {
 // ---------------------------------------------------------------------------------------------
 // A pile in the bowl (the 5,000-particle, 10 s version is in bench/sim/bench_collisions.cpp)
 
-TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
-  const double R = 0.3, r = 0.01;
-  World world;
-  world.add_mesh(bowl(R, 12, 32, mat(0.3, 0.5)));
+/// 400 beads of radius r poured into the bowl over the first second, colliding with each other.
+ParticleSystemDef pile_system(double r) {
   ParticleSystemDef def = probes();
   def.collide_particles = true;
   def.particle_restitution = 0.2;
@@ -657,7 +655,14 @@ TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
   def.emitter.start_speed = {0.5, 0.0, 0.0};
   def.emitter.lifetime = {100, 0, 0};
   def.emitter.radius = {r, 0, 1e-6};
-  const auto ps = world.add_particle_system(def);
+  return def;
+}
+
+TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
+  const double R = 0.3, r = 0.01;
+  World world;
+  world.add_mesh(bowl(R, 12, 32, mat(0.3, 0.5)));
+  const auto ps = world.add_particle_system(pile_system(r));
   world.advance(3.5);
   std::vector<Vec3> before;
   for (std::size_t i = 0; i < world.particles(ps).count; ++i)
@@ -688,6 +693,116 @@ TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
   EXPECT_LT(max_speed, 2e-2);
   EXPECT_LT(max_v, 5e-2);  // the stored velocity: no jitter either
   EXPECT_EQ(world.removed_inside_count(ps), 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sleep of particles at rest (ParticleStore::rest, collision/particle_collisions.hpp)
+
+/// The 400-bead pile of PileInBowlComesToRestInsideIt; `moving_box`: a kinematic box far from
+/// the bowl moves all the time (particles must not sleep among moving colliders).
+struct SleepyPile {
+  World world;
+  ParticleSystemHandle ps;
+  explicit SleepyPile(bool moving_box = false, int threads = 1)
+      : world(WorldDef{1.0 / 240, 1, 0.05, threads}) {
+    world.add_mesh(bowl(0.3, 12, 32, mat(0.3, 0.5)));
+    if (moving_box) {
+      BoxDef b;
+      b.half_extents = Vec3::Constant(0.05);
+      b.path.keys = {Keyframe{0.0, Vec3(2, 0, 0), Quat::Identity()},
+                     Keyframe{10.0, Vec3(3, 0, 0), Quat::Identity()}};
+      world.add_box(b);
+    }
+    ps = world.add_particle_system(pile_system(0.01));
+  }
+  std::vector<Vec3> positions() const {
+    std::vector<Vec3> x;
+    for (std::size_t i = 0; i < world.particles(ps).count; ++i)
+      x.push_back(position_of(world.particles(ps), i));
+    return x;
+  }
+  /// Particles whose position has not changed by a single bit since `before` and whose velocity
+  /// is exactly zero: asleep (an awake particle's stored velocity is never exactly zero under
+  /// gravity).
+  std::size_t still(const std::vector<Vec3>& before) const {
+    const ParticleView v = world.particles(ps);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < before.size() && i < v.count; ++i)
+      n += position_of(v, i) == before[i] && velocity_of(v, i) == Vec3::Zero();
+    return n;
+  }
+};
+
+TEST(SimParticleSleep, ASettledPileSleepsAndAnImpactWakesWhatItHits) {
+  SleepyPile p;
+  p.world.advance(4.0);  // poured over the first second, settled well before 3.5 s
+  const std::vector<Vec3> settled = p.positions();
+  ASSERT_EQ(settled.size(), 400u);
+  p.world.advance(0.5);
+  const std::size_t still = p.still(settled);
+  // Measured: 367 of 400 (beads slower than 1 cm/s for 0.5 s sleep; on the pile's surface some
+  // slide now and then at mu = 0.3). Advanced in steps of 0.5 s the count reads 275 at 2.5 s,
+  // 326 at 3 s, 352 at 4 s and 350-358 up to 6 s. Without sleep no stored velocity is exactly 0.
+  EXPECT_GE(still, 320u);
+
+  // A bead thrown down onto the pile at 2 m/s: the beads it hits wake and give way, it does
+  // not pass through them, and the pile settles and sleeps again.
+  const std::vector<Vec3> before = p.positions();
+  double top = -1.0;
+  std::size_t top_i = 0;
+  for (std::size_t i = 0; i < before.size(); ++i)
+    if (before[i].z() > top) {
+      top = before[i].z();
+      top_i = i;
+    }
+  const Vec3 aim = before[top_i];
+  p.world.spawn_particle(p.ps, aim + Vec3(0, 0, 0.05), Vec3(0, 0, -2.0), 0.01 * 0.01 * 0.01 * 4.19 * 1000,
+                         0.01, 100);
+  p.world.advance(0.25);
+  const ParticleView v = p.world.particles(p.ps);
+  ASSERT_EQ(v.count, 401u);
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) moved += position_of(v, i) != before[i];
+  EXPECT_GE(moved, 1u);  // woken by the impact
+  const Vec3 thrown = position_of(v, 400);
+  EXPECT_GT(thrown.z(), aim.z() - 0.02) << "through the pile";  // rests on top, not inside
+  for (std::size_t i = 0; i < before.size(); ++i)
+    EXPECT_GT((position_of(v, i) - thrown).norm(), 2 * 0.01 - 2e-3) << i;  // no deep overlap
+  p.world.advance(2.0);
+  const std::vector<Vec3> again = p.positions();
+  p.world.advance(0.5);
+  EXPECT_GE(p.still(again), 320u);  // measured 341
+  for (const Vec3& x : p.positions()) {
+    EXPECT_LT(x.norm(), 0.3 - 0.01 + 1e-3);  // all still in the bowl
+    EXPECT_LT(x.z(), 0.0);
+  }
+}
+
+TEST(SimParticleSleep, NoSleepAmongMovingColliders) {
+  // A kinematic box far away moving: a collider that moves could push a sleeping particle
+  // without waking it, so none sleeps (the pile itself settles the same way).
+  SleepyPile p(true);
+  p.world.advance(4.0);
+  const std::vector<Vec3> settled = p.positions();
+  p.world.advance(0.5);
+  EXPECT_LT(p.still(settled), 10u);
+}
+
+TEST(SimParticleSleep, SleepingPileIsTheSameBitsAtOneAndTwoThreadsAndAfterARestore) {
+  SleepyPile a(false, 1), b(false, 2);
+  a.world.advance(3.0);
+  b.world.advance(3.0);
+  std::string saved;
+  a.world.save_state(saved);
+  SleepyPile c(false, 1);
+  c.world.load_state(saved);
+  a.world.advance(1.0);
+  b.world.advance(1.0);
+  c.world.advance(1.0);
+  EXPECT_EQ(a.world.state_hash(), b.world.state_hash());
+  EXPECT_EQ(a.world.state_hash(), c.world.state_hash());
+  // The restore must carry the sleep: one whose sleepers were woken would move them.
+  EXPECT_GE(a.still(c.positions()), 320u);  // measured 369
 }
 
 }  // namespace

@@ -134,6 +134,8 @@ struct CollisionContext {
   /// OpenMP threads for a large pass whose particles share nothing (WorldDef::threads; the
   /// results do not depend on it).
   int threads = 1;
+  /// The system's particles may sleep (ParticleStore::rest): the pass leaves sleeping ones alone.
+  bool sleep = false;
 };
 
 /// Collides particles [begin, end) of one system with every collider, after integration. Each

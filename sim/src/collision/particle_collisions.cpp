@@ -51,9 +51,14 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   key.resize(n);
   collides.resize(n);
   half_dt_.resize(n);
+  asleep.resize(n);
+  inv_mass_awake_.resize(n);
+  any_asleep_ = false;
   std::size_t k = 0;
   for (const auto& m : members) {
-    const ParticleStore& s = *m.store;
+    ParticleStore& s = *m.store;
+    if (s.track_rest && !m.sleep)  // sleep not allowed now: wake them all
+      for (std::size_t i = 0; i < s.count; ++i) s.rest[4 * i + 3] = 0.0f;
     for (std::size_t i = 0; i < s.count; ++i, ++k) {
       x[k] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
       v[k] = Vec3(s.velocity[3 * i], s.velocity[3 * i + 1], s.velocity[3 * i + 2]);
@@ -64,6 +69,12 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       key[k] = (std::uint64_t(m.system) << 40) | s.id[i];
       collides[k] = m.collide ? 1 : 0;
       half_dt_[k] = 0.5 * std::min(double(s.age[i]), h);
+      asleep[k] = m.sleep && s.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
+      inv_mass_awake_[k] = inv_mass[k];
+      if (asleep[k] != 0) {
+        inv_mass[k] = 0.0;
+        any_asleep_ = true;
+      }
     }
   }
   x_before.clear();
@@ -84,6 +95,10 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     permute(half_dt_, order_, tmp1_);
     permute(key, order_, tmp_key_);
     permute(collides, order_, tmp_byte_);
+    if (any_asleep_) {  // else all zero, in any order
+      permute(asleep, order_, tmp_byte_);
+      permute(inv_mass_awake_, order_, tmp1_);
+    }
     perm_.swap(order_);
     order_.resize(n);
     for (std::size_t q = 0; q < n; ++q) order_[q] = std::uint32_t(q);
@@ -94,6 +109,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     find_contacts_hashed(contact_speed, h);
   }
   const std::size_t pair_count = contacts.size();
+  if (any_asleep_) wake_on_impact(contact_speed);
   if (colliders != nullptr && !colliders->empty())
     find_collider_contacts(*colliders, h, contact_speed);
   bands_.clear();
@@ -112,7 +128,11 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   v_before_ = v;
   solve();
   if (cache != nullptr) store_warm_start(*cache);
-  if (contacts.empty()) return;
+  if (contacts.empty()) {
+    if (any_asleep_) unpermute(asleep, perm_, tmp_byte_);
+    update_rest(members, h);
+    return;
+  }
   // The position follows the change the contact impulses made to the velocity, taken as a
   // constant force over the step (x1 = x0 + dt v0 + dt² a / 2 in every integrator for a constant
   // acceleration): dt Δv / 2. A stack whose weight the solve cancels stays where it was instead
@@ -124,6 +144,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   unpermute(x, perm_, tmp3_);
   unpermute(v, perm_, tmp3_);
   unpermute(x_before, perm_, tmp3_);
+  if (any_asleep_) unpermute(asleep, perm_, tmp_byte_);
   k = 0;
   for (const auto& m : members) {
     ParticleStore& s = *m.store;
@@ -133,6 +154,54 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
         s.velocity[3 * i + std::size_t(a)] = float(v[k][a]);
       }
   }
+  update_rest(members, h);
+}
+
+void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& members, double h) {
+  // Flat order here (run() has put x, v and `asleep` back). A particle slower than the sleep
+  // speed after the solve adds the step to its time at rest; reaching kSleepTime it falls
+  // asleep where it is, its velocity zeroed.
+  std::size_t k = 0;
+  for (const auto& m : members) {
+    ParticleStore& s = *m.store;
+    if (!s.track_rest || !m.sleep) {
+      k += s.count;
+      continue;
+    }
+    for (std::size_t i = 0; i < s.count; ++i, ++k) {
+      float* r = &s.rest[4 * i];
+      if (asleep[k] != 0) continue;  // asleep all step: it did not move
+      const float* vf = &s.velocity[3 * i];
+      const float speed2 = vf[0] * vf[0] + vf[1] * vf[1] + vf[2] * vf[2];
+      if (!(speed2 < kSleepSpeed * kSleepSpeed)) {
+        r[3] = 0.0f;
+        continue;
+      }
+      r[3] = std::min(kSleepTime, r[3] + float(h));
+      if (r[3] < kSleepTime) continue;
+      for (std::size_t a = 0; a < 3; ++a) {
+        r[a] = s.position[3 * i + a];
+        s.velocity[3 * i + a] = 0.0f;
+      }
+    }
+  }
+}
+
+void ParticleCollider::wake_on_impact(double contact_speed) {
+  bool woke = false;
+  for (const Contact& c : contacts) {
+    if (c.i == kCollider || (asleep[c.i] == 0) == (asleep[c.j] == 0)) continue;
+    // Overlapping and approaching faster than the contact speed: an impact, not a resting
+    // contact (§3.6.3).
+    if (!(c.depth > 0.0) || !((v[c.j] - v[c.i]).dot(c.n) < -contact_speed)) continue;
+    const std::uint32_t s = asleep[c.i] != 0 ? c.i : c.j;
+    asleep[s] = 0;
+    inv_mass[s] = inv_mass_awake_[s];
+    woke = true;
+  }
+  if (!woke) return;
+  for (Contact& c : contacts)
+    if (c.i != kCollider) c.m_eff = 1.0 / (inv_mass[c.i] + inv_mass[c.j]);
 }
 
 void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colliders, double h,
@@ -141,6 +210,7 @@ void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colli
   SurfaceContact found[kMaxPerCollider];
   for (std::size_t p = 0; p < x.size(); ++p) {
     if (!collides.empty() && collides[p] == 0) continue;
+    if (!asleep.empty() && asleep[p] != 0) continue;  // it does not move: nothing to hold
     const double r = radius[p];
     for (std::size_t ci = 0; ci < colliders.size(); ++ci) {
       const Collider& col = colliders[ci];

@@ -50,6 +50,9 @@ struct ParticleGroupMember {
   bool collide = true;  ///< the system collides with colliders (its corrections are swept)
   std::uint32_t system = 0;  ///< registration serial of the system: warm-start key (stable
                              ///< when other systems are removed)
+  /// Its particles may sleep (WorldState::sleep_allowed; the store keeps `rest`): otherwise any
+  /// sleeping ones are woken.
+  bool sleep = false;
 };
 
 class ParticleCollider {
@@ -81,6 +84,10 @@ class ParticleCollider {
   std::vector<double> inv_mass, radius, restitution, friction;
   std::vector<std::uint64_t> key;  ///< (system << 40) | id, for the warm start (run() fills it)
   std::vector<std::uint8_t> collides;  ///< the particle collides with colliders
+  /// The particle sleeps (ParticleStore::rest): inv_mass is 0 (it does not move), pairs of two
+  /// sleeping particles and its collider contacts are left out; an impact of an awake particle
+  /// (overlapping, approaching faster than the contact speed) wakes it before the solve.
+  std::vector<std::uint8_t> asleep;
   static constexpr std::uint32_t kCollider = 0xffffffffu;  ///< Contact::i of a collider contact
   struct Contact {
     std::uint32_t i, j;  ///< particles; i == kCollider: j against collider `collider`
@@ -216,6 +223,12 @@ class ParticleCollider {
   std::vector<double> tmp1_;
   std::vector<std::uint64_t> tmp_key_;
   std::vector<std::uint8_t> tmp_byte_;
+  std::vector<double> inv_mass_awake_;  ///< 1 / mass, for a sleeping particle woken
+  bool any_asleep_ = false;  ///< some particle of this run() sleeps
+  /// Wakes the sleeping particles an awake one hits (see `asleep`) and updates the pairs' m_eff.
+  void wake_on_impact(double contact_speed);
+  /// After the solve: the members' times at rest, and those that fall asleep (flat order).
+  void update_rest(const std::vector<ParticleGroupMember>& members, double h);
 
   std::vector<std::uint32_t> bucket_start_, cursor_, sorted_, cell_hash_;
   std::vector<std::int64_t> cell_xyz_;

@@ -135,6 +135,7 @@ bool ParticleCollider::build_grid() {
 
 void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
                                 double contact_speed, double h) {
+  if (inv_mass[i] == 0.0 && inv_mass[j] == 0.0) return;  // both asleep: neither moves
   const Vec3 d = x[j] - x[i];
   const double rr = radius[i] + radius[j];
   const double dist = std::sqrt(d2);

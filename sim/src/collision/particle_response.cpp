@@ -581,8 +581,11 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     shared = shared || act == HitAction::split || (ctx.impulses != nullptr && ctx.impulses->logs(c));
   }
   const bool par = !shared && ctx.threads > 1 && end - begin >= kParallelMin;
-  // Fast rejection: end point clear of every plane, swept bounds clear of every solid.
+  // Fast rejection: end point clear of every plane, swept bounds clear of every solid; a
+  // sleeping particle is put back where it sleeps by the caller.
+  const float* rest = ctx.sleep && s.track_rest ? s.rest.data() : nullptr;
   const auto is_near = [&](std::size_t i) __attribute__((always_inline)) {
+    if (rest != nullptr && rest[4 * i + 3] >= kSleepTime) return false;
     const Vec3 p1(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
     const double r = s.radius[i];
     for (const Collider& c : colliders) {

@@ -27,8 +27,20 @@ void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_
     ctx.on_hit = &*ps.def.on_hit;
     ctx.on_hit_split = &ps.def.on_hit_split;
   }
+  ctx.sleep = sleep_allowed(index);
   ps.spawns.clear();
   collide(st, begin, end, h, shapes, ctx, ps.forces);
+  // Sleeping particles (ParticleStore::rest) stay where they fell asleep, at rest: what the
+  // integrator did to them this step is undone (they are not swept either).
+  if (ctx.sleep)
+    for (std::size_t i = begin; i < end; ++i) {
+      const float* r = &st.rest[4 * i];
+      if (!(r[3] >= kSleepTime)) continue;
+      for (std::size_t k = 0; k < 3; ++k) {
+        st.position[3 * i + k] = r[k];
+        st.velocity[3 * i + k] = 0.0f;
+      }
+    }
   ps.removed_inside += ctx.removed_inside;
   // Splash droplets (HitAction::split) join the system now, at age 0: they move from the next
   // step on. Droplets past max_particles are dropped.

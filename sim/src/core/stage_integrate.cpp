@@ -74,6 +74,15 @@ void stage_particle_integration(WorldState& w, double t0, double t1) {
   }
 }
 
+bool WorldState::sleep_allowed(std::size_t index) const {
+  const ParticleSystemState& ps = systems.at(index);
+  if (!ps.store.track_rest || general(index) || !cloths.dense().empty() || dyn.dynamic_count > 0)
+    return false;
+  for (const Collider& c : shapes)
+    if (c.moving) return false;
+  return true;
+}
+
 bool WorldState::general(std::size_t index) const {
   const ParticleSystemState& ps = systems.at(index);
   const Integrator in = ps.def.integrator;

@@ -69,6 +69,7 @@ std::uint64_t World::state_hash() const {
     f.array(st.split_countdown, n);
     // Only with sub-emitters (which read it), so the hashes of scenes before them are unchanged.
     if (!ps.sub_emitters.empty()) f.array(st.from_split, n);
+    f.array(st.rest, st.track_rest ? 4 * n : 0);
     f.value(ps.next_id);
     f.value(ps.emitter.scheduled);
     f.array(ps.emitter.bursts_fired, ps.emitter.bursts_fired.size());

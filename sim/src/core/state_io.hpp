@@ -23,7 +23,7 @@
 namespace simreel::sim::detail {
 
 /// Version of the section layout; World::load_state refuses any other.
-inline constexpr std::uint32_t kStateFormat = 2;  // 2: joints
+inline constexpr std::uint32_t kStateFormat = 3;  // 2: joints; 3: particle sleep
 
 /// Appends to a byte string (reused from frame to frame: no allocation once grown).
 class StateWriter {

@@ -307,6 +307,7 @@ void save_store(const detail::ParticleStore& st, StateWriter& out, bool from_spl
   out.array(st.split_generation, n);
   out.array(st.split_countdown, n);
   if (from_split) out.array(st.from_split, n);
+  out.array(st.rest, st.track_rest ? 4 * n : 0);
 }
 
 void load_store(detail::ParticleStore& st, StateReader& in, const std::string& name, bool from_split) {
@@ -335,13 +336,15 @@ void load_store(detail::ParticleStore& st, StateReader& in, const std::string& n
   in.array(st.split_countdown, n, "particle split countdowns");
   if (from_split) in.array(st.from_split, n, "particle split origins");
   else st.from_split.assign(n, 0);
+  in.array(st.rest, st.track_rest ? 4 * n : 0, "particle rest states");
   const bool ok = st.position.size() == 3 * n && st.velocity.size() == 3 * n &&
                   st.prev_position.size() == (st.track_prev ? 3 * n : 0) && st.color.size() == 4 * n &&
                   st.radius.size() == n && st.mass.size() == n && st.age.size() == n &&
                   st.lifetime.size() == n && st.id.size() == n &&
                   st.charge.size() == (st.has_charge ? n : 0) && st.base_radius.size() == n &&
                   st.tint.size() == n && st.split_generation.size() == n &&
-                  st.split_countdown.size() == n && st.from_split.size() == n;
+                  st.split_countdown.size() == n && st.from_split.size() == n &&
+                  st.rest.size() == (st.track_rest ? 4 * n : 0);
   if (!ok) throw StateError("state: particle system '" + name + "' arrays do not hold its " +
                             std::to_string(n) + " particles");
 }

@@ -67,6 +67,7 @@ ParticleSystemHandle World::add_particle_system(const ParticleSystemDef& def) {
   ps.def = def;
   ps.store.track_prev = def.collide && def.integrator != Integrator::semi_implicit_euler;
   ps.store.has_charge = def.charge.mean != 0.0 || def.charge.deviation != 0.0;
+  ps.store.track_rest = def.collide_particles || !def.collision_group.empty();
   for (const InitialParticle& p : def.initial_particles) ps.store.has_charge |= p.charge != 0.0;
   ps.store.reserve(def.emitter.max_particles);
   ps.charge_rng = Rng(impl_->def.seed, 0x5eed0000u + index);

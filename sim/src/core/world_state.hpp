@@ -91,6 +91,10 @@ struct WorldState {
 
   /// Is system i integrated by the general path (integrators.hpp) rather than the fast one?
   [[nodiscard]] bool general(std::size_t i) const;
+  /// May system i's particles sleep (ParticleStore::rest)? Only under gravity and drag alone
+  /// (the fast path), among colliders that never move, without cloth or dynamic bodies, which
+  /// could push a sleeping particle without waking it.
+  [[nodiscard]] bool sleep_allowed(std::size_t i) const;
   /// Resolves system i's springs and attractor springs to indices for this step.
   void build_dynamics(std::size_t i, bool interactions);
   /// Colliders of system i over particles [begin, end), then its splash droplets; h (s).

@@ -121,6 +121,11 @@ class Column {
   std::size_t cap_ = 0, head_ = 0, size_ = 0;
 };
 
+/// Sleep of particles at rest (ParticleStore::rest): slower than kSleepSpeed (m/s) for
+/// kSleepTime (s) — Box2D's linear sleep tolerance and time to sleep.
+inline constexpr float kSleepSpeed = 0.01f;
+inline constexpr float kSleepTime = 0.5f;
+
 /// Live particles of one system. Every array holds exactly `count` particles (xyz arrays
 /// 3 * count floats, color 4 * count); capacity for `max_particles` is reserved at creation so
 /// neither emission nor compaction allocates. The view's pointers move when the oldest die at
@@ -151,6 +156,12 @@ struct ParticleStore {
   Column<std::uint32_t> split_countdown; ///< (count) steps left before a child splits
   Column<std::uint8_t> from_split;       ///< (count) 1: created by a split (§3.9.1), 0:
                                          ///< emitted or spawned (sub-emitter filter)
+  /// Sleep of particles at rest in a particle–particle group (collision/particle_collisions.hpp):
+  /// (count x 4) the position it sleeps at (m, world) and the time (s) it has been slower than
+  /// the sleep speed; asleep from kSleepTime on. Kept only when `track_rest` (systems that
+  /// collide with each other's particles); part of the state.
+  Column<float> rest;
+  bool track_rest = false;
 
   void reserve(std::size_t capacity);
   /// Appends n zero-initialised particles; returns the index of the first.

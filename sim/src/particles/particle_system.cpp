@@ -29,6 +29,7 @@ void ParticleStore::reserve(std::size_t capacity) {
   split_generation.reserve(capacity);
   split_countdown.reserve(capacity);
   from_split.reserve(capacity);
+  if (track_rest) rest.reserve(4 * capacity);
 }
 
 namespace {
@@ -48,6 +49,7 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.split_generation.resize(n);
   s.split_countdown.resize(n);
   s.from_split.resize(n);
+  if (s.track_rest) s.rest.resize(4 * n);  // awake, no time at rest
   s.count = n;
 }
 
@@ -93,6 +95,7 @@ void ParticleStore::compact(std::size_t first) {
     split_generation.drop_front(k);
     split_countdown.drop_front(k);
     from_split.drop_front(k);
+    if (track_rest) rest.drop_front(4 * k);
     count = n - k;
     compact(0);
     return;
@@ -119,6 +122,7 @@ void ParticleStore::compact(std::size_t first) {
     move_run(split_generation, 1, w, run, len);
     move_run(split_countdown, 1, w, run, len);
     move_run(from_split, 1, w, run, len);
+    if (track_rest) move_run(rest, 4, w, run, len);
     w += len;
   }
   resize_all(*this, w);
