@@ -7,10 +7,22 @@ namespace simreel::sim::detail {
 
 void stage_particle_collisions(WorldState& w, double t0, double t1) {
   prepare_coupling(w);  // the step's impulse log on dynamic bodies (§3.7, body_coupling.cpp)
-  if (w.shapes.empty()) return;
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
-    if (ps.def.collide) w.collide_system(index, 0, ps.n_old, t1 - t0);
+    const bool sleep = w.sleep_allowed(index);
+    if (ps.def.collide && !w.shapes.empty()) w.collide_system(index, 0, ps.n_old, t1 - t0);
+    if (!sleep) continue;
+    // Sleeping particles (ParticleStore::rest) stay where they fell asleep, at rest: what the
+    // integrator did to them this step is undone (the pass above did not sweep them).
+    ParticleStore& st = ps.store;
+    for (std::size_t i = 0; i < ps.n_old; ++i) {
+      const float* r = &st.rest[4 * i];
+      if (!(r[3] >= kSleepTime)) continue;
+      for (std::size_t k = 0; k < 3; ++k) {
+        st.position[3 * i + k] = r[k];
+        st.velocity[3 * i + k] = 0.0f;
+      }
+    }
   }
 }
 
@@ -27,20 +39,9 @@ void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_
     ctx.on_hit = &*ps.def.on_hit;
     ctx.on_hit_split = &ps.def.on_hit_split;
   }
-  ctx.sleep = sleep_allowed(index);
+  ctx.sleep = sleep_allowed(index);  // sleeping particles are not swept (put back after)
   ps.spawns.clear();
   collide(st, begin, end, h, shapes, ctx, ps.forces);
-  // Sleeping particles (ParticleStore::rest) stay where they fell asleep, at rest: what the
-  // integrator did to them this step is undone (they are not swept either).
-  if (ctx.sleep)
-    for (std::size_t i = begin; i < end; ++i) {
-      const float* r = &st.rest[4 * i];
-      if (!(r[3] >= kSleepTime)) continue;
-      for (std::size_t k = 0; k < 3; ++k) {
-        st.position[3 * i + k] = r[k];
-        st.velocity[3 * i + k] = 0.0f;
-      }
-    }
   ps.removed_inside += ctx.removed_inside;
   // Splash droplets (HitAction::split) join the system now, at age 0: they move from the next
   // step on. Droplets past max_particles are dropped.

@@ -27,7 +27,8 @@ struct Stage {
 void stage_kinematic_poses(WorldState& w, double t0, double t1);
 /// Every system's particles alive at t0 are integrated over [t0, t1] (forces §3.3, App. B).
 void stage_particle_integration(WorldState& w, double t0, double t1);
-/// Those particles are collided as swept spheres with the colliders (§3.4–3.6).
+/// Those particles are collided as swept spheres with the colliders (§3.4–3.6); sleeping ones
+/// (ParticleStore::rest) are put back where they sleep instead.
 void stage_particle_collisions(WorldState& w, double t0, double t1);
 /// Splits (§3.9.1), removal of the dead, emission of the step's newborns (each moved and
 /// collided for its own age), colours and sizes over lifetime.
