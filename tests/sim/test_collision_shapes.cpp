@@ -703,8 +703,8 @@ TEST(SimCollisionMesh, PileInBowlComesToRestInsideIt) {
 struct SleepyPile {
   World world;
   ParticleSystemHandle ps;
-  explicit SleepyPile(bool moving_box = false, int threads = 1)
-      : world(WorldDef{1.0 / 240, 1, 0.05, threads}) {
+  explicit SleepyPile(bool moving_box = false, int threads = 1, double max_step = 1.0 / 240)
+      : world(WorldDef{max_step, 1, 0.05, threads}) {
     world.add_mesh(bowl(0.3, 12, 32, mat(0.3, 0.5)));
     if (moving_box) {
       BoxDef b;
@@ -776,6 +776,74 @@ TEST(SimParticleSleep, ASettledPileSleepsAndAnImpactWakesWhatItHits) {
     EXPECT_LT(x.norm(), 0.3 - 0.01 + 1e-3);  // all still in the bowl
     EXPECT_LT(x.z(), 0.0);
   }
+}
+
+TEST(SimParticleSleep, AWokenBeadRestsOnItsSleepingNeighboursSoTheWakingStaysNearTheImpact) {
+  // A bead woken by an impact must rest on the sleepers under it in the step it wakes: without
+  // those contacts it falls for a step, hits them faster than the wake speed and wakes them, and
+  // the waking runs down through the pile to the bowl.
+  SleepyPile p;
+  p.world.advance(4.5);
+  const std::vector<Vec3> before = p.positions();
+  std::vector<double> z;
+  for (const Vec3& x : before) z.push_back(x.z());
+  std::sort(z.begin(), z.end());
+  const double low = z[z.size() / 3];  // the bottom third of the pile lies below
+  const std::size_t top_i = std::size_t(std::max_element(before.begin(), before.end(), [](const Vec3& a, const Vec3& b) {
+                                           return a.z() < b.z();
+                                         }) - before.begin());
+  p.world.spawn_particle(p.ps, before[top_i] + Vec3(0, 0, 0.03), Vec3(0, 0, -1.0),
+                         0.01 * 0.01 * 0.01 * 4.19 * 1000, 0.01, 100);
+  std::size_t deep_moved = 0, moved = 0;
+  for (int k = 0; k < 12; ++k) {
+    p.world.advance(1.0 / 24);
+    const ParticleView v = p.world.particles(p.ps);
+    std::size_t d = 0, m = 0;
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      const bool changed = position_of(v, i) != before[i];
+      m += changed;
+      d += changed && before[i].z() < low;
+    }
+    deep_moved = std::max(deep_moved, d);
+    moved = std::max(moved, m);
+  }
+  SCOPED_TRACE(testing::Message() << "moved " << moved << ", in the bottom third " << deep_moved);
+  EXPECT_GE(moved, 1u);
+  EXPECT_LE(deep_moved, 10u);
+}
+
+TEST(SimParticleSleep, ABeadLaidOnASleepingColumnAtSixtyHertzDoesNotWakeIt) {
+  // At 60 Hz a bead resting on a sleeper meets it at g h = 16 cm/s each step, over the contact
+  // speed: that is its own weight, not an impact, and must neither wake the sleeper nor bounce.
+  const double r = 0.01, h = 1.0 / 60;
+  World world(WorldDef{h, 1, 0.05, 1});
+  PlaneDef ground;
+  ground.material = Material(0.5, 0.5);
+  world.add_plane(ground);
+  ParticleSystemDef def = pile_system(r);
+  def.emitter.rate = 0.0;
+  const auto ps = world.add_particle_system(def);
+  const double m = 4.19 * r * r * r * 1000;
+  for (int k = 0; k < 5; ++k) world.spawn_particle(ps, Vec3(0, 0, r + 2 * r * k), Vec3::Zero(), m, r, 100);
+  world.advance(2.0);
+  std::vector<Vec3> column;
+  for (std::size_t i = 0; i < 5; ++i) column.push_back(position_of(world.particles(ps), i));
+  world.advance(0.5);
+  for (std::size_t i = 0; i < 5; ++i) {
+    ASSERT_EQ(position_of(world.particles(ps), i), column[i]) << "the column sleeps " << i;
+    ASSERT_EQ(velocity_of(world.particles(ps), i), Vec3::Zero()) << i;
+  }
+  // Laid on top, touching, at rest: it settles on the column and falls asleep in turn.
+  world.spawn_particle(ps, Vec3(0, 0, r + 2 * r * 5), Vec3::Zero(), m, r, 100);
+  double top_speed = 0.0;
+  for (int k = 0; k < 60; ++k) {
+    world.advance(h);
+    top_speed = std::max(top_speed, velocity_of(world.particles(ps), 5).norm());
+    for (std::size_t i = 0; i < 5; ++i)
+      ASSERT_EQ(position_of(world.particles(ps), i), column[i]) << "woken at step " << k << ": " << i;
+  }
+  EXPECT_LT(top_speed, 0.01);  // no bounce off the sleeper (e = 0.2 of 16 cm/s would be 3 cm/s)
+  EXPECT_EQ(velocity_of(world.particles(ps), 5), Vec3::Zero()) << "asleep after 1 s";
 }
 
 TEST(SimParticleSleep, ABeadThatDoesNotCollideWithTheBowlSleepsOnThePileWithoutSinking) {

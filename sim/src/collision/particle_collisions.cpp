@@ -79,10 +79,18 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   }
   x_before.clear();
   if (n < 2) return;
+  // The resting threshold of §3.6.3 for pairs, with the g h one step of gravity adds left out
+  // as collide()'s is_resting() does for colliders: a particle resting on one that a collider
+  // (or sleep) held this step meets it at g h (16 cm/s at 60 Hz, over the contact speed), its
+  // weight, not an impact to bounce from or to wake a sleeper with.
+  double g = 0.0;
+  for (const auto& m : members) g = std::max(g, m.gravity);
+  const double pair_rest_speed = contact_speed + g * h;
   key_flat_ = key;
   // The working arrays go into cell order, so that every later pass reads neighbours from
   // nearby memory; perm_ maps them back.
   contacts.clear();
+  sleeper_pairs_.clear();
   choose_cells(h);
   const bool reordered = levels == 1 && build_grid();
   if (reordered) {
@@ -102,14 +110,17 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     perm_.swap(order_);
     order_.resize(n);
     for (std::size_t q = 0; q < n; ++q) order_[q] = std::uint32_t(q);
-    find_pairs(contact_speed, h);
+    find_pairs(pair_rest_speed, h);
   } else {
     perm_.resize(n);
     for (std::size_t q = 0; q < n; ++q) perm_[q] = std::uint32_t(q);
-    find_contacts_hashed(contact_speed, h);
+    record_sleeper_pairs_ = any_asleep_;
+    find_contacts_hashed(pair_rest_speed, h);
+    record_sleeper_pairs_ = false;
   }
+  grid_sorted_ = reordered;
   const std::size_t pair_count = contacts.size();
-  if (any_asleep_) wake_on_impact(contact_speed);
+  if (any_asleep_) wake_on_impact(pair_rest_speed, h);
   if (colliders != nullptr && !colliders->empty())
     find_collider_contacts(*colliders, h, contact_speed);
   bands_.clear();
@@ -187,8 +198,9 @@ void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& membe
   }
 }
 
-void ParticleCollider::wake_on_impact(double contact_speed) {
+void ParticleCollider::wake_on_impact(double contact_speed, double h) {
   bool woke = false;
+  woken_.clear();
   for (const Contact& c : contacts) {
     if (c.i == kCollider || (asleep[c.i] == 0) == (asleep[c.j] == 0)) continue;
     // Overlapping and approaching faster than the contact speed: an impact, not a resting
@@ -197,9 +209,31 @@ void ParticleCollider::wake_on_impact(double contact_speed) {
     const std::uint32_t s = asleep[c.i] != 0 ? c.i : c.j;
     asleep[s] = 0;
     inv_mass[s] = inv_mass_awake_[s];
+    if (grid_sorted_) woken_.push_back(s);
     woke = true;
   }
   if (!woke) return;
+  if (grid_sorted_) {
+    std::sort(woken_.begin(), woken_.end());
+    find_sleeping_neighbours(woken_, h);
+  }
+  // A woken particle must rest on its sleeping neighbours this step already: without those
+  // contacts it falls for a step, reaches them faster than the wake speed and wakes them in
+  // turn, and the waking runs down through a settled pile. Its pairs go where the pair search
+  // would have put them, so the contact order is the one of a search that had it awake.
+  bool any = false;
+  for (const SleeperPair& sp : sleeper_pairs_) any = any || asleep[sp.i] == 0 || asleep[sp.j] == 0;
+  if (any) {
+    tmp_contacts_.swap(contacts);
+    contacts.clear();
+    std::size_t q = 0;
+    for (const SleeperPair& sp : sleeper_pairs_) {
+      if (asleep[sp.i] != 0 && asleep[sp.j] != 0) continue;
+      for (; q < sp.before; ++q) contacts.push_back(tmp_contacts_[q]);
+      try_pair(sp.i, sp.j, sp.d2, contact_speed, h);
+    }
+    for (; q < tmp_contacts_.size(); ++q) contacts.push_back(tmp_contacts_[q]);
+  }
   for (Contact& c : contacts)
     if (c.i != kCollider) c.m_eff = 1.0 / (inv_mass[c.i] + inv_mass[c.j]);
 }

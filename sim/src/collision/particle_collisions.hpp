@@ -53,6 +53,9 @@ struct ParticleGroupMember {
   /// Its particles may sleep (WorldState::sleep_allowed; the store keeps `rest`): otherwise any
   /// sleeping ones are woken.
   bool sleep = false;
+  /// (m/s²) magnitude of the system's gravity: a pair is an impact (restitution, a sleeper
+  /// woken) when it approaches faster than the contact speed plus the g h of one step.
+  double gravity = 0.0;
 };
 
 class ParticleCollider {
@@ -225,8 +228,27 @@ class ParticleCollider {
   std::vector<std::uint8_t> tmp_byte_;
   std::vector<double> inv_mass_awake_;  ///< 1 / mass, for a sleeping particle woken
   bool any_asleep_ = false;  ///< some particle of this run() sleeps
-  /// Wakes the sleeping particles an awake one hits (see `asleep`) and updates the pairs' m_eff.
-  void wake_on_impact(double contact_speed);
+  bool grid_sorted_ = false;  ///< this run() found its pairs on the sorted grid (find_pairs())
+  /// Wakes the sleeping particles an awake one hits (see `asleep`), adds the contacts of each
+  /// woken one with its sleeping neighbours (from sleeper_pairs_, where the pair search would
+  /// have found them) and updates the pairs' m_eff.
+  void wake_on_impact(double contact_speed, double h);
+  /// Pairs of two sleeping particles within reach, left out of `contacts` by try_pair(): `before`
+  /// is the number of contacts found before it.
+  struct SleeperPair {
+    std::uint32_t i, j, before;
+    double d2;
+  };
+  std::vector<SleeperPair> sleeper_pairs_;
+  bool record_sleeper_pairs_ = false;  ///< try_pair() keeps them (the hashed grid's search)
+  std::vector<Contact> tmp_contacts_;
+  std::vector<std::uint32_t> woken_;
+  /// The sorted grid's pairs of the `woken` (ascending) with particles asleep at the pair search,
+  /// into sleeper_pairs_ (find_pairs() skipped them).
+  void find_sleeping_neighbours(const std::vector<std::uint32_t>& woken, double h);
+  /// find_pairs(): one cell's awake candidates (index into cand_s_, x, y, z, radius, d2)
+  std::vector<std::uint32_t> awake_s_;
+  std::vector<double> awake_x_, awake_y_, awake_z_, awake_r_, awake_d2_;
   /// After the solve: the members' times at rest, and those that fall asleep (flat order).
   void update_rest(const std::vector<ParticleGroupMember>& members, double h);
 

@@ -135,7 +135,11 @@ bool ParticleCollider::build_grid() {
 
 void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
                                 double contact_speed, double h) {
-  if (inv_mass[i] == 0.0 && inv_mass[j] == 0.0) return;  // both asleep: neither moves
+  if (inv_mass[i] == 0.0 && inv_mass[j] == 0.0) {  // both asleep: neither moves
+    // Kept aside with its place in the contact order, in case an impact wakes one of them.
+    if (record_sleeper_pairs_) sleeper_pairs_.push_back({i, j, std::uint32_t(contacts.size()), d2});
+    return;
+  }
   const Vec3 d = x[j] - x[i];
   const double rr = radius[i] + radius[j];
   const double dist = std::sqrt(d2);
@@ -202,8 +206,36 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
         cand_z_[k] = pz[sj];
         cand_r_[k] = pr[sj];
       }
+    // With particles asleep, a sleeping one meets only the awake candidates (try_pair() would
+    // drop a pair of sleepers): the same contacts in the same order, and a settled pile's cells
+    // cost a scan of their flags.
+    std::size_t ma = 0, pa = 0;
+    if (any_asleep_) {
+      if (awake_s_.size() < m) {
+        awake_s_.resize(m);
+        for (auto* a : {&awake_x_, &awake_y_, &awake_z_, &awake_r_, &awake_d2_}) a->resize(m);
+      }
+      for (std::size_t q = 0; q < m; ++q) {
+        awake_s_[ma] = std::uint32_t(q);
+        awake_x_[ma] = cand_x_[q];
+        awake_y_[ma] = cand_y_[q];
+        awake_z_[ma] = cand_z_[q];
+        awake_r_[ma] = cand_r_[q];
+        ma += std::size_t(asleep[order_[cand_s_[q]]] == 0);
+      }
+    }
     for (std::uint32_t si = first[c]; si < first[c + 1]; ++si) {
       const std::size_t from = si + 1 - first[c];
+      if (any_asleep_ && asleep[order_[si]] != 0) {
+        while (pa < ma && awake_s_[pa] < from) ++pa;
+        within_reach(px[si], py[si], pz[si], pr[si], margin, awake_x_.data() + pa,
+                     awake_y_.data() + pa, awake_z_.data() + pa, awake_r_.data() + pa, ma - pa,
+                     awake_d2_.data() + pa);
+        for (std::size_t u = pa; u < ma; ++u)
+          if (awake_d2_[u] > 0.0)
+            try_pair(order_[si], order_[cand_s_[awake_s_[u]]], awake_d2_[u], contact_speed, h);
+        continue;
+      }
       within_reach(px[si], py[si], pz[si], pr[si], margin, cand_x_.data() + from,
                    cand_y_.data() + from, cand_z_.data() + from, cand_r_.data() + from, m - from,
                    cand_d2_.data() + from);
@@ -218,6 +250,43 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
       }
     }
   }
+}
+
+void ParticleCollider::find_sleeping_neighbours(const std::vector<std::uint32_t>& woken, double h) {
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const auto was_woken = [&](std::uint32_t u) {
+    return std::binary_search(woken.begin(), woken.end(), u);
+  };
+  for (const std::uint32_t w : woken) {
+    const std::uint64_t kw = cell_key_[perm_[w]];
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          // Cell coordinates start at 1 with a spare cell past the last: no key wraps.
+          const std::uint64_t kc = kw + std::uint64_t(dx) * stride_x_ + std::uint64_t(dy) * stride_y_ +
+                                   std::uint64_t(dz);
+          const auto it = std::lower_bound(occupied_.begin(), occupied_.end(), kc);
+          if (it == occupied_.end() || *it != kc) continue;
+          const std::size_t c = std::size_t(it - occupied_.begin());
+          for (std::uint32_t u = cell_first_[c]; u < cell_first_[c + 1]; ++u) {
+            // Its partner was asleep at the search too: still asleep, or woken with it (that
+            // pair is taken once, from the smaller index).
+            if (u == w || (asleep[u] == 0 && !(u > w && was_woken(u)))) continue;
+            double d2 = 0.0;
+            const std::uint32_t i = std::min(w, u), j = std::max(w, u);
+            within_reach(sx_[i], sy_[i], sz_[i], sr_[i], margin, &sx_[j], &sy_[j], &sz_[j],
+                         &sr_[j], 1, &d2);
+            if (!(d2 > 0.0)) continue;
+            // find_pairs() lists contacts by their first particle: the pair goes after those of i.
+            const auto at = std::upper_bound(contacts.begin(), contacts.end(), i,
+                                             [](std::uint32_t a, const Contact& c) { return a < c.i; });
+            sleeper_pairs_.push_back({i, j, std::uint32_t(at - contacts.begin()), d2});
+          }
+        }
+  }
+  std::sort(sleeper_pairs_.begin(), sleeper_pairs_.end(), [](const SleeperPair& a, const SleeperPair& b) {
+    return a.before != b.before ? a.before < b.before : a.i != b.i ? a.i < b.i : a.j < b.j;
+  });
 }
 
 void ParticleCollider::find_contacts_hashed(double contact_speed, double h) {

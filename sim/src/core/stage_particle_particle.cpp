@@ -25,7 +25,8 @@ void stage_particle_particle(WorldState& w, double t0, double t1) {
       done[u] = true;
       // The warm-start key is the registration serial: it survives other systems' removal.
       members.push_back({&systems[u].store, du.particle_restitution, du.particle_friction,
-                         du.collide, std::uint32_t(w.systems.serial(u)), w.sleep_allowed(u)});
+                         du.collide, std::uint32_t(w.systems.serial(u)), w.sleep_allowed(u),
+                         du.gravity.norm()});
     }
     // A lone system without collide_particles has nobody to collide with.
     if (members.size() == 1 && !d.collide_particles) continue;
