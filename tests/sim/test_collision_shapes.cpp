@@ -778,11 +778,15 @@ TEST(SimParticleSleep, ASettledPileSleepsAndAnImpactWakesWhatItHits) {
   }
 }
 
-TEST(SimParticleSleep, AWokenBeadRestsOnItsSleepingNeighboursSoTheWakingStaysNearTheImpact) {
+class SimParticleSleepGrid : public testing::TestWithParam<bool> {};
+
+TEST_P(SimParticleSleepGrid, AWokenBeadRestsOnItsSleepingNeighboursSoTheWakingStaysNearTheImpact) {
   // A bead woken by an impact must rest on the sleepers under it in the step it wakes: without
   // those contacts it falls for a step, hits them faster than the wake speed and wakes them, and
-  // the waking runs down through the pile to the bowl.
+  // the waking runs down through the pile to the bowl. Param: a 1 mm bead far off makes the
+  // radii differ enough for the multi-level hashed grid (§2.3.2) instead of the sorted one.
   SleepyPile p;
+  if (GetParam()) p.world.spawn_particle(p.ps, Vec3(0.0, 0.0, 0.5), Vec3::Zero(), 1e-6, 0.001, 100);
   p.world.advance(4.5);
   const std::vector<Vec3> before = p.positions();
   std::vector<double> z;
@@ -811,6 +815,8 @@ TEST(SimParticleSleep, AWokenBeadRestsOnItsSleepingNeighboursSoTheWakingStaysNea
   EXPECT_GE(moved, 1u);
   EXPECT_LE(deep_moved, 10u);
 }
+
+INSTANTIATE_TEST_SUITE_P(SortedAndHashed, SimParticleSleepGrid, testing::Bool());
 
 TEST(SimParticleSleep, ABeadLaidOnASleepingColumnAtSixtyHertzDoesNotWakeIt) {
   // At 60 Hz a bead resting on a sleeper meets it at g h = 16 cm/s each step, over the contact
