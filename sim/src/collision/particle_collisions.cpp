@@ -504,9 +504,90 @@ void ParticleCollider::solve() {
   // The sweeps run over a copy of the contacts in wavefront order (schedule()), which is the
   // same Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end.
   schedule();
+#if defined(__SSE2__)
+  // Two contacts of one wave at once, one in each lane of the SSE2 registers: they share no
+  // particle, and each lane performs the scalar update's operations in its order (no FMA,
+  // -ffp-contract=off), so the result is the same to the bit (the solver test compares them).
+  const auto update2 = [&](SolverContact& c0, SolverContact& c1, const Vec3& vc0, const Vec3& vc1,
+                           auto wall_tag) __attribute__((always_inline)) {
+    constexpr bool wall = decltype(wall_tag)::value;
+    const auto pack = [](double a, double b) { return _mm_set_pd(b, a); };
+    const auto load3 = [](const Vec3& a, const Vec3& b, __m128d* out) {
+      for (int k = 0; k < 3; ++k) out[k] = _mm_loadh_pd(_mm_load_sd(&a[k]), &b[k]);
+    };
+    const auto store3 = [](const __m128d* in, Vec3& a, Vec3& b) {
+      for (int k = 0; k < 3; ++k) {
+        _mm_storel_pd(&a[k], in[k]);
+        _mm_storeh_pd(&b[k], in[k]);
+      }
+    };
+    const auto dot = [](const __m128d* a, const __m128d* b) {
+      return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a[0], b[0]), _mm_mul_pd(a[1], b[1])),
+                        _mm_mul_pd(a[2], b[2]));
+    };
+    __m128d n[3], vi[3], vj[3], dv[3], pt[3];
+    for (int k = 0; k < 3; ++k) {
+      n[k] = pack(c0.n[k], c1.n[k]);
+      pt[k] = pack(c0.pt[k], c1.pt[k]);
+    }
+    const __m128d wj = pack(inv_mass[c0.j], inv_mass[c1.j]);
+    const __m128d wi = wall ? _mm_setzero_pd() : pack(inv_mass[c0.i], inv_mass[c1.i]);
+    if (wall) {
+      load3(vc0, vc1, vi);
+    } else {
+      load3(v[c0.i], v[c1.i], vi);
+    }
+    load3(v[c0.j], v[c1.j], vj);
+    const __m128d m_eff = pack(c0.m_eff, c1.m_eff), pn = pack(c0.pn, c1.pn);
+    for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
+    const __m128d vn = dot(dv, n);
+    const __m128d pn_new = _mm_max_pd(
+        _mm_add_pd(pn, _mm_mul_pd(m_eff, _mm_sub_pd(pack(c0.target, c1.target), vn))),
+        _mm_setzero_pd());
+    const __m128d dpn = _mm_sub_pd(pn_new, pn);
+    _mm_storel_pd(&c0.pn, pn_new);
+    _mm_storeh_pd(&c1.pn, pn_new);
+    const __m128d si = _mm_mul_pd(dpn, wi), sj = _mm_mul_pd(dpn, wj);
+    for (int k = 0; k < 3; ++k) {
+      if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(si, n[k]));
+      vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(sj, n[k]));
+    }
+    for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
+    const __m128d dvn = dot(dv, n);
+    __m128d pt_new[3];
+    for (int k = 0; k < 3; ++k) {
+      const __m128d vt = _mm_sub_pd(dv[k], _mm_mul_pd(dvn, n[k]));
+      pt_new[k] = _mm_sub_pd(pt[k], _mm_mul_pd(m_eff, vt));
+    }
+    const __m128d bound = _mm_mul_pd(pack(c0.mu, c1.mu), pn_new);
+    const __m128d len = _mm_sqrt_pd(dot(pt_new, pt_new));
+    const __m128d f = _mm_min_pd(_mm_div_pd(bound, len), _mm_set1_pd(1.0));
+    for (int k = 0; k < 3; ++k) {
+      pt_new[k] = _mm_mul_pd(pt_new[k], f);
+      const __m128d dpt = _mm_sub_pd(pt_new[k], pt[k]);
+      _mm_storel_pd(&c0.pt[k], pt_new[k]);
+      _mm_storeh_pd(&c1.pt[k], pt_new[k]);
+      if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(wi, dpt));
+      vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(wj, dpt));
+    }
+    if (!wall) store3(vi, v[c0.i], v[c1.i]);
+    store3(vj, v[c0.j], v[c1.j]);
+  };
+#endif
   const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
     for (std::size_t q = begin; q < end; ++q) {
       SolverContact& c = work_[q];
+#if defined(__SSE2__)
+      if (pair_next_[q] != 0) {  // q and q + 1: the same wave, so the same kind
+        if (c.i == kCollider) {
+          update2(c, work_[q + 1], work_vc_[q], work_vc_[q + 1], std::true_type{});
+        } else {
+          update2(c, work_[q + 1], work_vc_[q], work_vc_[q + 1], std::false_type{});
+        }
+        ++q;
+        continue;
+      }
+#endif
       if (c.i == kCollider) {
         update(c, work_vc_[q], std::true_type{});
       } else {
@@ -550,6 +631,7 @@ void ParticleCollider::schedule() {
   work_.resize(m);
   work_vc_.resize(m);
   wave_.resize(m);
+  pair_next_.assign(m, 0);
   last_wave_.assign(x.size(), 0);
   // Contact q's wave is one past the latest wave of the contacts before it (in its window) that
   // share a particle with it, so a particle's contacts keep their order and the contacts of one
@@ -577,6 +659,15 @@ void ParticleCollider::schedule() {
     for (std::size_t w = 0; w + 1 < wave_count_.size(); ++w) wave_count_[w + 1] += wave_count_[w];
     for (std::size_t q = begin; q < end; ++q)
       sched_[begin + wave_count_[wave_[q]]++] = std::uint32_t(q);
+    // Pairs of neighbours in one wave go to the two-lane update together.
+    for (std::size_t k = begin; k < end;) {
+      if (k + 1 < end && wave_[sched_[k]] == wave_[sched_[k + 1]]) {
+        pair_next_[k] = 1;
+        k += 2;
+      } else {
+        ++k;
+      }
+    }
     for (std::size_t q = begin; q < end; ++q) {
       last_wave_[contacts[q].j] = 0;
       if (contacts[q].i != kCollider) last_wave_[contacts[q].i] = 0;

@@ -215,6 +215,8 @@ class ParticleCollider {
   std::vector<SolverContact> work_;
   std::vector<Vec3> work_vc_;
   std::vector<std::uint32_t> sched_, wave_, last_wave_, wave_count_;
+  /// (work_ position) 1: it and the next are one wave's, solved together in two SIMD lanes
+  std::vector<std::uint8_t> pair_next_;
   /// Fills bands_ from the contacts of find_pairs() and find_collider_contacts() on sorted
   /// positions (pairs, then walls, each in ascending band order).
   void make_bands(std::size_t pair_count);
