@@ -230,7 +230,7 @@ void ParticleCollider::wake_on_impact(double contact_speed, double h) {
     for (const SleeperPair& sp : sleeper_pairs_) {
       if (asleep[sp.i] != 0 && asleep[sp.j] != 0) continue;
       for (; q < sp.before; ++q) contacts.push_back(tmp_contacts_[q]);
-      try_pair(sp.i, sp.j, sp.d2, contact_speed, h);
+      try_pair(sp.i, sp.j, sp.d2, contact_speed, h, contacts);
     }
     for (; q < tmp_contacts_.size(); ++q) contacts.push_back(tmp_contacts_[q]);
   }

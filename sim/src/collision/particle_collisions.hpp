@@ -171,9 +171,25 @@ class ParticleCollider {
   void find_pairs(double contact_speed, double h);
   /// The hashed grid of Coutinho §2.3.1–2.3.2 (multi-level, or a uniform grid too wide to sort).
   void find_contacts_hashed(double contact_speed, double h);
-  /// Appends the contact of i and j, d2 (m²) apart within reach, unless they are apart and
-  /// approaching faster than contact_speed (see find_contacts()).
-  void try_pair(std::uint32_t i, std::uint32_t j, double d2, double contact_speed, double h);
+  /// Appends to `out` the contact of i and j, d2 (m²) apart within reach, unless they are apart
+  /// and approaching faster than contact_speed (see find_contacts()).
+  void try_pair(std::uint32_t i, std::uint32_t j, double d2, double contact_speed, double h,
+                std::vector<Contact>& out);
+  /// One pair search's scratch: a cell's candidates (sorted position, x, y, z, radius), their
+  /// squared distances within reach (0: out of reach) and the ones kept; the same of its awake
+  /// candidates (index into cand_s); and, for a search over part of the cells, its contacts.
+  struct PairSearch {
+    std::vector<std::uint32_t> cand_s, cand_keep;
+    std::vector<double> cand_x, cand_y, cand_z, cand_r, cand_d2;
+    std::vector<std::uint32_t> awake_s;
+    std::vector<double> awake_x, awake_y, awake_z, awake_r, awake_d2;
+    std::vector<Contact> out;
+  };
+  std::vector<PairSearch> search_;  ///< one per thread of find_pairs()
+  std::vector<std::size_t> cell_cut_;
+  /// find_pairs() over the occupied cells [cell_begin, cell_end), appending to `out`.
+  void find_pairs_in(std::size_t cell_begin, std::size_t cell_end, double contact_speed, double h,
+                     PairSearch& ps, std::vector<Contact>& out);
   std::vector<std::uint32_t> order_;       ///< sorted position -> particle index
   std::vector<std::uint32_t> perm_;        ///< run(): working index -> flat (member) index
   std::vector<std::uint64_t> cell_key_;    ///< (particles) linear cell key, then occupied cells'
@@ -181,10 +197,6 @@ class ParticleCollider {
   std::vector<std::uint64_t> occupied_;    ///< occupied cells' keys, increasing
   std::vector<std::uint32_t> count_;       ///< counting-sort scratch
   std::vector<double> sx_, sy_, sz_, sr_;  ///< x, y, z, radius in sorted order
-  /// find_pairs(): one cell's candidates (sorted position, x, y, z, radius), their squared
-  /// distances within reach (0: out of reach) and the ones kept
-  std::vector<std::uint32_t> cand_s_, cand_keep_;
-  std::vector<double> cand_x_, cand_y_, cand_z_, cand_r_, cand_d2_;
   std::uint64_t stride_y_ = 0, stride_x_ = 0;  ///< linear key = cx stride_x + cy stride_y + cz
   std::uint64_t cells_x_ = 0;              ///< cells along x (the key's major axis)
   /// Contacts of run() in slabs of grid columns along x: band b holds the pairs whose first
@@ -248,9 +260,7 @@ class ParticleCollider {
   /// The sorted grid's pairs of the `woken` (ascending) with particles asleep at the pair search,
   /// into sleeper_pairs_ (find_pairs() skipped them).
   void find_sleeping_neighbours(const std::vector<std::uint32_t>& woken, double h);
-  /// find_pairs(): one cell's awake candidates (index into cand_s_, x, y, z, radius, d2)
-  std::vector<std::uint32_t> awake_s_;
-  std::vector<double> awake_x_, awake_y_, awake_z_, awake_r_, awake_d2_;
+
   /// After the solve: the members' times at rest, and those that fall asleep (flat order).
   void update_rest(const std::vector<ParticleGroupMember>& members, double h);
 

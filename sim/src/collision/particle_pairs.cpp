@@ -134,10 +134,10 @@ bool ParticleCollider::build_grid() {
 }
 
 void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
-                                double contact_speed, double h) {
+                                double contact_speed, double h, std::vector<Contact>& out) {
   if (inv_mass[i] == 0.0 && inv_mass[j] == 0.0) {  // both asleep: neither moves
     // Kept aside with its place in the contact order, in case an impact wakes one of them.
-    if (record_sleeper_pairs_) sleeper_pairs_.push_back({i, j, std::uint32_t(contacts.size()), d2});
+    if (record_sleeper_pairs_) sleeper_pairs_.push_back({i, j, std::uint32_t(out.size()), d2});
     return;
   }
   const Vec3 d = x[j] - x[i];
@@ -157,10 +157,42 @@ void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
   const double e = 0.5 * (restitution[i] + restitution[j]);
   c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
   c.mu = 0.5 * (friction[i] + friction[j]);
-  contacts.push_back(c);
+  out.push_back(c);
 }
 
 void ParticleCollider::find_pairs(double contact_speed, double h) {
+  const std::size_t cells = occupied_.size();
+  // A large system's cells in one stretch per thread, each with its own candidates and contact
+  // list, joined in order: the same contacts in the same order at any thread count.
+  const int parts = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+  if (search_.size() < std::size_t(parts)) search_.resize(std::size_t(parts));
+  if (parts == 1) {
+    find_pairs_in(0, cells, contact_speed, h, search_[0], contacts);
+    return;
+  }
+  const std::size_t n = x.size();
+  std::vector<std::size_t>& cut = cell_cut_;
+  cut.assign(std::size_t(parts) + 1, cells);
+  cut[0] = 0;
+  for (int t = 1; t < parts; ++t) {  // the first cell at or past t / parts of the particles
+    const std::uint32_t at = std::uint32_t(n * std::size_t(t) / std::size_t(parts));
+    cut[std::size_t(t)] = std::size_t(std::lower_bound(cell_first_.begin(), cell_first_.end() - 1, at) -
+                                      cell_first_.begin());
+  }
+#pragma omp parallel for schedule(static, 1) num_threads(parts)
+  for (int t = 0; t < parts; ++t) {
+    PairSearch& ps = search_[std::size_t(t)];
+    ps.out.clear();
+    find_pairs_in(cut[std::size_t(t)], cut[std::size_t(t) + 1], contact_speed, h, ps,
+                  t == 0 ? contacts : ps.out);
+  }
+  for (int t = 1; t < parts; ++t)
+    contacts.insert(contacts.end(), search_[std::size_t(t)].out.begin(), search_[std::size_t(t)].out.end());
+}
+
+void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_end,
+                                     double contact_speed, double h, PairSearch& ps,
+                                     std::vector<Contact>& out) {
   const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
   const std::size_t cells = occupied_.size();
   const std::uint64_t* key_of = occupied_.data();
@@ -173,7 +205,7 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
   const std::uint64_t off[4] = {stride_y_, stride_x_ - stride_y_, stride_x_, stride_x_ + stride_y_};
   std::size_t cursor[4] = {0, 0, 0, 0};
   std::uint32_t run_b[5], run_e[5];
-  for (std::size_t c = 0; c < cells; ++c) {
+  for (std::size_t c = cell_begin; c < cell_end; ++c) {
     const std::uint64_t kc = key_of[c];
     run_b[0] = first[c];
     run_e[0] = c + 1 < cells && key_of[c + 1] == kc + 1 ? first[c + 2] : first[c + 1];
@@ -192,61 +224,61 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
     // the pairs within reach, then try_pair() in order.
     std::size_t m = 0;
     for (int col = 0; col < 5; ++col) m += run_e[col] - run_b[col];
-    if (cand_s_.size() < m) {
-      cand_s_.resize(m);
-      cand_keep_.resize(m);
-      for (auto* a : {&cand_x_, &cand_y_, &cand_z_, &cand_r_, &cand_d2_}) a->resize(m);
+    if (ps.cand_s.size() < m) {
+      ps.cand_s.resize(m);
+      ps.cand_keep.resize(m);
+      for (auto* a : {&ps.cand_x, &ps.cand_y, &ps.cand_z, &ps.cand_r, &ps.cand_d2}) a->resize(m);
     }
     std::size_t k = 0;
     for (int col = 0; col < 5; ++col)
       for (std::uint32_t sj = run_b[col]; sj < run_e[col]; ++sj, ++k) {
-        cand_s_[k] = sj;
-        cand_x_[k] = px[sj];
-        cand_y_[k] = py[sj];
-        cand_z_[k] = pz[sj];
-        cand_r_[k] = pr[sj];
+        ps.cand_s[k] = sj;
+        ps.cand_x[k] = px[sj];
+        ps.cand_y[k] = py[sj];
+        ps.cand_z[k] = pz[sj];
+        ps.cand_r[k] = pr[sj];
       }
     // With particles asleep, a sleeping one meets only the awake candidates (try_pair() would
     // drop a pair of sleepers): the same contacts in the same order, and a settled pile's cells
     // cost a scan of their flags.
     std::size_t ma = 0, pa = 0;
     if (any_asleep_) {
-      if (awake_s_.size() < m) {
-        awake_s_.resize(m);
-        for (auto* a : {&awake_x_, &awake_y_, &awake_z_, &awake_r_, &awake_d2_}) a->resize(m);
+      if (ps.awake_s.size() < m) {
+        ps.awake_s.resize(m);
+        for (auto* a : {&ps.awake_x, &ps.awake_y, &ps.awake_z, &ps.awake_r, &ps.awake_d2}) a->resize(m);
       }
       for (std::size_t q = 0; q < m; ++q) {
-        awake_s_[ma] = std::uint32_t(q);
-        awake_x_[ma] = cand_x_[q];
-        awake_y_[ma] = cand_y_[q];
-        awake_z_[ma] = cand_z_[q];
-        awake_r_[ma] = cand_r_[q];
-        ma += std::size_t(asleep[order_[cand_s_[q]]] == 0);
+        ps.awake_s[ma] = std::uint32_t(q);
+        ps.awake_x[ma] = ps.cand_x[q];
+        ps.awake_y[ma] = ps.cand_y[q];
+        ps.awake_z[ma] = ps.cand_z[q];
+        ps.awake_r[ma] = ps.cand_r[q];
+        ma += std::size_t(asleep[order_[ps.cand_s[q]]] == 0);
       }
     }
     for (std::uint32_t si = first[c]; si < first[c + 1]; ++si) {
       const std::size_t from = si + 1 - first[c];
       if (any_asleep_ && asleep[order_[si]] != 0) {
-        while (pa < ma && awake_s_[pa] < from) ++pa;
-        within_reach(px[si], py[si], pz[si], pr[si], margin, awake_x_.data() + pa,
-                     awake_y_.data() + pa, awake_z_.data() + pa, awake_r_.data() + pa, ma - pa,
-                     awake_d2_.data() + pa);
+        while (pa < ma && ps.awake_s[pa] < from) ++pa;
+        within_reach(px[si], py[si], pz[si], pr[si], margin, ps.awake_x.data() + pa,
+                     ps.awake_y.data() + pa, ps.awake_z.data() + pa, ps.awake_r.data() + pa, ma - pa,
+                     ps.awake_d2.data() + pa);
         for (std::size_t u = pa; u < ma; ++u)
-          if (awake_d2_[u] > 0.0)
-            try_pair(order_[si], order_[cand_s_[awake_s_[u]]], awake_d2_[u], contact_speed, h);
+          if (ps.awake_d2[u] > 0.0)
+            try_pair(order_[si], order_[ps.cand_s[ps.awake_s[u]]], ps.awake_d2[u], contact_speed, h, out);
         continue;
       }
-      within_reach(px[si], py[si], pz[si], pr[si], margin, cand_x_.data() + from,
-                   cand_y_.data() + from, cand_z_.data() + from, cand_r_.data() + from, m - from,
-                   cand_d2_.data() + from);
+      within_reach(px[si], py[si], pz[si], pr[si], margin, ps.cand_x.data() + from,
+                   ps.cand_y.data() + from, ps.cand_z.data() + from, ps.cand_r.data() + from, m - from,
+                   ps.cand_d2.data() + from);
       std::size_t kept = 0;
       for (std::size_t q = from; q < m; ++q) {
-        cand_keep_[kept] = std::uint32_t(q);
-        kept += std::size_t(cand_d2_[q] > 0.0);
+        ps.cand_keep[kept] = std::uint32_t(q);
+        kept += std::size_t(ps.cand_d2[q] > 0.0);
       }
       for (std::size_t u = 0; u < kept; ++u) {
-        const std::size_t q = cand_keep_[u];
-        try_pair(order_[si], order_[cand_s_[q]], cand_d2_[q], contact_speed, h);
+        const std::size_t q = ps.cand_keep[u];
+        try_pair(order_[si], order_[ps.cand_s[q]], ps.cand_d2[q], contact_speed, h, out);
       }
     }
   }
@@ -343,7 +375,7 @@ void ParticleCollider::find_contacts_hashed(double contact_speed, double h) {
               const double reach = radius[i] + radius[j] + margin * std::min(radius[i], radius[j]);
               const double d2 = d.squaredNorm();
               if (!(d2 < reach * reach) || !(d2 > 0.0)) continue;
-              try_pair(std::uint32_t(i), j, d2, contact_speed, h);
+              try_pair(std::uint32_t(i), j, d2, contact_speed, h, contacts);
             }
           }
     }
