@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <type_traits>
+
+#include <omp.h>
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -20,19 +22,26 @@ namespace simreel::sim::detail {
 
 namespace {
 
-/// a[k] = a[order[k]] for every k, through `tmp`.
+/// a[k] = a[order[k]] for every k, through `tmp`; `threads` > 1 splits k (each element is
+/// written once, so the result does not depend on it).
 template <class T>
-void permute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
+void permute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp,
+             int threads = 1) {
   tmp.resize(a.size());
-  for (std::size_t k = 0; k < a.size(); ++k) tmp[k] = a[order[k]];
+  const std::ptrdiff_t n = std::ptrdiff_t(a.size());
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (std::ptrdiff_t k = 0; k < n; ++k) tmp[std::size_t(k)] = a[order[std::size_t(k)]];
   a.swap(tmp);
 }
 
 /// a[order[k]] = a[k] for every k (the inverse of permute), through `tmp`.
 template <class T>
-void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
+void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp,
+               int threads = 1) {
   tmp.resize(a.size());
-  for (std::size_t k = 0; k < a.size(); ++k) tmp[order[k]] = a[k];
+  const std::ptrdiff_t n = std::ptrdiff_t(a.size());
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (std::ptrdiff_t k = 0; k < n; ++k) tmp[order[std::size_t(k)]] = a[std::size_t(k)];
   a.swap(tmp);
 }
 
@@ -54,12 +63,19 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   asleep.resize(n);
   inv_mass_awake_.resize(n);
   any_asleep_ = false;
-  std::size_t k = 0;
+  // Passes over particles or contacts that write each element once split over the threads for
+  // a large system; the results do not depend on it.
+  const int par = threads > 1 && n >= kParallelMin ? threads : 1;
+  std::size_t base = 0;
   for (const auto& m : members) {
     ParticleStore& s = *m.store;
     if (s.track_rest && !m.sleep)  // sleep not allowed now: wake them all
       for (std::size_t i = 0; i < s.count; ++i) s.rest[4 * i + 3] = 0.0f;
-    for (std::size_t i = 0; i < s.count; ++i, ++k) {
+    bool slept = false;
+    const std::ptrdiff_t count = std::ptrdiff_t(s.count);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1) reduction(|| : slept)
+    for (std::ptrdiff_t ii = 0; ii < count; ++ii) {
+      const std::size_t i = std::size_t(ii), k = base + i;
       x[k] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
       v[k] = Vec3(s.velocity[3 * i], s.velocity[3 * i + 1], s.velocity[3 * i + 2]);
       inv_mass[k] = 1.0 / double(s.mass[i]);
@@ -73,9 +89,11 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       inv_mass_awake_[k] = inv_mass[k];
       if (asleep[k] != 0) {
         inv_mass[k] = 0.0;
-        any_asleep_ = true;
+        slept = true;
       }
     }
+    any_asleep_ = any_asleep_ || slept;
+    base += s.count;
   }
   x_before.clear();
   if (n < 2) return;
@@ -94,18 +112,18 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   choose_cells(h);
   const bool reordered = levels == 1 && build_grid();
   if (reordered) {
-    permute(x, order_, tmp3_);
-    permute(v, order_, tmp3_);
-    permute(inv_mass, order_, tmp1_);
-    permute(radius, order_, tmp1_);
-    permute(restitution, order_, tmp1_);
-    permute(friction, order_, tmp1_);
-    permute(half_dt_, order_, tmp1_);
-    permute(key, order_, tmp_key_);
-    permute(collides, order_, tmp_byte_);
+    permute(x, order_, tmp3_, par);
+    permute(v, order_, tmp3_, par);
+    permute(inv_mass, order_, tmp1_, par);
+    permute(radius, order_, tmp1_, par);
+    permute(restitution, order_, tmp1_, par);
+    permute(friction, order_, tmp1_, par);
+    permute(half_dt_, order_, tmp1_, par);
+    permute(key, order_, tmp_key_, par);
+    permute(collides, order_, tmp_byte_, par);
     if (any_asleep_) {  // else all zero, in any order
-      permute(asleep, order_, tmp_byte_);
-      permute(inv_mass_awake_, order_, tmp1_);
+      permute(asleep, order_, tmp_byte_, par);
+      permute(inv_mass_awake_, order_, tmp1_, par);
     }
     perm_.swap(order_);
     order_.resize(n);
@@ -149,21 +167,33 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   // acceleration): dt Δv / 2. A stack whose weight the solve cancels stays where it was instead
   // of sinking g h² / 2 per step into overlaps the projection must undo.
   x_before = x;
-  for (std::size_t q = 0; q < n; ++q) x[q] += half_dt_[q] * (v[q] - v_before_[q]);
+  {
+    const std::ptrdiff_t np = std::ptrdiff_t(n);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t q = 0; q < np; ++q) {
+      const std::size_t u = std::size_t(q);
+      x[u] += half_dt_[u] * (v[u] - v_before_[u]);
+    }
+  }
   project_positions();
   // Back to flat order: x, v and x_before are indexed like the members' particles again.
-  unpermute(x, perm_, tmp3_);
-  unpermute(v, perm_, tmp3_);
-  unpermute(x_before, perm_, tmp3_);
-  if (any_asleep_) unpermute(asleep, perm_, tmp_byte_);
-  k = 0;
+  unpermute(x, perm_, tmp3_, par);
+  unpermute(v, perm_, tmp3_, par);
+  unpermute(x_before, perm_, tmp3_, par);
+  if (any_asleep_) unpermute(asleep, perm_, tmp_byte_, par);
+  base = 0;
   for (const auto& m : members) {
     ParticleStore& s = *m.store;
-    for (std::size_t i = 0; i < s.count; ++i, ++k)
+    const std::ptrdiff_t count = std::ptrdiff_t(s.count);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t ii = 0; ii < count; ++ii) {
+      const std::size_t i = std::size_t(ii), k = base + i;
       for (int a = 0; a < 3; ++a) {
         s.position[3 * i + std::size_t(a)] = float(x[k][a]);
         s.velocity[3 * i + std::size_t(a)] = float(v[k][a]);
       }
+    }
+    base += s.count;
   }
   update_rest(members, h);
 }
@@ -350,7 +380,11 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
     while (cursor < c.ki.size() && c.ki[cursor] < kf) ++cursor;
     warm_first_[f] = std::uint32_t(cursor);
   }
-  for (Contact& ct : contacts) {
+  const std::ptrdiff_t m = std::ptrdiff_t(contacts.size());
+  const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t qc = 0; qc < m; ++qc) {
+    Contact& ct = contacts[std::size_t(qc)];
     ct.pn = 0.0;
     ct.pt = Vec3::Zero();
     // Only resting and speculative contacts (target <= 0): an impact's impulse is its own, the
@@ -632,33 +666,39 @@ void ParticleCollider::schedule() {
   work_vc_.resize(m);
   wave_.resize(m);
   pair_next_.assign(m, 0);
-  last_wave_.assign(x.size(), 0);
+  // The bands are ordered on their own (a band's windows, its particles' latest waves in the
+  // thread's own array), so large systems split them over the threads; the order is the same.
+  const int par = threads > 1 && x.size() >= kParallelMin && bands_.size() > 1 ? threads : 1;
+  if (wave_scratch_.size() < std::size_t(par)) wave_scratch_.resize(std::size_t(par));
+  for (int t = 0; t < par; ++t) wave_scratch_[std::size_t(t)].last_wave.assign(x.size(), 0);
   // Contact q's wave is one past the latest wave of the contacts before it (in its window) that
   // share a particle with it, so a particle's contacts keep their order and the contacts of one
   // wave share none: sorting a window by wave (stably) changes no result, and the sweep can
   // overlap each wave's contacts. Windows of kWindow contacts keep the reordered sweep's reads
   // near each other in memory.
   constexpr std::size_t kWindow = 2048;
-  const auto order_window = [&](std::size_t begin, std::size_t end) {
+  const auto order_window = [&](std::size_t begin, std::size_t end, WaveScratch& ws) {
+    std::vector<std::uint32_t>& last_wave = ws.last_wave;
+    std::vector<std::uint32_t>& wave_count = ws.wave_count;
     std::uint32_t top = 0;
     for (std::size_t q = begin; q < end; ++q) {
       const Contact& c = contacts[q];
       const bool wall = c.i == kCollider;
-      std::uint32_t w = last_wave_[c.j];
-      if (!wall) w = std::max(w, last_wave_[c.i]);
+      std::uint32_t w = last_wave[c.j];
+      if (!wall) w = std::max(w, last_wave[c.i]);
       // Wave k's pairs are 2k + 2, its collider contacts 2k + 3: the sweep's branch on the
       // contact's kind then changes once per wave.
       w = 2 * (w / 2 + 1) + (wall ? 1u : 0u);
       wave_[q] = w;
-      last_wave_[c.j] = w;
-      if (!wall) last_wave_[c.i] = w;
+      last_wave[c.j] = w;
+      if (!wall) last_wave[c.i] = w;
       top = std::max(top, w);
     }
-    wave_count_.assign(std::size_t(top) + 2, 0);
-    for (std::size_t q = begin; q < end; ++q) ++wave_count_[wave_[q] + 1];
-    for (std::size_t w = 0; w + 1 < wave_count_.size(); ++w) wave_count_[w + 1] += wave_count_[w];
+    wave_count.assign(std::size_t(top) + 2, 0);
+    for (std::size_t q = begin; q < end; ++q) ++wave_count[wave_[q] + 1];
+    for (std::size_t w = 0; w + 1 < wave_count.size(); ++w) wave_count[w + 1] += wave_count[w];
     for (std::size_t q = begin; q < end; ++q)
-      sched_[begin + wave_count_[wave_[q]]++] = std::uint32_t(q);
+      sched_[begin + wave_count[wave_[q]]++] = std::uint32_t(q);
     // Pairs of neighbours in one wave go to the two-lane update together.
     for (std::size_t k = begin; k < end;) {
       if (k + 1 < end && wave_[sched_[k]] == wave_[sched_[k + 1]]) {
@@ -669,24 +709,32 @@ void ParticleCollider::schedule() {
       }
     }
     for (std::size_t q = begin; q < end; ++q) {
-      last_wave_[contacts[q].j] = 0;
-      if (contacts[q].i != kCollider) last_wave_[contacts[q].i] = 0;
+      last_wave[contacts[q].j] = 0;
+      if (contacts[q].i != kCollider) last_wave[contacts[q].i] = 0;
     }
   };
-  const auto order_range = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t w = begin; w < end; w += kWindow) order_window(w, std::min(end, w + kWindow));
+  const auto order_range = [&](std::size_t begin, std::size_t end, WaveScratch& ws) {
+    for (std::size_t w = begin; w < end; w += kWindow)
+      order_window(w, std::min(end, w + kWindow), ws);
   };
   if (!wavefront) {
     for (std::size_t q = 0; q < m; ++q) sched_[q] = std::uint32_t(q);
   } else if (bands_.empty()) {
-    order_range(0, m);
+    order_range(0, m, wave_scratch_[0]);
   } else {
-    for (const Band& b : bands_) {
-      order_range(b.pair_begin, b.pair_end);
-      order_range(b.wall_begin, b.wall_end);
+    const int nb = int(bands_.size());
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (int bi = 0; bi < nb; ++bi) {
+      WaveScratch& ws = wave_scratch_[std::size_t(omp_get_thread_num())];
+      const Band& b = bands_[std::size_t(bi)];
+      order_range(b.pair_begin, b.pair_end, ws);
+      order_range(b.wall_begin, b.wall_end, ws);
     }
   }
-  for (std::size_t k = 0; k < m; ++k) {
+  const std::ptrdiff_t mm = std::ptrdiff_t(m);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t kk = 0; kk < mm; ++kk) {
+    const std::size_t k = std::size_t(kk);
     const Contact& c = contacts[sched_[k]];
     work_[k] = SolverContact{c.i, c.j, c.n, c.m_eff, c.target, c.mu, c.pn, c.pt};
     if (c.i == kCollider) work_vc_[k] = c.vc;

@@ -226,7 +226,13 @@ class ParticleCollider {
   };
   std::vector<SolverContact> work_;
   std::vector<Vec3> work_vc_;
-  std::vector<std::uint32_t> sched_, wave_, last_wave_, wave_count_;
+  std::vector<std::uint32_t> sched_, wave_;
+  /// schedule(): per thread, each particle's latest wave in the current window, and a window's
+  /// contacts per wave
+  struct WaveScratch {
+    std::vector<std::uint32_t> last_wave, wave_count;
+  };
+  std::vector<WaveScratch> wave_scratch_;
   /// (work_ position) 1: it and the next are one wave's, solved together in two SIMD lanes
   std::vector<std::uint8_t> pair_next_;
   /// Fills bands_ from the contacts of find_pairs() and find_collider_contacts() on sorted
