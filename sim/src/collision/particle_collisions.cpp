@@ -108,6 +108,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   // The working arrays go into cell order, so that every later pass reads neighbours from
   // nearby memory; perm_ maps them back.
   contacts.clear();
+  wall_vc.clear();
   sleeper_pairs_.clear();
   choose_cells(h);
   const bool reordered = levels == 1 && build_grid();
@@ -289,15 +290,16 @@ void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colli
         c.n = found[q].normal;
         c.depth = -found[q].gap;
         c.m_eff = 1.0 / inv_mass[p];
-        c.vc = col.point_velocity(x[p] - (r + found[q].gap) * c.n);
+        const Vec3 vc = col.point_velocity(x[p] - (r + found[q].gap) * c.n);
         // Speculative while apart: the particle may still close the gap this step.
         c.target = found[q].gap > 0.0 ? -found[q].gap / h : 0.0;
-        const Vec3 dv = v[p] - c.vc;
+        const Vec3 dv = v[p] - vc;
         const Vec3 vt = dv - dv.dot(c.n) * c.n;
         c.mu = act == HitAction::stick ? std::numeric_limits<double>::infinity()
                : vt.norm() <= contact_speed ? col.material.static_mu()
                                             : col.material.friction;
         contacts.push_back(c);
+        wall_vc.push_back(vc);
       }
     }
   }
@@ -737,7 +739,7 @@ void ParticleCollider::schedule() {
     const std::size_t k = std::size_t(kk);
     const Contact& c = contacts[sched_[k]];
     work_[k] = SolverContact{c.i, c.j, c.n, c.m_eff, c.target, c.mu, c.pn, c.pt};
-    if (c.i == kCollider) work_vc_[k] = c.vc;
+    if (c.i == kCollider) work_vc_[k] = wall_vc[sched_[k] - (m - wall_vc.size())];
   }
 }
 

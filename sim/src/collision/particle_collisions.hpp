@@ -92,8 +92,11 @@ class ParticleCollider {
   /// (overlapping, approaching faster than the contact speed) wakes it before the solve.
   std::vector<std::uint8_t> asleep;
   static constexpr std::uint32_t kCollider = 0xffffffffu;  ///< Contact::i of a collider contact
+  /// 104 bytes: every pass over the contacts reads them (a collider contact's surface velocity
+  /// is in wall_vc, not here, which pairs would carry for nothing).
   struct Contact {
     std::uint32_t i, j;  ///< particles; i == kCollider: j against collider `collider`
+    std::uint32_t collider = 0;
     Vec3 n;             ///< unit, from i to j (from the collider's surface to j)
     double m_eff;       ///< 1 / (1/m_i + 1/m_j); m_j against a collider
     double target;      ///< wanted separating normal speed after the solve
@@ -102,10 +105,11 @@ class ParticleCollider {
     double pn = 0.0;    ///< accumulated normal impulse (N s), >= 0; solve() starts from it
                         ///< (the warm start: the previous step's impulse, else 0)
     Vec3 pt = Vec3::Zero();  ///< accumulated friction impulse, likewise
-    Vec3 vc = Vec3::Zero();     ///< (m/s) velocity of the collider's surface point
-    std::uint32_t collider = 0;
   };
   std::vector<Contact> contacts;
+  /// (m/s) velocity of the collider's surface point of each collider contact: they are the last
+  /// wall_vc.size() of `contacts`, in the same order (find_collider_contacts() appends both).
+  std::vector<Vec3> wall_vc;
   /// Fills `contacts` from x/radius with a uniform grid (§2.3.1). Cell size: 2 x the mean
   /// diameter, or the largest diameter if that is bigger, so the 27 neighbouring cells hold
   /// every contact; particles are sorted by cell and each pair is tested once, from the earlier

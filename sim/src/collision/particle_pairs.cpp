@@ -65,6 +65,7 @@ void ParticleCollider::choose_cells(double h) {
 
 void ParticleCollider::find_contacts(double contact_speed, double h) {
   contacts.clear();
+  wall_vc.clear();
   bands_.clear();
   if (x.size() < 2) return;
   choose_cells(h);
