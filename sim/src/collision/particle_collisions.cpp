@@ -745,8 +745,9 @@ void ParticleCollider::schedule() {
 
 void ParticleCollider::project_positions() {
   if (x_before.size() != x.size()) x_before = x;
-  for (int it = 0; it < position_iterations; ++it) {
-    for (const Contact& c : contacts) {
+  const auto project = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t q = begin; q < end; ++q) {
+      const Contact& c = contacts[q];
       const bool wall = c.i == kCollider;
       double slop = 0.0, depth = 0.0;
       Vec3 nn = c.n;
@@ -771,6 +772,24 @@ void ParticleCollider::project_positions() {
       if (!wall) x[c.i] -= corr * wi * nn;
       x[c.j] += corr * wj * nn;
     }
+  };
+  if (bands_.empty()) {
+    for (int it = 0; it < position_iterations; ++it) project(0, contacts.size());
+    return;
+  }
+  // A large system's sweeps go like the solve's: the pairs of the even bands, of the odd bands,
+  // then the collider contacts, the same order at any thread count.
+  const int nb = int(bands_.size());
+  const bool par = threads > 1 && x.size() >= kParallelMin;
+  for (int it = 0; it < position_iterations; ++it) {
+    for (int phase = 0; phase < 2; ++phase) {
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+      for (int b = phase; b < nb; b += 2)
+        project(bands_[std::size_t(b)].pair_begin, bands_[std::size_t(b)].pair_end);
+    }
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+    for (int b = 0; b < nb; ++b)
+      project(bands_[std::size_t(b)].wall_begin, bands_[std::size_t(b)].wall_end);
   }
 }
 
