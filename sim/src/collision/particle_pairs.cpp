@@ -79,24 +79,52 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
 bool ParticleCollider::build_grid() {
   const std::size_t n = x.size();
   const double inv = 1.0 / cell_size;
-  Vec3 lo = x[0];
-  for (std::size_t i = 1; i < n; ++i) lo = lo.cwiseMin(x[i]);
+  // The passes that write each particle's entry, and the minima and maxima (exact in any
+  // order), split over the threads for a large system; the counting sort stays in one.
+  const int par = threads > 1 && n >= kParallelMin ? threads : 1;
+  const std::ptrdiff_t np = std::ptrdiff_t(n);
+  double lx = x[0][0], ly = x[0][1], lz = x[0][2];
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1) reduction(min : lx, ly, lz)
+  for (std::ptrdiff_t i = 1; i < np; ++i) {
+    const Vec3& p = x[std::size_t(i)];
+    lx = std::min(lx, p[0]);
+    ly = std::min(ly, p[1]);
+    lz = std::min(lz, p[2]);
+  }
+  const Vec3 lo(lx, ly, lz);
   // Cell coordinates from 1 (a neighbour at -1 stays >= 0), and one spare cell past the largest.
   constexpr double kMaxCells = double(1 << 21);
-  std::int64_t dim[3] = {0, 0, 0};
+  double cx = 0.0, cy = 0.0, cz = 0.0;
+  bool wide = false;
   cell_key_.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) {
-      const double c = std::floor((x[i][a] - lo[a]) * inv) + 1.0;
-      if (!(c < kMaxCells - 2.0)) return false;  // too wide for 21 bits (or not finite)
-      dim[a] = std::max(dim[a], std::int64_t(c) + 2);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1) \
+    reduction(max : cx, cy, cz) reduction(|| : wide)
+  for (std::ptrdiff_t i = 0; i < np; ++i) {
+    const Vec3& p = x[std::size_t(i)];
+    const double c0 = std::floor((p[0] - lo[0]) * inv) + 1.0;
+    const double c1 = std::floor((p[1] - lo[1]) * inv) + 1.0;
+    const double c2 = std::floor((p[2] - lo[2]) * inv) + 1.0;
+    // Too wide for 21 bits (or not finite).
+    if (!(c0 < kMaxCells - 2.0) || !(c1 < kMaxCells - 2.0) || !(c2 < kMaxCells - 2.0)) {
+      wide = true;
+      continue;
     }
+    cx = std::max(cx, c0);
+    cy = std::max(cy, c1);
+    cz = std::max(cz, c2);
+    // The coordinates, packed 21 bits each, until the strides are known.
+    cell_key_[std::size_t(i)] = (std::uint64_t(c0) << 42) | (std::uint64_t(c1) << 21) | std::uint64_t(c2);
+  }
+  if (wide) return false;
+  const std::int64_t dim[3] = {std::int64_t(cx) + 2, std::int64_t(cy) + 2, std::int64_t(cz) + 2};
   stride_y_ = std::uint64_t(dim[2]);
   stride_x_ = std::uint64_t(dim[1]) * stride_y_;
   cells_x_ = std::uint64_t(dim[0]);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto c = [&](int a) { return std::uint64_t(std::floor((x[i][a] - lo[a]) * inv) + 1.0); };
-    cell_key_[i] = c(0) * stride_x_ + c(1) * stride_y_ + c(2);
+  constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t i = 0; i < np; ++i) {
+    const std::uint64_t c = cell_key_[std::size_t(i)];
+    cell_key_[std::size_t(i)] = (c >> 42) * stride_x_ + ((c >> 21) & kMask) * stride_y_ + (c & kMask);
   }
   // Particles by (cell key, index): a counting sort when the box has few cells per particle,
   // else a comparison sort of the same keys (the same order either way).
@@ -117,14 +145,19 @@ bool ParticleCollider::build_grid() {
   sy_.resize(n);
   sz_.resize(n);
   sr_.resize(n);
-  occupied_.clear();
-  cell_first_.clear();
-  for (std::size_t s = 0; s < n; ++s) {
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t ss = 0; ss < np; ++ss) {
+    const std::size_t s = std::size_t(ss);
     const std::uint32_t i = order_[s];
     sx_[s] = x[i][0];
     sy_[s] = x[i][1];
     sz_[s] = x[i][2];
     sr_[s] = radius[i];
+  }
+  occupied_.clear();
+  cell_first_.clear();
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::uint32_t i = order_[s];
     if (s == 0 || cell_key_[i] != occupied_.back()) {
       occupied_.push_back(cell_key_[i]);
       cell_first_.push_back(std::uint32_t(s));
