@@ -140,7 +140,7 @@ inline void sweep_triangle_all(const Triangle& t, const Vec3& a, const Vec3& d, 
 /// the segment, so when both ends are beyond r on one side, no point of the segment comes within
 /// r of the edge's line — nor of the edge or its end vertices — and when that side is the outside,
 /// of the triangle at all. (A particle lying on a face far from its edges then costs one face
-/// test; the triangle next to it none.) The margin covers rounding (1e-6 r plus 1e-12 per metre
+/// test; the triangle next to it none.) Likewise for the triangle's plane, tested first. The margin covers rounding (1e-6 r plus 1e-12 per metre
 /// of the coordinates' size), far above the features' own. Once a contact at s = 0 is known, none
 /// can come earlier.
 inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, double r,
@@ -150,6 +150,10 @@ inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, doub
   const double size = 1.0 + std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(),
                                       t.a.cwiseAbs().maxCoeff()});
   const double reach = r * (1.0 + 1e-6) + 1e-12 * size;
+  // Both ends beyond r on one side of the triangle's plane: the grown triangle lies within r of
+  // the plane, so the segment meets none of it (a drop above a terrain's triangle: two dots).
+  const double h0 = t.normal.dot(a - t.a), h1 = t.normal.dot(b - t.a);
+  if ((h0 > reach && h1 > reach) || (h0 < -reach && h1 < -reach)) return;
   const Vec3* v[3] = {&t.a, &t.b, &t.c};
   bool far[3];
   for (int k = 0; k < 3; ++k) {
