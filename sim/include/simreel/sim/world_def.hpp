@@ -12,7 +12,8 @@ struct WorldDef {
                                   ///< time into ceil(T / max_step) equal steps
   std::uint64_t seed = 0;         ///< scene seed; the i-th system ever added draws from Rng(seed, i)
   double contact_speed = 0.05;    ///< (m/s) normal speed under which a collision becomes a
-                                  ///< resting contact (§3.6.3)
+                                  ///< resting contact (§3.6.3), beyond the g h one step of
+                                  ///< gravity adds (not counted as impact speed)
   int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
                                   ///< 0 = the hardware's count. Results are bit-identical at any
                                   ///< count (static partitioning, per-particle gathers)
