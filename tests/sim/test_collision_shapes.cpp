@@ -889,6 +889,46 @@ TEST(SimParticleSleep, ABeadThatDoesNotCollideWithTheBowlSleepsOnThePileWithoutS
   EXPECT_GE(still, on_pile * 8 / 10);
 }
 
+TEST(SimParticleSleep, RemovingTheColliderUnderASleepingPileWakesIt) {
+  // A sleeper stays put only because what holds it stays: with the bowl removed, the pile falls.
+  World world;
+  const auto bowl_h = world.add_mesh(bowl(0.3, 12, 32, mat(0.3, 0.5)));
+  const auto ps = world.add_particle_system(pile_system(0.01));
+  world.advance(4.5);
+  world.remove(bowl_h);
+  world.advance(0.5);
+  const ParticleView v = world.particles(ps);
+  ASSERT_EQ(v.count, 400u);
+  std::size_t fallen = 0;
+  for (std::size_t i = 0; i < v.count; ++i) fallen += position_of(v, i).z() < -0.3 - 0.5;
+  EXPECT_EQ(fallen, v.count);  // in free fall g t^2 / 2 = 1.2 m in 0.5 s
+}
+
+TEST(SimParticleSleep, AColliderAddedIntoASleepingPileWakesIt) {
+  // A sphere set down into the settled pile: the beads it overlaps must be pushed out of it (a
+  // sleeper has no collider contacts and is not swept, so it would stay inside the sphere's skin).
+  SleepyPile p;
+  p.world.advance(4.5);
+  const std::vector<Vec3> before = p.positions();
+  double top = -1.0;
+  for (const Vec3& x : before) top = std::max(top, x.z());
+  const double R = 0.06, r = 0.01;
+  const Vec3 c(0.0, 0.0, top - 0.02);
+  std::size_t overlapped = 0;
+  for (const Vec3& x : before) overlapped += (x - c).norm() < R + r && (x - c).norm() > R;
+  ASSERT_GE(overlapped, 3u);
+  SphereDef sphere;
+  sphere.transform.translation = c;
+  sphere.radius = R;
+  sphere.material = mat(0.3, 0.5);
+  p.world.add_sphere(sphere);
+  p.world.advance(0.25);
+  const ParticleView v = p.world.particles(p.ps);
+  std::size_t deep = 0;
+  for (std::size_t i = 0; i < v.count; ++i) deep += (position_of(v, i) - c).norm() < R + r - 2e-3;
+  EXPECT_EQ(deep, 0u) << "of " << overlapped << " overlapping when it was added";
+}
+
 TEST(SimParticleSleep, NoSleepAmongMovingColliders) {
   // A kinematic box far away moving: a collider that moves could push a sleeping particle
   // without waking it, so none sleeps (the pile itself settles the same way).

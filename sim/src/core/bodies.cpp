@@ -203,6 +203,7 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
   }
   b.reported_translation = b.pose.translation;
   b.reported_rotation = b.pose.rotation.normalized();
+  wake_particles(w);  // a new collider may overlap sleeping particles
   return BodyHandle{w.bodies.add(std::move(b))};
 }
 
@@ -243,6 +244,7 @@ void remove_body(WorldState& w, const Handle& h) {
   // Whatever rested on the body must be free to fall (and island ids name rigid indices, which
   // the swap-remove below changes).
   wake_all(w);
+  wake_particles(w);
   const Body& gone = w.bodies[h];
   remove_joints_of(w, h);  // its joints go with it (their handles go stale)
   if (gone.dynamic()) --w.dyn.dynamic_count;

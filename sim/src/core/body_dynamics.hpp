@@ -263,6 +263,10 @@ void wake_island(WorldState& w, std::uint32_t i);
 /// Wakes every sleeping body (a removal: whatever rested on the removed body must fall).
 void wake_all(WorldState& w);
 
+/// Wakes every sleeping particle (ParticleStore::rest): the colliders changed, so what held a
+/// sleeper may be gone, or a new one may overlap it.
+void wake_particles(WorldState& w);
+
 /// After the step's solve: rest times from the new velocities, islands from this step's
 /// manifolds, and islands that have all rested kTimeToSleep put to sleep.
 void update_sleep(WorldState& w, double h);

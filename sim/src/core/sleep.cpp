@@ -52,6 +52,14 @@ void wake_all(WorldState& w) {
   }
 }
 
+void wake_particles(WorldState& w) {
+  for (ParticleSystemState& ps : w.systems.dense()) {
+    ParticleStore& s = ps.store;
+    if (!s.track_rest) continue;
+    for (std::size_t i = 0; i < s.count; ++i) s.rest[4 * i + 3] = 0.0f;
+  }
+}
+
 bool wake_touched(WorldState& w) {
   BodyDynamics& d = w.dyn;
   bool woke = false;
