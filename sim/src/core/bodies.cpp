@@ -203,7 +203,8 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
   }
   b.reported_translation = b.pose.translation;
   b.reported_rotation = b.pose.rotation.normalized();
-  wake_particles(w);  // a new collider may overlap sleeping particles
+  for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k)
+    wake_particles_near(w, w.shapes[k]);  // it may overlap sleeping particles
   return BodyHandle{w.bodies.add(std::move(b))};
 }
 
@@ -244,8 +245,9 @@ void remove_body(WorldState& w, const Handle& h) {
   // Whatever rested on the body must be free to fall (and island ids name rigid indices, which
   // the swap-remove below changes).
   wake_all(w);
-  wake_particles(w);
   const Body& gone = w.bodies[h];
+  for (std::uint32_t k = gone.first_shape; k < gone.first_shape + gone.shape_count; ++k)
+    wake_particles_near(w, w.shapes[k]);
   remove_joints_of(w, h);  // its joints go with it (their handles go stale)
   if (gone.dynamic()) --w.dyn.dynamic_count;
   if (gone.rigid != kNoRigid) remove_rigid(w, gone.rigid);

@@ -263,9 +263,12 @@ void wake_island(WorldState& w, std::uint32_t i);
 /// Wakes every sleeping body (a removal: whatever rested on the removed body must fall).
 void wake_all(WorldState& w);
 
-/// Wakes every sleeping particle (ParticleStore::rest): the colliders changed, so what held a
-/// sleeper may be gone, or a new one may overlap it.
-void wake_particles(WorldState& w);
+/// A collider added or about to be removed: wakes every particle of each system (and of the
+/// systems in its collision group) that has a sleeper within reach of the collider's bounds
+/// (1.5 radii + 1 mm; a plane: above it by less, or below), since what held a sleeper may be
+/// gone or a new solid may overlap it. The whole system wakes, not just the sleepers near it:
+/// the beads of a pile rest on one another, and sleep has no islands to follow.
+void wake_particles_near(WorldState& w, const Collider& c);
 
 /// After the step's solve: rest times from the new velocities, islands from this step's
 /// manifolds, and islands that have all rested kTimeToSleep put to sleep.

@@ -52,10 +52,30 @@ void wake_all(WorldState& w) {
   }
 }
 
-void wake_particles(WorldState& w) {
-  for (ParticleSystemState& ps : w.systems.dense()) {
-    ParticleStore& s = ps.store;
+void wake_particles_near(WorldState& w, const Collider& c) {
+  std::vector<ParticleSystemState>& systems = w.systems.dense();
+  std::vector<bool> wake(systems.size(), false);
+  for (std::size_t u = 0; u < systems.size(); ++u) {
+    const ParticleStore& s = systems[u].store;
     if (!s.track_rest) continue;
+    for (std::size_t i = 0; i < s.count && !wake[u]; ++i) {
+      if (s.rest[4 * i + 3] < kSleepTime) continue;  // awake: an impact wakes what it meets
+      const Vec3 x(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
+      const double reach = 1.5 * double(s.radius[i]) + 1e-3;
+      wake[u] = c.shape == Collider::Shape::plane
+                    ? c.normal.dot(x - c.point) < reach
+                    : ((x - c.aabb_center).cwiseAbs() - c.aabb_half).maxCoeff() < reach;
+    }
+  }
+  for (std::size_t u = 0; u < systems.size(); ++u) {
+    const std::string& g = systems[u].def.collision_group;
+    if (!wake[u] || g.empty()) continue;
+    for (std::size_t v = 0; v < systems.size(); ++v)
+      if (systems[v].def.collision_group == g) wake[v] = true;
+  }
+  for (std::size_t u = 0; u < systems.size(); ++u) {
+    ParticleStore& s = systems[u].store;
+    if (!wake[u]) continue;
     for (std::size_t i = 0; i < s.count; ++i) s.rest[4 * i + 3] = 0.0f;
   }
 }
