@@ -324,6 +324,62 @@ std::vector<detail::Collider> ground_and_moving_box() {
   return cols;
 }
 
+TEST(SimParticleCollision, BeadsWokenInALargeSleepingLayerRestOnTheirNeighbours) {
+  // 20,000 sleeping beads in two touching layers on the ground (a large system: solved in bands
+  // over the threads) and 50 awake beads coming down at 1 m/s onto the top layer. The beads they
+  // hit wake, and their pairs with the sleepers under them join the contacts before the solve:
+  // the banded sweeps must solve those pairs too (a woken bead must not go on into the sleeper
+  // under it), the same at one and two threads.
+  const double r = 0.01, h = 1.0 / 240;
+  const int side = 100, hits = 50;
+  std::vector<detail::Collider> ground;
+  ground.push_back(detail::make_collider(ShapeDef::plane(), "ground"));
+  ground.back().follow(Transform{}, Vec3::Zero(), Vec3::Zero());
+  const auto run = [&](int threads) {
+    detail::ParticleStore s;
+    s.track_rest = true;
+    const std::size_t n = std::size_t(2 * side * side + hits);
+    s.append(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec3 x, v = Vec3::Zero();
+      if (k < std::size_t(2 * side * side)) {
+        const std::size_t layer = k / std::size_t(side * side), q = k % std::size_t(side * side);
+        x = Vec3(2 * r * double(q % std::size_t(side)), 2 * r * double(q / std::size_t(side)),
+                 r + 2 * r * double(layer));
+        for (int a = 0; a < 3; ++a) s.rest[4 * k + std::size_t(a)] = float(x[a]);
+        s.rest[4 * k + 3] = detail::kSleepTime;
+      } else {  // above every 7th bead of the top layer's middle rows, 2 mm into it
+        const std::size_t q = (k - std::size_t(2 * side * side)) * 7 + std::size_t(side * side / 2);
+        x = Vec3(2 * r * double(q % std::size_t(side)), 2 * r * double(q / std::size_t(side)), 5 * r - 0.002);
+        v = Vec3(0, 0, -1.0);
+      }
+      for (int a = 0; a < 3; ++a) {
+        s.position[3 * k + std::size_t(a)] = float(x[a]);
+        s.velocity[3 * k + std::size_t(a)] = float(v[a]);
+      }
+      s.radius[k] = float(r);
+      s.mass[k] = 4.19e-3f;
+      s.age[k] = 1.0f;
+      s.id[k] = k;
+    }
+    detail::ParticleCollider pc;
+    pc.threads = threads;
+    const std::vector<detail::ParticleGroupMember> members{{&s, 0.2, 0.3, true, 0, true, 9.81}};
+    pc.run(members, 0.05, h, &ground);
+    return std::vector<float>(s.velocity.data(), s.velocity.data() + 3 * n);
+  };
+  const std::vector<float> one = run(1);
+  EXPECT_EQ(one, run(2));
+  for (int k = 0; k < hits; ++k) {
+    // The bead hit (held by the sleeper under it, it may fall asleep again at once) and the one
+    // that hit it (bounced off): neither goes on down.
+    const std::size_t q = std::size_t(k) * 7 + std::size_t(side * side / 2) + std::size_t(side * side);
+    const std::size_t p = std::size_t(2 * side * side + k);
+    EXPECT_GE(one[3 * q + 2], -1e-3f) << "woken bead " << q << " goes on into the sleeper under it";
+    EXPECT_GE(one[3 * p + 2], -1e-3f) << "bead " << p << " goes on through the one it hit";
+  }
+}
+
 TEST(SimParticleCollision, WavefrontSweepsGiveTheBitsOfTheContactOrder) {
   // The solve sweeps the contacts in waves that share no particle (schedule()), so that the
   // processor overlaps neighbouring updates. Each update touches only its two particles, so any

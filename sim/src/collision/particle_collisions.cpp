@@ -138,8 +138,8 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     record_sleeper_pairs_ = false;
   }
   grid_sorted_ = reordered;
+  if (any_asleep_) wake_on_impact(pair_rest_speed, h);  // may add pairs
   const std::size_t pair_count = contacts.size();
-  if (any_asleep_) wake_on_impact(pair_rest_speed, h);
   if (colliders != nullptr && !colliders->empty())
     find_collider_contacts(*colliders, h, contact_speed);
   bands_.clear();
