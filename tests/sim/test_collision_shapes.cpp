@@ -929,6 +929,29 @@ TEST(SimParticleSleep, AColliderAddedIntoASleepingPileWakesIt) {
   EXPECT_EQ(deep, 0u) << "of " << overlapped << " overlapping when it was added";
 }
 
+TEST(SimParticleSleep, APileWhoseBottomBeadsDieWakesAndSettles) {
+  // Beads live 3.6 s: those poured first (the bottom of the pile) die first, from 3.6 s on,
+  // while the pile sleeps. A sleeper that rested on a bead that died must fall, not hover.
+  World world;
+  world.add_mesh(bowl(0.3, 12, 32, mat(0.3, 0.5)));
+  ParticleSystemDef def = pile_system(0.01);
+  def.emitter.lifetime = {3.6, 0, 0};
+  const auto ps = world.add_particle_system(def);
+  world.advance(3.5);
+  const auto top = [&] {  // mean height of the 20 highest beads
+    std::vector<double> z;
+    for (std::size_t i = 0; i < world.particles(ps).count; ++i) z.push_back(position_of(world.particles(ps), i).z());
+    std::sort(z.rbegin(), z.rend());
+    double m = 0.0;
+    for (std::size_t i = 0; i < 20 && i < z.size(); ++i) m += z[i] / 20.0;
+    return m;
+  };
+  const double before = top();
+  world.advance(0.4);  // the beads poured in the first 0.3 s are gone
+  ASSERT_LT(world.particles(ps).count, 300u);
+  EXPECT_LT(top(), before - 0.005) << "the pile's top sank " << before - top() << " m";
+}
+
 TEST(SimParticleSleep, NoSleepAmongMovingColliders) {
   // A kinematic box far away moving: a collider that moves could push a sleeping particle
   // without waking it, so none sleeps (the pile itself settles the same way).

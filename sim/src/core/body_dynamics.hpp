@@ -270,6 +270,10 @@ void wake_all(WorldState& w);
 /// the beads of a pile rest on one another, and sleep has no islands to follow.
 void wake_particles_near(WorldState& w, const Collider& c);
 
+/// Wakes every particle of the systems marked in `wake` (dense index) and of the systems in
+/// their collision groups.
+void wake_systems(WorldState& w, std::vector<bool> wake);
+
 /// After the step's solve: rest times from the new velocities, islands from this step's
 /// manifolds, and islands that have all rested kTimeToSleep put to sleep.
 void update_sleep(WorldState& w, double h);

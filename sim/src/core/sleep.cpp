@@ -67,6 +67,11 @@ void wake_particles_near(WorldState& w, const Collider& c) {
                     : ((x - c.aabb_center).cwiseAbs() - c.aabb_half).maxCoeff() < reach;
     }
   }
+  wake_systems(w, wake);
+}
+
+void wake_systems(WorldState& w, std::vector<bool> wake) {
+  std::vector<ParticleSystemState>& systems = w.systems.dense();
   for (std::size_t u = 0; u < systems.size(); ++u) {
     const std::string& g = systems[u].def.collision_group;
     if (!wake[u] || g.empty()) continue;
@@ -75,7 +80,7 @@ void wake_particles_near(WorldState& w, const Collider& c) {
   }
   for (std::size_t u = 0; u < systems.size(); ++u) {
     ParticleStore& s = systems[u].store;
-    if (!wake[u]) continue;
+    if (!wake[u] || !s.track_rest) continue;
     for (std::size_t i = 0; i < s.count; ++i) s.rest[4 * i + 3] = 0.0f;
   }
 }

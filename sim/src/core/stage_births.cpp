@@ -52,12 +52,16 @@ void stage_births_and_deaths(WorldState& w, double t0, double t1) {
   const double h = t1 - t0;
   const bool any_collider = !w.shapes.empty();
   collect_sub_births(w, h);
+  // A system of sleeping particles that lost some (lifetime, a kill, a split) wakes with its
+  // collision group: a sleeper may have rested on one that is gone.
+  std::vector<bool> lost(w.systems.size(), false);
+  bool any_lost = false;
   for (std::size_t index = 0; index < w.systems.size(); ++index) {
     ParticleSystemState& ps = w.systems.at(index);
     ParticleStore& st = ps.store;
     // Particle split (§3.9.1): parents whose condition is met create their children.
     split_particles(ps.def.emitter, ps.split_rng, st, ps.n_old, ps.next_id);
-    st.compact(0);
+    if (st.compact(0) > 0 && st.track_rest) any_lost = lost[index] = true;
 
     // Particles born in (t0, t1].
     const std::size_t first_new = emit(ps.def.emitter, ps.emitter, st, t0, t1, ps.next_id);
@@ -93,6 +97,7 @@ void stage_births_and_deaths(WorldState& w, double t0, double t1) {
       apply_tint(st, ps.gradient.constant() ? first_new : 0, st.count);
     if (!ps.size_curve.empty()) ps.size_curve.apply(st, 0, st.count);
   }
+  if (any_lost) wake_systems(w, lost);
 }
 
 }  // namespace simreel::sim::detail

@@ -167,8 +167,9 @@ struct ParticleStore {
   /// Appends n zero-initialised particles; returns the index of the first.
   std::size_t append(std::size_t n);
   /// Removes particles with age >= lifetime from index `first` on, keeping the survivors' order
-  /// (so exports sorted by id stay sorted). Moves contiguous runs with memmove.
-  void compact(std::size_t first = 0);
+  /// (so exports sorted by id stay sorted). Moves contiguous runs with memmove. Returns how many
+  /// were removed.
+  std::size_t compact(std::size_t first = 0);
   [[nodiscard]] ParticleView view() const;
 };
 

@@ -66,7 +66,7 @@ std::size_t ParticleStore::append(std::size_t n) {
   return first;
 }
 
-void ParticleStore::compact(std::size_t first) {
+std::size_t ParticleStore::compact(std::size_t first) {
   const std::size_t n = count;
   auto alive = [this](std::size_t i) { return age[i] < lifetime[i]; };
   // Find the first death a block at a time: most steps nobody dies, and a branch-free block
@@ -80,7 +80,7 @@ void ParticleStore::compact(std::size_t first) {
     if (dead) break;
     i = e;
   }
-  if (i >= n) return;  // the common case: nothing moves
+  if (i >= n) return 0;  // the common case: nothing moves
   while (alive(i)) ++i;
   if (i == 0) {
     // The oldest died (emission order is age order): drop them from the front of every
@@ -97,8 +97,7 @@ void ParticleStore::compact(std::size_t first) {
     from_split.drop_front(k);
     if (track_rest) rest.drop_front(4 * k);
     count = n - k;
-    compact(0);
-    return;
+    return k + compact(0);
   }
   std::size_t w = i;
   while (i < n) {
@@ -126,6 +125,7 @@ void ParticleStore::compact(std::size_t first) {
     w += len;
   }
   resize_all(*this, w);
+  return n - w;
 }
 
 ParticleView ParticleStore::view() const {
