@@ -220,6 +220,11 @@ class ParticleCollider {
   /// `contacts` (each update reads and writes only its own two particles), but neighbouring
   /// updates no longer wait on each other, so the processor overlaps them.
   void schedule();
+  /// `sweeps` passes of over(begin, end) over the contacts: in contact order, or for bands the
+  /// even bands' pairs, the odd bands' pairs, then every band's collider contacts, each phase
+  /// split over the threads for a large system (the same order at any thread count).
+  template <class F>
+  void sweep_bands(int sweeps, const F& over);
   /// What a sweep reads of a contact (88 bytes against Contact's 128: the large solves are
   /// bound by memory); a collider contact's surface velocity is in work_vc_.
   struct SolverContact {

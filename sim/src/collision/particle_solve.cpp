@@ -1,0 +1,336 @@
+// The particle contacts' solve (Coutinho §3.6.1–3.6.2): the bands of grid columns, the
+// wavefront order of the sequential-impulse sweeps, the sweeps themselves and the overlap
+// projection. The contact search is in particle_pairs.cpp, the step in particle_collisions.cpp.
+#include <algorithm>
+#include <cmath>
+#include <type_traits>
+
+#include <omp.h>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
+#include "collision/particle_collisions.hpp"
+#include "particles/forces.hpp"  // kParallelMin
+
+namespace simreel::sim::detail {
+
+template <class F>
+void ParticleCollider::sweep_bands(int sweeps, const F& over) {
+  if (bands_.empty()) {
+    for (int it = 0; it < sweeps; ++it) over(std::size_t(0), contacts.size());
+    return;
+  }
+  const int nb = int(bands_.size());
+  // Two sweeps of bands per iteration, each a fork and a barrier: only for large systems.
+  const bool par = threads > 1 && x.size() >= kParallelMin;
+  // Pairs of the even bands, of the odd bands, then every collider contact (one particle each:
+  // the bands' are independent of each other).
+  for (int it = 0; it < sweeps; ++it) {
+    for (int phase = 0; phase < 2; ++phase) {
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+      for (int b = phase; b < nb; b += 2)
+        over(std::size_t(bands_[std::size_t(b)].pair_begin), std::size_t(bands_[std::size_t(b)].pair_end));
+    }
+#pragma omp parallel for schedule(static) num_threads(threads) if (par)
+    for (int b = 0; b < nb; ++b)
+      over(std::size_t(bands_[std::size_t(b)].wall_begin), std::size_t(bands_[std::size_t(b)].wall_end));
+  }
+}
+
+void ParticleCollider::make_bands(std::size_t pair_count) {
+  // Band width in columns: about 64 bands over the particles' extent (at least one column) for
+  // a system large enough to be solved in parallel; one band (the plain sweep in cell order)
+  // below that, which keeps piles of a few thousand particles as quiet as the sequential order
+  // (bands two apart are not coupled within a sweep, so an impulse crosses a pile more slowly).
+  // The choice depends on the particle count only, never on the thread count.
+  const std::uint64_t width =
+      x.size() >= kParallelMin ? std::max<std::uint64_t>(1, (cells_x_ + 63) / 64) : cells_x_;
+  const std::size_t nb = std::size_t((cells_x_ + width - 1) / width);
+  // Sorted position -> band: the column of its cell (cell keys are x-major).
+  const auto band_of = [&](std::uint32_t s) {
+    return std::size_t(cell_key_[perm_[s]] / stride_x_ / width);
+  };
+  bands_.assign(nb, Band{0, 0, 0, 0});
+  std::size_t b = 0;
+  for (std::size_t q = 0; q <= pair_count; ++q) {
+    const std::size_t bq = q < pair_count ? band_of(contacts[q].i) : nb;
+    for (; b < bq; ++b) {
+      bands_[b].pair_end = std::uint32_t(q);
+      if (b + 1 < nb) bands_[b + 1].pair_begin = std::uint32_t(q);
+    }
+  }
+  b = 0;
+  for (std::size_t q = pair_count; q <= contacts.size(); ++q) {
+    const std::size_t bq = q < contacts.size() ? band_of(contacts[q].j) : nb;
+    if (q == pair_count) bands_[0].wall_begin = std::uint32_t(q);
+    for (; b < bq; ++b) {
+      bands_[b].wall_end = std::uint32_t(q);
+      if (b + 1 < nb) bands_[b + 1].wall_begin = std::uint32_t(q);
+    }
+  }
+}
+
+void ParticleCollider::solve() {
+  for (Contact& c : contacts) {
+    const Vec3 p = c.pn * c.n + c.pt;
+    if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
+    v[c.j] += inv_mass[c.j] * p;
+  }
+  // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
+  const auto update = [&](SolverContact& c, const Vec3& vc, auto wall_tag)
+                          __attribute__((always_inline)) {
+    constexpr bool wall = decltype(wall_tag)::value;
+    const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+    Vec3 dv = v[c.j] - (wall ? vc : v[c.i]);
+    // Normal: accumulated impulse clamped to push only.
+    const double vn = dv.dot(c.n);
+    const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
+    const double dpn = pn_new - c.pn;
+    c.pn = pn_new;
+    if (!wall) v[c.i] -= (dpn * wi) * c.n;
+    v[c.j] += (dpn * wj) * c.n;
+    // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
+    dv = v[c.j] - (wall ? vc : v[c.i]);
+    const Vec3 vt = dv - dv.dot(c.n) * c.n;
+    Vec3 pt_new = c.pt - c.m_eff * vt;
+    const double bound = c.mu * c.pn;
+    const double len = pt_new.norm();
+    // A minimum, not a branch: whether a contact slides is data, and a mispredicted branch
+    // stops the overlap of independent contacts. bound / len < 1 exactly when the branch
+    // "len > bound" would scale (a quotient rounded up to 1 scales by 1.0 either way; 0 / 0 and
+    // b / 0 leave it at 1), and x * 1.0 == x: the bits are those of the branch.
+    const double ratio = bound / len;
+#if defined(__SSE2__)
+    // gcc turns the ternary below into a branch; minsd returns its second operand on NaN.
+    pt_new *= _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(ratio), _mm_set_sd(1.0)));
+#else
+    pt_new *= ratio < 1.0 ? ratio : 1.0;
+#endif
+    const Vec3 dpt = pt_new - c.pt;
+    c.pt = pt_new;
+    if (!wall) v[c.i] -= wi * dpt;
+    v[c.j] += wj * dpt;
+  };
+  // The sweeps run over a copy of the contacts in wavefront order (schedule()), which is the
+  // same Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end.
+  schedule();
+#if defined(__SSE2__)
+  // Two contacts of one wave at once, one in each lane of the SSE2 registers: they share no
+  // particle, and each lane performs the scalar update's operations in its order (no FMA,
+  // -ffp-contract=off), so the result is the same to the bit (the solver test compares them).
+  const auto update2 = [&](SolverContact& c0, SolverContact& c1, const Vec3& vc0, const Vec3& vc1,
+                           auto wall_tag) __attribute__((always_inline)) {
+    constexpr bool wall = decltype(wall_tag)::value;
+    const auto pack = [](double a, double b) { return _mm_set_pd(b, a); };
+    const auto load3 = [](const Vec3& a, const Vec3& b, __m128d* out) {
+      for (int k = 0; k < 3; ++k) out[k] = _mm_loadh_pd(_mm_load_sd(&a[k]), &b[k]);
+    };
+    const auto store3 = [](const __m128d* in, Vec3& a, Vec3& b) {
+      for (int k = 0; k < 3; ++k) {
+        _mm_storel_pd(&a[k], in[k]);
+        _mm_storeh_pd(&b[k], in[k]);
+      }
+    };
+    const auto dot = [](const __m128d* a, const __m128d* b) {
+      return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a[0], b[0]), _mm_mul_pd(a[1], b[1])),
+                        _mm_mul_pd(a[2], b[2]));
+    };
+    __m128d n[3], vi[3], vj[3], dv[3], pt[3];
+    for (int k = 0; k < 3; ++k) {
+      n[k] = pack(c0.n[k], c1.n[k]);
+      pt[k] = pack(c0.pt[k], c1.pt[k]);
+    }
+    const __m128d wj = pack(inv_mass[c0.j], inv_mass[c1.j]);
+    const __m128d wi = wall ? _mm_setzero_pd() : pack(inv_mass[c0.i], inv_mass[c1.i]);
+    if (wall) {
+      load3(vc0, vc1, vi);
+    } else {
+      load3(v[c0.i], v[c1.i], vi);
+    }
+    load3(v[c0.j], v[c1.j], vj);
+    const __m128d m_eff = pack(c0.m_eff, c1.m_eff), pn = pack(c0.pn, c1.pn);
+    for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
+    const __m128d vn = dot(dv, n);
+    const __m128d pn_new = _mm_max_pd(
+        _mm_add_pd(pn, _mm_mul_pd(m_eff, _mm_sub_pd(pack(c0.target, c1.target), vn))),
+        _mm_setzero_pd());
+    const __m128d dpn = _mm_sub_pd(pn_new, pn);
+    _mm_storel_pd(&c0.pn, pn_new);
+    _mm_storeh_pd(&c1.pn, pn_new);
+    const __m128d si = _mm_mul_pd(dpn, wi), sj = _mm_mul_pd(dpn, wj);
+    for (int k = 0; k < 3; ++k) {
+      if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(si, n[k]));
+      vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(sj, n[k]));
+    }
+    for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
+    const __m128d dvn = dot(dv, n);
+    __m128d pt_new[3];
+    for (int k = 0; k < 3; ++k) {
+      const __m128d vt = _mm_sub_pd(dv[k], _mm_mul_pd(dvn, n[k]));
+      pt_new[k] = _mm_sub_pd(pt[k], _mm_mul_pd(m_eff, vt));
+    }
+    const __m128d bound = _mm_mul_pd(pack(c0.mu, c1.mu), pn_new);
+    const __m128d len = _mm_sqrt_pd(dot(pt_new, pt_new));
+    const __m128d f = _mm_min_pd(_mm_div_pd(bound, len), _mm_set1_pd(1.0));
+    for (int k = 0; k < 3; ++k) {
+      pt_new[k] = _mm_mul_pd(pt_new[k], f);
+      const __m128d dpt = _mm_sub_pd(pt_new[k], pt[k]);
+      _mm_storel_pd(&c0.pt[k], pt_new[k]);
+      _mm_storeh_pd(&c1.pt[k], pt_new[k]);
+      if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(wi, dpt));
+      vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(wj, dpt));
+    }
+    if (!wall) store3(vi, v[c0.i], v[c1.i]);
+    store3(vj, v[c0.j], v[c1.j]);
+  };
+#endif
+  const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
+    for (std::size_t q = begin; q < end; ++q) {
+      SolverContact& c = work_[q];
+#if defined(__SSE2__)
+      if (pair_next_[q] != 0) {  // q and q + 1: the same wave, so the same kind
+        if (c.i == kCollider) {
+          update2(c, work_[q + 1], work_vc_[q], work_vc_[q + 1], std::true_type{});
+        } else {
+          update2(c, work_[q + 1], work_vc_[q], work_vc_[q + 1], std::false_type{});
+        }
+        ++q;
+        continue;
+      }
+#endif
+      if (c.i == kCollider) {
+        update(c, work_vc_[q], std::true_type{});
+      } else {
+        update(c, work_vc_[q], std::false_type{});
+      }
+    }
+  };
+  const auto give_back = [&] {
+    for (std::size_t k = 0; k < work_.size(); ++k) {
+      Contact& c = contacts[sched_[k]];
+      c.pn = work_[k].pn;
+      c.pt = work_[k].pt;
+    }
+  };
+  sweep_bands(iterations, sweep);
+  give_back();
+}
+
+void ParticleCollider::schedule() {
+  const std::size_t m = contacts.size();
+  sched_.resize(m);
+  work_.resize(m);
+  work_vc_.resize(m);
+  wave_.resize(m);
+  pair_next_.assign(m, 0);
+  // The bands are ordered on their own (a band's windows, its particles' latest waves in the
+  // thread's own array), so large systems split them over the threads; the order is the same.
+  const int par = threads > 1 && x.size() >= kParallelMin && bands_.size() > 1 ? threads : 1;
+  if (wave_scratch_.size() < std::size_t(par)) wave_scratch_.resize(std::size_t(par));
+  for (int t = 0; t < par; ++t) wave_scratch_[std::size_t(t)].last_wave.assign(x.size(), 0);
+  // Contact q's wave is one past the latest wave of the contacts before it (in its window) that
+  // share a particle with it, so a particle's contacts keep their order and the contacts of one
+  // wave share none: sorting a window by wave (stably) changes no result, and the sweep can
+  // overlap each wave's contacts. Windows of kWindow contacts keep the reordered sweep's reads
+  // near each other in memory.
+  constexpr std::size_t kWindow = 2048;
+  const auto order_window = [&](std::size_t begin, std::size_t end, WaveScratch& ws) {
+    std::vector<std::uint32_t>& last_wave = ws.last_wave;
+    std::vector<std::uint32_t>& wave_count = ws.wave_count;
+    std::uint32_t top = 0;
+    for (std::size_t q = begin; q < end; ++q) {
+      const Contact& c = contacts[q];
+      const bool wall = c.i == kCollider;
+      std::uint32_t w = last_wave[c.j];
+      if (!wall) w = std::max(w, last_wave[c.i]);
+      // Wave k's pairs are 2k + 2, its collider contacts 2k + 3: the sweep's branch on the
+      // contact's kind then changes once per wave.
+      w = 2 * (w / 2 + 1) + (wall ? 1u : 0u);
+      wave_[q] = w;
+      last_wave[c.j] = w;
+      if (!wall) last_wave[c.i] = w;
+      top = std::max(top, w);
+    }
+    wave_count.assign(std::size_t(top) + 2, 0);
+    for (std::size_t q = begin; q < end; ++q) ++wave_count[wave_[q] + 1];
+    for (std::size_t w = 0; w + 1 < wave_count.size(); ++w) wave_count[w + 1] += wave_count[w];
+    for (std::size_t q = begin; q < end; ++q)
+      sched_[begin + wave_count[wave_[q]]++] = std::uint32_t(q);
+    // Pairs of neighbours in one wave go to the two-lane update together.
+    for (std::size_t k = begin; k < end;) {
+      if (k + 1 < end && wave_[sched_[k]] == wave_[sched_[k + 1]]) {
+        pair_next_[k] = 1;
+        k += 2;
+      } else {
+        ++k;
+      }
+    }
+    for (std::size_t q = begin; q < end; ++q) {
+      last_wave[contacts[q].j] = 0;
+      if (contacts[q].i != kCollider) last_wave[contacts[q].i] = 0;
+    }
+  };
+  const auto order_range = [&](std::size_t begin, std::size_t end, WaveScratch& ws) {
+    for (std::size_t w = begin; w < end; w += kWindow)
+      order_window(w, std::min(end, w + kWindow), ws);
+  };
+  if (!wavefront) {
+    for (std::size_t q = 0; q < m; ++q) sched_[q] = std::uint32_t(q);
+  } else if (bands_.empty()) {
+    order_range(0, m, wave_scratch_[0]);
+  } else {
+    const int nb = int(bands_.size());
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (int bi = 0; bi < nb; ++bi) {
+      WaveScratch& ws = wave_scratch_[std::size_t(omp_get_thread_num())];
+      const Band& b = bands_[std::size_t(bi)];
+      order_range(b.pair_begin, b.pair_end, ws);
+      order_range(b.wall_begin, b.wall_end, ws);
+    }
+  }
+  const std::ptrdiff_t mm = std::ptrdiff_t(m);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t kk = 0; kk < mm; ++kk) {
+    const std::size_t k = std::size_t(kk);
+    const Contact& c = contacts[sched_[k]];
+    work_[k] = SolverContact{c.i, c.j, c.n, c.m_eff, c.target, c.mu, c.pn, c.pt};
+    if (c.i == kCollider) work_vc_[k] = wall_vc[sched_[k] - (m - wall_vc.size())];
+  }
+}
+
+void ParticleCollider::project_positions() {
+  if (x_before.size() != x.size()) x_before = x;
+  const auto project = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t q = begin; q < end; ++q) {
+      const Contact& c = contacts[q];
+      const bool wall = c.i == kCollider;
+      double slop = 0.0, depth = 0.0;
+      Vec3 nn = c.n;
+      if (wall) {
+        // The surface as the plane of its closest feature at the start of the projection.
+        depth = c.depth - c.n.dot(x[c.j] - x_before[c.j]);
+      } else {
+        const Vec3 d = x[c.j] - x[c.i];
+        const double dist = d.norm();
+        if (!(dist > 0.0)) continue;
+        nn = d / dist;
+        depth = radius[c.i] + radius[c.j] - dist;
+        slop = slop_fraction * std::min(radius[c.i], radius[c.j]);
+      }
+      // Each contact aims at the same end depth in every sweep, so the sweeps converge to it.
+      // A collider contact may close its gap (goal 0) but not go deeper.
+      const double goal = wall ? (c.depth > 0.0 ? (1.0 - position_fraction) * c.depth : 0.0)
+                               : c.depth - position_fraction * std::max(0.0, c.depth - slop);
+      if (!(depth > goal)) continue;
+      const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
+      const double corr = (depth - goal) / (wi + wj);
+      if (!wall) x[c.i] -= corr * wi * nn;
+      x[c.j] += corr * wj * nn;
+    }
+  };
+  // A large system's sweeps go like the solve's, the same order at any thread count.
+  sweep_bands(position_iterations, project);
+}
+
+}  // namespace simreel::sim::detail
