@@ -19,8 +19,11 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "collision/bvh.hpp"
+#include "collision/mesh_grid.hpp"
 #include "collision/narrow_phase.hpp"
 #include "collision/particle_collisions.hpp"
 #include "simreel/sim/random.hpp"
@@ -104,6 +107,52 @@ void mesh_phases(benchmark::State& state, bool narrow) {
   state.counters["segments"] =
       benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["bvh_depth"] = bvh.depth();
+}
+
+/// The same segments against the mesh's uniform grid (MeshGrid, what the particle sweep asks
+/// first), visited in Z-order of where they are as collide() does: the grid query alone (broad)
+/// and with the swept-sphere triangle tests (broad + narrow).
+void mesh_grid_phases(benchmark::State& state, bool narrow) {
+  const auto n = std::size_t(state.range(0));
+  const MeshDef def = terrain();
+  std::vector<detail::Triangle> tris;
+  for (const auto& t : def.triangles) {
+    detail::Triangle x{def.vertices[t[0]], def.vertices[t[1]], def.vertices[t[2]], Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  const detail::Bvh bvh(tris);
+  const detail::MeshGrid grid(tris, bvh.visit_order());
+  Rng rng(42);
+  std::vector<std::pair<std::uint64_t, std::pair<Vec3, Vec3>>> seg(n);
+  for (auto& [code, ad] : seg) {
+    ad.first = Vec3(rng.uniform(-45, 45), rng.uniform(-45, 45), rng.uniform(-0.5, 0.6));
+    ad.second = Vec3(0, 0, -rng.uniform(2, 8) / 240);
+    code = 0;
+    const auto qx = std::uint64_t((ad.first.x() + 50) * 10.23), qy = std::uint64_t((ad.first.y() + 50) * 10.23);
+    for (int b = 0; b < 10; ++b) code |= (qx >> b & 1) << (2 * b) | (qy >> b & 1) << (2 * b + 1);
+  }
+  std::sort(seg.begin(), seg.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  std::size_t found = 0;
+  const int reps = getenv("REP") ? 2 : 1;
+  for (auto _ : state) {
+    for (const auto& [code, ad] : seg) {
+      const auto& [a, d] = ad;
+      const Vec3 b = a + d, g = Vec3::Constant(0.01);
+      detail::SweepHit h;
+      for (int rep = 0; rep < reps; ++rep) grid.query(a.cwiseMin(b) - g, a.cwiseMax(b) + g, [&](const detail::Triangle& t, std::uint32_t) {
+        if (narrow) {
+          detail::sweep_triangle(t, a, d, 0.01, h);
+        } else {
+          ++found;
+        }
+      });
+      found += std::isfinite(h.s);
+    }
+    benchmark::DoNotOptimize(found);
+  }
+  state.counters["segments"] =
+      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
 /// n particles of radius 1 cm at about 30 % volume fraction in a 3D box with random velocities.
@@ -252,6 +301,8 @@ void pile_in_bowl(benchmark::State& state) {
 BENCHMARK(rain_on_mesh)->Args({100'000, 1})->Args({100'000, 2})->Iterations(240)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(mesh_phases, mesh_broad, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(mesh_phases, mesh_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(internal_hash)->Args({30'000, 1})->Args({30'000, 2})->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);

@@ -4,22 +4,23 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace simreel::sim::detail {
 
 MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uint32_t>& visit) {
   const std::size_t n = tris.size();
   if (n == 0 || visit.size() != n) return;
-  visit_ = visit;
-  box_.resize(6 * n);
+  std::vector<double> box(6 * n);  // by rank: lo x, y, z, hi x, y, z
   Aabb all;
   double extent = 0.0;  // mean of the triangles' largest box side
   for (std::size_t r = 0; r < n; ++r) {
     const Aabb b = triangle_box(tris[visit[r]]);
     all.grow(b);
     for (int k = 0; k < 3; ++k) {
-      box_[6 * r + std::size_t(k)] = b.lo[k];
-      box_[6 * r + 3 + std::size_t(k)] = b.hi[k];
+      box[6 * r + std::size_t(k)] = b.lo[k];
+      box[6 * r + 3 + std::size_t(k)] = b.hi[k];
     }
     extent += (b.hi - b.lo).maxCoeff() / double(n);
   }
@@ -38,34 +39,69 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   for (int k = 0; k < 3; ++k) dim_[k] = std::int64_t(std::floor(size[k] * inv_cell_)) + 1;
   const std::size_t cells = std::size_t(dim_[0] * dim_[1] * dim_[2]);
   auto cell_range = [&](std::size_t r, int k, std::int64_t& c0, std::int64_t& c1) {
-    const double a = (box_[6 * r + std::size_t(k)] - lo_[k]) * inv_cell_;
-    const double b = (box_[6 * r + 3 + std::size_t(k)] - lo_[k]) * inv_cell_;
+    const double a = (box[6 * r + std::size_t(k)] - lo_[k]) * inv_cell_;
+    const double b = (box[6 * r + 3 + std::size_t(k)] - lo_[k]) * inv_cell_;
     c0 = std::clamp(std::int64_t(a), std::int64_t(0), dim_[k] - 1);
     c1 = std::clamp(std::int64_t(b), std::int64_t(0), dim_[k] - 1);
   };
   // Two passes of a counting sort: counts per cell, then ranks in increasing order per cell.
-  start_.assign(cells + 1, 0);
-  for (int pass = 0; pass < 2; ++pass) {
-    std::vector<std::uint32_t> fill;
-    if (pass == 1) {
-      for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
-      rank_.resize(start_[cells]);
-      fill.assign(start_.begin(), start_.end() - 1);
-    }
-    for (std::size_t r = 0; r < n; ++r) {
-      std::int64_t c0[3], c1[3];
-      for (int k = 0; k < 3; ++k) cell_range(r, k, c0[k], c1[k]);
-      for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
-        for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
-          for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
-            const std::size_t c = std::size_t((z * dim_[1] + y) * dim_[0] + x);
-            if (pass == 0)
-              ++start_[c + 1];
-            else
-              rank_[fill[c]++] = std::uint32_t(r);
-          }
-    }
+  // The cells' runs lie in Z-order (Morton) of the cells, not in row order: particles are
+  // resolved in Z-order of where they are (particle_response.cpp), so the runs they read next
+  // lie next in memory.
+  std::vector<std::uint32_t> count(cells, 0);
+  const auto each_cell = [&](std::size_t r, auto&& g) {
+    std::int64_t c0[3], c1[3];
+    for (int k = 0; k < 3; ++k) cell_range(r, k, c0[k], c1[k]);
+    for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
+      for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
+        for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
+          g(std::size_t((z * dim_[1] + y) * dim_[0] + x));
+  };
+  for (std::size_t r = 0; r < n; ++r) each_cell(r, [&](std::size_t c) { ++count[c]; });
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // (Morton code, cell)
+  for (std::int64_t z = 0; z < dim_[2]; ++z)
+    for (std::int64_t y = 0; y < dim_[1]; ++y)
+      for (std::int64_t x = 0; x < dim_[0]; ++x) {
+        const std::size_t c = std::size_t((z * dim_[1] + y) * dim_[0] + x);
+        if (count[c] == 0) continue;
+        std::uint64_t code = 0;
+        for (int bit = 0; bit < 21; ++bit)
+          code |= ((std::uint64_t(x) >> bit & 1) << (3 * bit)) |
+                  ((std::uint64_t(y) >> bit & 1) << (3 * bit + 1)) |
+                  ((std::uint64_t(z) >> bit & 1) << (3 * bit + 2));
+        order.emplace_back(code, std::uint32_t(c));
+      }
+  std::sort(order.begin(), order.end());
+  cell_.assign(cells, Range{0, 0});
+  std::uint32_t next = 0;
+  for (const auto& [code, c] : order) {
+    cell_[c] = Range{next, next};
+    next += (count[c] + kLanes - 1) / kLanes;
   }
+  Block empty;
+  for (int l = 0; l < kLanes; ++l) {
+    for (int k = 0; k < 3; ++k) {
+      empty.lo[k][l] = std::numeric_limits<float>::infinity();
+      empty.hi[k][l] = -std::numeric_limits<float>::infinity();
+    }
+    empty.rank[l] = 0;
+  }
+  blocks_.assign(next, empty);
+  std::fill(count.begin(), count.end(), 0u);  // now: entries placed per cell
+  for (std::size_t r = 0; r < n; ++r)
+    each_cell(r, [&](std::size_t c) {
+      Block& b = blocks_[cell_[c].begin + count[c] / kLanes];
+      const std::uint32_t l = count[c]++ % kLanes;
+      for (int k = 0; k < 3; ++k) {
+        b.lo[k][l] = float(box[6 * r + std::size_t(k)]);
+        b.hi[k][l] = float(box[6 * r + 3 + std::size_t(k)]);
+      }
+      b.rank[l] = std::uint32_t(r);
+    });
+  for (std::size_t c = 0; c < cells; ++c) cell_[c].end = cell_[c].begin + (count[c] + kLanes - 1) / kLanes;
+  visit_ = visit;
+  tris_.reserve(n);
+  for (std::size_t r = 0; r < n; ++r) tris_.push_back(tris[visit[r]]);
 }
 
 }  // namespace simreel::sim::detail

@@ -4,32 +4,44 @@
 // small query in O(1) cells, where the tree walks O(log n) nodes scattered in memory). It
 // answers the small boxes of swept particles; larger ones go to the tree. Private.
 
+#include <algorithm>
+#include <bit>
 #include <cstdint>
+#include <limits>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "collision/bvh.hpp"
 
 namespace simreel::sim::detail {
 
-/// Cells of a fixed size over the mesh's bounds, each listing (as a contiguous range) the
-/// triangles whose box overlaps it. Triangles are named by their rank in the tree's visiting
+/// Cells of a fixed size over the mesh's bounds, each listing (as a contiguous run of blocks)
+/// the triangles whose box overlaps it. Triangles are named by their rank in the tree's visiting
 /// order, so a query can hand them out in that order: a first-hit search over them keeps the
-/// tree's choice among equal times (and so its bits).
+/// tree's choice among equal times (and so its bits). The grid keeps its own copy of the
+/// triangles by rank, so that the narrow phase reads them in the order they lie in space.
 class MeshGrid {
  public:
-  static constexpr int kMaxCells = 8;       ///< larger queries: the tree
+  static constexpr int kMaxCells = 8;        ///< larger queries: the tree
   static constexpr int kMaxCandidates = 96;  ///< more entries in the cells: the tree
+  static constexpr int kLanes = 4;           ///< entries per block (one SSE register)
 
   MeshGrid() = default;
   /// Grid over tris (local frame); visit = the tree's triangle order (Bvh::visit_order()).
   MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uint32_t>& visit);
 
-  /// Calls f(triangle index) for every triangle whose own box overlaps [lo, hi], in the tree's
-  /// visiting order, and returns true; or returns false (having called nothing) when the box
-  /// spans more than kMaxCells cells or its cells hold more than kMaxCandidates entries.
+  /// Calls f(triangle, its index in the mesh) for every triangle whose own box overlaps [lo, hi]
+  /// (local frame, m) — and
+  /// perhaps a few more within float rounding of it, which a swept-sphere test rejects
+  /// exactly — each once, in the tree's visiting order, and returns true; or returns false
+  /// (having called nothing) when the box spans more than kMaxCells cells or its cells hold more
+  /// than kMaxCandidates entries.
   template <class F>
   bool query(const Vec3& lo, const Vec3& hi, F&& f) const {
-    if (start_.empty()) return false;
+    if (cell_.empty()) return false;
     std::int64_t c0[3], c1[3];
     std::int64_t cells = 1;
     for (int k = 0; k < 3; ++k) {
@@ -40,42 +52,76 @@ class MeshGrid {
       cells *= c1[k] - c0[k] + 1;
     }
     if (cells > kMaxCells) return false;
-    std::uint32_t cand[kMaxCandidates];
+    // The query box and the entries' boxes to the nearest floats: rounding is monotonic
+    // (a <= b gives float(a) <= float(b)), so no triangle whose box overlaps is missed; one
+    // whose box misses by less than float rounding may come too.
+    const float q[6] = {float(lo[0]), float(lo[1]), float(lo[2]),
+                        float(hi[0]), float(hi[1]), float(hi[2])};
+    std::uint32_t cand[kMaxCandidates + kLanes];
     int count = 0;
     for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
       for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
         for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
-          const std::size_t c = std::size_t((z * dim_[1] + y) * dim_[0] + x);
-          const std::uint32_t b = start_[c], e = start_[c + 1];
-          if (count + int(e - b) > kMaxCandidates) return false;
-          for (std::uint32_t q = b; q < e; ++q) {
-            const std::uint32_t rank = rank_[q];
-            const double* box = &box_[6 * std::size_t(rank)];
-            if (box[0] <= hi[0] && box[1] <= hi[1] && box[2] <= hi[2] && box[3] >= lo[0] &&
-                box[4] >= lo[1] && box[5] >= lo[2])
-              cand[count++] = rank;
-          }
+          const Range rg = cell_[std::size_t((z * dim_[1] + y) * dim_[0] + x)];
+          if (count + kLanes * int(rg.end - rg.begin) > kMaxCandidates) return false;
+          for (std::uint32_t b = rg.begin; b < rg.end; ++b) count += overlaps(blocks_[b], q, cand + count);
         }
-    // Few entries: insertion sort, then each rank once (a triangle may sit in several cells).
-    for (int i = 1; i < count; ++i) {
-      const std::uint32_t v = cand[i];
-      int j = i;
-      for (; j > 0 && cand[j - 1] > v; --j) cand[j] = cand[j - 1];
-      cand[j] = v;
-    }
+    // Several cells: ranks in increasing order (insertion sort of a few), each once (a triangle
+    // may sit in several cells). One cell lists its ranks in increasing order already.
+    if (cells > 1)
+      for (int i = 1; i < count; ++i) {
+        const std::uint32_t v = cand[i];
+        int j = i;
+        for (; j > 0 && cand[j - 1] > v; --j) cand[j] = cand[j - 1];
+        cand[j] = v;
+      }
     for (int i = 0; i < count; ++i)
-      if (i == 0 || cand[i] != cand[i - 1]) f(visit_[cand[i]]);
+      if (i == 0 || cand[i] != cand[i - 1]) f(tris_[cand[i]], visit_[cand[i]]);
     return true;
   }
 
  private:
+  /// kLanes entries side by side: boxes (local frame, m; nearest floats) and ranks. An
+  /// unused lane has an empty box (lo = +inf, hi = -inf).
+  struct alignas(16) Block {
+    float lo[3][kLanes], hi[3][kLanes];
+    std::uint32_t rank[kLanes];
+  };
+  struct Range {
+    std::uint32_t begin, end;  ///< the cell's blocks
+  };
+
+  /// Writes the ranks of b's entries whose box overlaps q (lo x, y, z, hi x, y, z) to out, in
+  /// lane order; returns how many.
+  static int overlaps(const Block& b, const float* q, std::uint32_t* out) {
+    unsigned mask;
+#if defined(__SSE2__)
+    __m128 m = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[0]), _mm_set1_ps(q[3])),
+                          _mm_cmpge_ps(_mm_load_ps(b.hi[0]), _mm_set1_ps(q[0])));
+    for (int k = 1; k < 3; ++k)
+      m = _mm_and_ps(m, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[k]), _mm_set1_ps(q[3 + k])),
+                                   _mm_cmpge_ps(_mm_load_ps(b.hi[k]), _mm_set1_ps(q[k]))));
+    mask = unsigned(_mm_movemask_ps(m));
+#else
+    mask = 0;
+    for (int l = 0; l < kLanes; ++l) {
+      bool in = true;
+      for (int k = 0; k < 3; ++k) in = in && b.lo[k][l] <= q[3 + k] && b.hi[k][l] >= q[k];
+      mask |= unsigned(in) << l;
+    }
+#endif
+    int n = 0;
+    for (; mask != 0; mask &= mask - 1) out[n++] = b.rank[std::countr_zero(mask)];
+    return n;
+  }
+
   Vec3 lo_ = Vec3::Zero(), hi_ = Vec3::Zero();  ///< (m) bounds of the mesh, local frame
   double inv_cell_ = 0.0;                       ///< (1/m)
   std::int64_t dim_[3] = {0, 0, 0};             ///< cells per axis
-  std::vector<std::uint32_t> start_;  ///< (cells + 1) first entry of each cell in rank_
-  std::vector<std::uint32_t> rank_;   ///< entries: ranks of the triangles, increasing per cell
-  std::vector<std::uint32_t> visit_;  ///< rank -> triangle index (the tree's order)
-  std::vector<double> box_;           ///< (triangles x 6) by rank: lo x, y, z, hi x, y, z (m)
+  std::vector<Range> cell_;                     ///< (cells) row order (x fastest)
+  std::vector<Block> blocks_;                   ///< the cells' runs, in Z-order of the cells
+  std::vector<Triangle> tris_;                  ///< the triangles by rank
+  std::vector<std::uint32_t> visit_;            ///< rank -> triangle index (the tree's order)
 };
 
 }  // namespace simreel::sim::detail

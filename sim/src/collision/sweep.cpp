@@ -213,8 +213,9 @@ void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, bool 
   h.s = best.s;
   const MeshShape& m = *c.mesh;
   const Vec3 lo = la.cwiseMin(lb) - grow, hi = la.cwiseMax(lb) + grow;
-  const auto test = [&](std::uint32_t t) { sweep_triangle(m.triangles[t], la, ld, r, h); };
-  if (!m.grid.query(lo, hi, test)) m.bvh.query(lo, hi, test);
+  const auto test = [&](const Triangle& t, std::uint32_t = 0) { sweep_triangle(t, la, ld, r, h); };
+  if (!m.grid.query(lo, hi, test))
+    m.bvh.query(lo, hi, [&](std::uint32_t t) { test(m.triangles[t]); });
   if (!(h.s < best.s)) return;
   best = Hit{h.s, Vec3(c.R * h.normal), Vec3(c.center + c.R * h.point), &c};
 }
