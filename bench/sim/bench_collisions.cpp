@@ -134,15 +134,15 @@ void mesh_grid_phases(benchmark::State& state, bool narrow) {
   }
   std::sort(seg.begin(), seg.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
   std::size_t found = 0;
-  const int reps = getenv("REP") ? 2 : 1;
   for (auto _ : state) {
     for (const auto& [code, ad] : seg) {
       const auto& [a, d] = ad;
       const Vec3 b = a + d, g = Vec3::Constant(0.01);
       detail::SweepHit h;
-      for (int rep = 0; rep < reps; ++rep) grid.query(a.cwiseMin(b) - g, a.cwiseMax(b) + g, [&](const detail::Triangle& t, std::uint32_t) {
+      const detail::SweepSegment seg(a, d);
+      grid.query(a.cwiseMin(b) - g, a.cwiseMax(b) + g, [&](const detail::SweepTriangle& t, std::uint32_t) {
         if (narrow) {
-          detail::sweep_triangle(t, a, d, 0.01, h);
+          detail::sweep_triangle(t, seg, 0.01, h);
         } else {
           ++found;
         }

@@ -277,9 +277,9 @@ TEST(SimCollisionMesh, MeshGridGivesTheTreesTrianglesInTheTreesOrder) {
       if (b.overlaps(lo, hi)) from_tree.push_back(t);
     });
     std::vector<std::uint32_t> extra;
-    if (!grid.query(lo, hi, [&](const detail::Triangle& x, std::uint32_t t) {
-          EXPECT_EQ(x.a, tris[t].a);  // the grid's copy of the triangle
-          EXPECT_EQ(x.normal, tris[t].normal);
+    if (!grid.query(lo, hi, [&](const detail::SweepTriangle& x, std::uint32_t t) {
+          EXPECT_EQ(x.t.a, tris[t].a);  // the grid's copy of the triangle
+          EXPECT_EQ(x.t.normal, tris[t].normal);
           detail::Aabb b;
           b.grow(tris[t].a);
           b.grow(tris[t].b);

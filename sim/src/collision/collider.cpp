@@ -114,6 +114,7 @@ void Collider::set_pose(const Transform& t) {
     case Shape::plane:
       break;
   }
+  note_pose();
 }
 
 void Collider::follow(const Transform& body_pose, const Vec3& v, const Vec3& w) {

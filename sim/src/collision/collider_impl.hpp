@@ -90,6 +90,10 @@ struct Collider {
   /// start pose to its end point in the end pose, i.e. along the relative motion (§2.1, §3.7).
   Vec3 prev_center = Vec3::Zero();
   Mat3 prev_R = Mat3::Identity();
+  /// The shape frame is the world frame now and at the start of the step (centre zero, R the
+  /// identity; a static terrain as most scenes place it): the sweeps skip the transforms, which
+  /// would change nothing but the sign of a zero. Kept by note_pose().
+  bool unposed = true;
   Vec3 aabb_center = Vec3::Zero();  ///< world AABB of the solid (unexpanded)
   Vec3 aabb_half = Vec3::Zero();
 
@@ -99,6 +103,11 @@ struct Collider {
   /// Places the shape on its body: the body frame's world pose and velocities (m/s of the body
   /// origin, rad/s, world). The previous pose becomes the start-of-step pose.
   void follow(const Transform& body_pose, const Vec3& v, const Vec3& w);
+  /// Updates `unposed` after the pose or the start-of-step pose changed.
+  void note_pose() {
+    unposed = center == Vec3::Zero() && prev_center == Vec3::Zero() && R == Mat3::Identity() &&
+              prev_R == Mat3::Identity();
+  }
   /// Velocity (m/s) of the collider's material point at world position p.
   [[nodiscard]] Vec3 point_velocity(const Vec3& p) const {
     return shape == Shape::plane ? Vec3::Zero() : Vec3(velocity + angular_velocity.cross(p - center));

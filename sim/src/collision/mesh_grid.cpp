@@ -36,7 +36,10 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
     cell *= 1.25;
   }
   inv_cell_ = 1.0 / cell;
-  for (int k = 0; k < 3; ++k) dim_[k] = std::int64_t(std::floor(size[k] * inv_cell_)) + 1;
+  for (int k = 0; k < 3; ++k) {
+    dim_[k] = std::int64_t(std::floor(size[k] * inv_cell_)) + 1;
+    last_[k] = double(dim_[k] - 1);
+  }
   const std::size_t cells = std::size_t(dim_[0] * dim_[1] * dim_[2]);
   auto cell_range = [&](std::size_t r, int k, std::int64_t& c0, std::int64_t& c1) {
     const double a = (box[6 * r + std::size_t(k)] - lo_[k]) * inv_cell_;
@@ -101,7 +104,7 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   for (std::size_t c = 0; c < cells; ++c) cell_[c].end = cell_[c].begin + (count[c] + kLanes - 1) / kLanes;
   visit_ = visit;
   tris_.reserve(n);
-  for (std::size_t r = 0; r < n; ++r) tris_.push_back(tris[visit[r]]);
+  for (std::size_t r = 0; r < n; ++r) tris_.emplace_back(tris[visit[r]]);
 }
 
 }  // namespace simreel::sim::detail

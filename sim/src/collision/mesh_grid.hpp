@@ -15,6 +15,7 @@
 #endif
 
 #include "collision/bvh.hpp"
+#include "collision/narrow_phase.hpp"
 
 namespace simreel::sim::detail {
 
@@ -22,7 +23,8 @@ namespace simreel::sim::detail {
 /// the triangles whose box overlaps it. Triangles are named by their rank in the tree's visiting
 /// order, so a query can hand them out in that order: a first-hit search over them keeps the
 /// tree's choice among equal times (and so its bits). The grid keeps its own copy of the
-/// triangles by rank, so that the narrow phase reads them in the order they lie in space.
+/// triangles by rank, with their edge data, so that the narrow phase reads them in the order
+/// they lie in space and derives nothing from them per query.
 class MeshGrid {
  public:
   static constexpr int kMaxCells = 8;        ///< larger queries: the tree
@@ -33,7 +35,7 @@ class MeshGrid {
   /// Grid over tris (local frame); visit = the tree's triangle order (Bvh::visit_order()).
   MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uint32_t>& visit);
 
-  /// Calls f(triangle, its index in the mesh) for every triangle whose own box overlaps [lo, hi]
+  /// Calls f(triangle with its edge data, its index in the mesh) for every triangle whose own box overlaps [lo, hi]
   /// (local frame, m) — and
   /// perhaps a few more within float rounding of it, which a swept-sphere test rejects
   /// exactly — each once, in the tree's visiting order, and returns true; or returns false
@@ -42,29 +44,29 @@ class MeshGrid {
   template <class F>
   bool query(const Vec3& lo, const Vec3& hi, F&& f) const {
     if (cell_.empty()) return false;
-    std::int64_t c0[3], c1[3];
-    std::int64_t cells = 1;
+    int c0[3], c1[3];
+    int cells = 1;
     for (int k = 0; k < 3; ++k) {
       if (!(lo[k] <= hi_[k] && hi[k] >= lo_[k])) return true;  // outside the mesh's bounds
-      const double a = (lo[k] - lo_[k]) * inv_cell_, b = (hi[k] - lo_[k]) * inv_cell_;
-      c0[k] = a <= 0.0 ? 0 : std::int64_t(std::min(a, double(dim_[k] - 1)));
-      c1[k] = b <= 0.0 ? 0 : std::int64_t(std::min(b, double(dim_[k] - 1)));
+      // Within the bounds, so neither is NaN: clamped to [0, dim - 1] and truncated.
+      c0[k] = int(std::min(std::max((lo[k] - lo_[k]) * inv_cell_, 0.0), last_[k]));
+      c1[k] = int(std::min(std::max((hi[k] - lo_[k]) * inv_cell_, 0.0), last_[k]));
       cells *= c1[k] - c0[k] + 1;
     }
     if (cells > kMaxCells) return false;
     // The query box and the entries' boxes to the nearest floats: rounding is monotonic
     // (a <= b gives float(a) <= float(b)), so no triangle whose box overlaps is missed; one
     // whose box misses by less than float rounding may come too.
-    const float q[6] = {float(lo[0]), float(lo[1]), float(lo[2]),
-                        float(hi[0]), float(hi[1]), float(hi[2])};
+    const Query q(lo, hi);
     std::uint32_t cand[kMaxCandidates + kLanes];
     int count = 0;
-    for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
-      for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
-        for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
-          const Range rg = cell_[std::size_t((z * dim_[1] + y) * dim_[0] + x)];
+    for (int z = c0[2]; z <= c1[2]; ++z)
+      for (int y = c0[1]; y <= c1[1]; ++y)
+        for (int x = c0[0]; x <= c1[0]; ++x) {
+          const Range rg = cell_[(std::size_t(z) * std::size_t(dim_[1]) + std::size_t(y)) *
+                                     std::size_t(dim_[0]) + std::size_t(x)];
           if (count + kLanes * int(rg.end - rg.begin) > kMaxCandidates) return false;
-          for (std::uint32_t b = rg.begin; b < rg.end; ++b) count += overlaps(blocks_[b], q, cand + count);
+          for (std::uint32_t b = rg.begin; b < rg.end; ++b) count += q.overlaps(blocks_[b], cand + count);
         }
     // Several cells: ranks in increasing order (insertion sort of a few), each once (a triangle
     // may sit in several cells). One cell lists its ranks in increasing order already.
@@ -91,36 +93,57 @@ class MeshGrid {
     std::uint32_t begin, end;  ///< the cell's blocks
   };
 
-  /// Writes the ranks of b's entries whose box overlaps q (lo x, y, z, hi x, y, z) to out, in
-  /// lane order; returns how many.
-  static int overlaps(const Block& b, const float* q, std::uint32_t* out) {
-    unsigned mask;
+  /// A query box in floats, each bound in every lane.
+  struct Query {
 #if defined(__SSE2__)
-    __m128 m = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[0]), _mm_set1_ps(q[3])),
-                          _mm_cmpge_ps(_mm_load_ps(b.hi[0]), _mm_set1_ps(q[0])));
-    for (int k = 1; k < 3; ++k)
-      m = _mm_and_ps(m, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[k]), _mm_set1_ps(q[3 + k])),
-                                   _mm_cmpge_ps(_mm_load_ps(b.hi[k]), _mm_set1_ps(q[k]))));
-    mask = unsigned(_mm_movemask_ps(m));
+    __m128 lo[3], hi[3];
+    Query(const Vec3& l, const Vec3& h) {
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = _mm_set1_ps(float(l[k]));
+        hi[k] = _mm_set1_ps(float(h[k]));
+      }
+    }
 #else
-    mask = 0;
-    for (int l = 0; l < kLanes; ++l) {
-      bool in = true;
-      for (int k = 0; k < 3; ++k) in = in && b.lo[k][l] <= q[3 + k] && b.hi[k][l] >= q[k];
-      mask |= unsigned(in) << l;
+    float lo[3], hi[3];
+    Query(const Vec3& l, const Vec3& h) {
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = float(l[k]);
+        hi[k] = float(h[k]);
+      }
     }
 #endif
-    int n = 0;
-    for (; mask != 0; mask &= mask - 1) out[n++] = b.rank[std::countr_zero(mask)];
-    return n;
-  }
+    /// Writes the ranks of b's entries whose box overlaps this one to out, in lane order;
+    /// returns how many.
+    int overlaps(const Block& b, std::uint32_t* out) const {
+      unsigned mask;
+#if defined(__SSE2__)
+      __m128 m = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[0]), hi[0]),
+                            _mm_cmpge_ps(_mm_load_ps(b.hi[0]), lo[0]));
+      for (int k = 1; k < 3; ++k)
+        m = _mm_and_ps(m, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[k]), hi[k]),
+                                     _mm_cmpge_ps(_mm_load_ps(b.hi[k]), lo[k])));
+      mask = unsigned(_mm_movemask_ps(m));
+#else
+      mask = 0;
+      for (int l = 0; l < kLanes; ++l) {
+        bool in = true;
+        for (int k = 0; k < 3; ++k) in = in && b.lo[k][l] <= hi[k] && b.hi[k][l] >= lo[k];
+        mask |= unsigned(in) << l;
+      }
+#endif
+      int n = 0;
+      for (; mask != 0; mask &= mask - 1) out[n++] = b.rank[std::countr_zero(mask)];
+      return n;
+    }
+  };
 
   Vec3 lo_ = Vec3::Zero(), hi_ = Vec3::Zero();  ///< (m) bounds of the mesh, local frame
   double inv_cell_ = 0.0;                       ///< (1/m)
   std::int64_t dim_[3] = {0, 0, 0};             ///< cells per axis
+  double last_[3] = {0.0, 0.0, 0.0};            ///< dim - 1, the last cell's index
   std::vector<Range> cell_;                     ///< (cells) row order (x fastest)
   std::vector<Block> blocks_;                   ///< the cells' runs, in Z-order of the cells
-  std::vector<Triangle> tris_;                  ///< the triangles by rank
+  std::vector<SweepTriangle> tris_;             ///< the triangles by rank
   std::vector<std::uint32_t> visit_;            ///< rank -> triangle index (the tree's order)
 };
 

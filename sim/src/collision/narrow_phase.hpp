@@ -134,21 +134,50 @@ inline void sweep_triangle_all(const Triangle& t, const Vec3& a, const Vec3& d, 
   np::sweep_vertex(t.c, a, d, r, best);
 }
 
+/// A triangle with what the culled sweep derives from it alone (MeshGrid keeps these, so that a
+/// particle's sweep does not derive them again every step): the in-plane normals of its edges
+/// and their lengths.
+struct SweepTriangle {
+  Triangle t;
+  Vec3 w[3];          ///< normal x e_k, e_k = v_{k+1} - v_k (a -> b, b -> c, c -> a)
+  double len[3];      ///< |e_k| (m)
+  double amax = 0.0;  ///< max |t.a_i| (m), for the rounding margin
+  SweepTriangle() = default;
+  explicit SweepTriangle(const Triangle& x) : t(x) {
+    const Vec3* v[3] = {&t.a, &t.b, &t.c};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = *v[(k + 1) % 3] - *v[k];
+      w[k] = t.normal.cross(e);
+      len[k] = e.norm();
+    }
+    amax = t.a.cwiseAbs().maxCoeff();
+  }
+};
+
+/// A swept segment a -> b = a + d with max |a_i|, |b_i| (m), shared by the triangles it is tested
+/// against.
+struct SweepSegment {
+  Vec3 a, d, b;
+  double amax;
+  SweepSegment(const Vec3& a_, const Vec3& d_)
+      : a(a_), d(d_), b(a_ + d_), amax(std::max(a_.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff())) {}
+};
+
 /// The same hits as sweep_triangle_all(), with the features the segment cannot come within r of
 /// left untested. In the triangle's plane, edge k's line splits space by the signed distance
 /// (n x e_k)·(x - v_k) / |e_k| (positive inside, the convention of in_prism); it is linear along
 /// the segment, so when both ends are beyond r on one side, no point of the segment comes within
 /// r of the edge's line — nor of the edge or its end vertices — and when that side is the outside,
 /// of the triangle at all. (A particle lying on a face far from its edges then costs one face
-/// test; the triangle next to it none.) Likewise for the triangle's plane, tested first. The margin covers rounding (1e-6 r plus 1e-12 per metre
-/// of the coordinates' size), far above the features' own. Once a contact at s = 0 is known, none
-/// can come earlier.
-inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, double r,
+/// test; the triangle next to it none.) Likewise for the triangle's plane, tested first. The
+/// margin covers rounding (1e-6 r plus 1e-12 per metre of the coordinates' size), far above the
+/// features' own. Once a contact at s = 0 is known, none can come earlier.
+inline void sweep_triangle(const SweepTriangle& st, const SweepSegment& sg, double r,
                            SweepHit& best) {
   if (best.s == 0.0) return;
-  const Vec3 b = a + d;
-  const double size = 1.0 + std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(),
-                                      t.a.cwiseAbs().maxCoeff()});
+  const Triangle& t = st.t;
+  const Vec3 &a = sg.a, &d = sg.d, &b = sg.b;
+  const double size = 1.0 + std::max(sg.amax, st.amax);
   const double reach = r * (1.0 + 1e-6) + 1e-12 * size;
   // Both ends beyond r on one side of the triangle's plane: the grown triangle lies within r of
   // the plane, so the segment meets none of it (a drop above a terrain's triangle: two dots).
@@ -158,10 +187,8 @@ inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, doub
   bool far[3];
   for (int k = 0; k < 3; ++k) {
     const Vec3& p = *v[k];
-    const Vec3 e = *v[(k + 1) % 3] - p;
-    const Vec3 w = t.normal.cross(e);
-    const double s0 = w.dot(a - p), s1 = w.dot(b - p);
-    const double lim = reach * e.norm();
+    const double s0 = st.w[k].dot(a - p), s1 = st.w[k].dot(b - p);
+    const double lim = reach * st.len[k];
     if (s0 < -lim && s1 < -lim) return;  // wholly outside this edge by more than r
     far[k] = s0 > lim && s1 > lim;
   }
@@ -172,6 +199,13 @@ inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, doub
   if (!far[2] && !far[0]) np::sweep_vertex(t.a, a, d, r, best);
   if (!far[0] && !far[1]) np::sweep_vertex(t.b, a, d, r, best);
   if (!far[1] && !far[2]) np::sweep_vertex(t.c, a, d, r, best);
+}
+
+/// The same for a bare triangle and segment (its edge data derived here).
+inline void sweep_triangle(const Triangle& t, const Vec3& a, const Vec3& d, double r,
+                           SweepHit& best) {
+  if (best.s == 0.0) return;
+  sweep_triangle(SweepTriangle(t), SweepSegment(a, d), r, best);
 }
 
 /// Does the ray from p along dir (unit) cross the triangle at a positive distance < len?

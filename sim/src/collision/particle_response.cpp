@@ -275,6 +275,7 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
     }
     for (const Collider& c : colliders) {
       if (c.shape == Collider::Shape::plane || c.shape == Collider::Shape::box) continue;
+      if (c.shape == Collider::Shape::mesh && !c.mesh->closed) continue;  // an open mesh has no inside
       if (((b - c.aabb_center).cwiseAbs().array() > c.aabb_half.array()).any()) continue;
       if (inside_solid(c, b)) {
         dead = true;  // §3.4.2

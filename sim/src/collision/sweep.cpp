@@ -73,6 +73,11 @@ void sweep_box(const Collider& c, const Vec3& a, const Vec3& b, double r, Hit& b
 /// first sweep of the step, so the segment follows the relative motion of a kinematic body, and
 /// in its end pose for the remainder after a contact — to b in the end pose (§2.1, §3.4).
 void local_segment(const Collider& c, const Vec3& a, const Vec3& b, bool first, Vec3& la, Vec3& ld) {
+  if (c.unposed) {
+    la = a;
+    ld = b - a;
+    return;
+  }
   la = first ? Vec3(c.prev_R.transpose() * (a - c.prev_center)) : Vec3(c.R.transpose() * (a - c.center));
   ld = c.R.transpose() * (b - c.center) - la;
 }
@@ -213,11 +218,13 @@ void sweep_mesh(const Collider& c, const Vec3& a, const Vec3& b, double r, bool 
   h.s = best.s;
   const MeshShape& m = *c.mesh;
   const Vec3 lo = la.cwiseMin(lb) - grow, hi = la.cwiseMax(lb) + grow;
-  const auto test = [&](const Triangle& t, std::uint32_t = 0) { sweep_triangle(t, la, ld, r, h); };
+  const SweepSegment seg(la, ld);
+  const auto test = [&](const SweepTriangle& t, std::uint32_t) { sweep_triangle(t, seg, r, h); };
   if (!m.grid.query(lo, hi, test))
-    m.bvh.query(lo, hi, [&](std::uint32_t t) { test(m.triangles[t]); });
+    m.bvh.query(lo, hi, [&](std::uint32_t t) { sweep_triangle(m.triangles[t], la, ld, r, h); });
   if (!(h.s < best.s)) return;
-  best = Hit{h.s, Vec3(c.R * h.normal), Vec3(c.center + c.R * h.point), &c};
+  best = c.unposed ? Hit{h.s, h.normal, h.point, &c}
+                   : Hit{h.s, Vec3(c.R * h.normal), Vec3(c.center + c.R * h.point), &c};
 }
 
 }  // namespace

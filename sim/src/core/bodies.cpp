@@ -200,6 +200,7 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
   for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k) {
     w.shapes[k].prev_center = w.shapes[k].center;
     w.shapes[k].prev_R = w.shapes[k].R;
+    w.shapes[k].note_pose();
   }
   b.reported_translation = b.pose.translation;
   b.reported_rotation = b.pose.rotation.normalized();
