@@ -54,6 +54,18 @@ class MeshGrid {
       cells *= c1[k] - c0[k] + 1;
     }
     if (cells > kMaxCells) return false;
+    if (cells == 1) {
+      // One cell (a particle's box, most of the time): its ranks are increasing and each once.
+      const Range rg = cell_[index(c0)];
+      if (kLanes * int(rg.end - rg.begin) > kMaxCandidates) return false;
+      const Query q(lo, hi);
+      for (std::uint32_t b = rg.begin; b < rg.end; ++b)
+        for (unsigned mask = q.mask(blocks_[b]); mask != 0; mask &= mask - 1) {
+          const std::uint32_t rank = blocks_[b].rank[std::countr_zero(mask)];
+          f(tris_[rank], visit_[rank]);
+        }
+      return true;
+    }
     // The query box and the entries' boxes to the nearest floats: rounding is monotonic
     // (a <= b gives float(a) <= float(b)), so no triangle whose box overlaps is missed; one
     // whose box misses by less than float rounding may come too.
@@ -63,8 +75,8 @@ class MeshGrid {
     for (int z = c0[2]; z <= c1[2]; ++z)
       for (int y = c0[1]; y <= c1[1]; ++y)
         for (int x = c0[0]; x <= c1[0]; ++x) {
-          const Range rg = cell_[(std::size_t(z) * std::size_t(dim_[1]) + std::size_t(y)) *
-                                     std::size_t(dim_[0]) + std::size_t(x)];
+          const int c[3] = {x, y, z};
+          const Range rg = cell_[index(c)];
           if (count + kLanes * int(rg.end - rg.begin) > kMaxCandidates) return false;
           for (std::uint32_t b = rg.begin; b < rg.end; ++b) count += q.overlaps(blocks_[b], cand + count);
         }
@@ -112,9 +124,8 @@ class MeshGrid {
       }
     }
 #endif
-    /// Writes the ranks of b's entries whose box overlaps this one to out, in lane order;
-    /// returns how many.
-    int overlaps(const Block& b, std::uint32_t* out) const {
+    /// Bit l set: lane l of b overlaps this box.
+    unsigned mask(const Block& b) const {
       unsigned mask;
 #if defined(__SSE2__)
       __m128 m = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(b.lo[0]), hi[0]),
@@ -131,11 +142,21 @@ class MeshGrid {
         mask |= unsigned(in) << l;
       }
 #endif
+      return mask;
+    }
+    /// Writes the ranks of b's entries whose box overlaps this one to out, in lane order;
+    /// returns how many.
+    int overlaps(const Block& b, std::uint32_t* out) const {
       int n = 0;
-      for (; mask != 0; mask &= mask - 1) out[n++] = b.rank[std::countr_zero(mask)];
+      for (unsigned m = mask(b); m != 0; m &= m - 1) out[n++] = b.rank[std::countr_zero(m)];
       return n;
     }
   };
+
+  [[nodiscard]] std::size_t index(const int* c) const {
+    return (std::size_t(c[2]) * std::size_t(dim_[1]) + std::size_t(c[1])) * std::size_t(dim_[0]) +
+           std::size_t(c[0]);
+  }
 
   Vec3 lo_ = Vec3::Zero(), hi_ = Vec3::Zero();  ///< (m) bounds of the mesh, local frame
   double inv_cell_ = 0.0;                       ///< (1/m)

@@ -3,6 +3,7 @@
 // §3.6.1 (impulse with restitution and Coulomb friction, critical friction), §3.6.3 (resting
 // contact under a normal-speed threshold, static friction).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -116,6 +117,8 @@ double drag_at(const ForceParams& f, const Vec3& v1) {
 /// (m/s²) The acceleration taken as constant over a particle's step, evaluated at its end
 /// velocity v1: gravity and the drag -k v1 / m (the forces semi-implicit Euler integrates).
 Vec3 step_acceleration(const ForceParams& f, double mass, const Vec3& v1) {
+  if (f.drag == 0.0f && f.drag_quadratic == 0.0f)  // g - (0 / m) v1 is g exactly
+    return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]);
   return Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (drag_at(f, v1) / mass) * v1;
 }
 
@@ -129,8 +132,12 @@ Vec3 start_of_step(const ParticleStore& s, std::size_t i, const Vec3& p1, const 
     const float* q = &s.prev_position[3 * i];
     return Vec3(q[0], q[1], q[2]);
   }
+  const Vec3 g(f.gravity[0], f.gravity[1], f.gravity[2]);
+  // No drag: d = 1 and a = g exactly (what the general expression gives), without its divisions.
+  if (f.drag == 0.0f && f.drag_quadratic == 0.0f)
+    return p1 - dt * v1 + (0.5 * dt * dt) * (accel != nullptr ? *accel : g);
   const double m = s.mass[i], k = drag_at(f, v1), d = m / (m + dt * k);
-  const Vec3 a = accel != nullptr ? *accel : Vec3(Vec3(f.gravity[0], f.gravity[1], f.gravity[2]) - (k / m) * v1);
+  const Vec3 a = accel != nullptr ? *accel : Vec3(g - (k / m) * v1);
   return p1 - dt * v1 + (0.5 * dt * dt * d * d) * a;
 }
 
@@ -369,15 +376,13 @@ void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams&
                                l.r[k] < 0.0);
 }
 
-/// Spreads the low 10 bits of v to every third bit (a Morton code's one axis).
-std::uint64_t spread3(std::uint64_t v) {
-  v &= 0x3ff;
-  v = (v | (v << 16)) & 0x030000ffULL;
-  v = (v | (v << 8)) & 0x0300f00fULL;
-  v = (v | (v << 4)) & 0x030c30c3ULL;
-  v = (v | (v << 2)) & 0x09249249ULL;
-  return v;
-}
+/// kSpread3[v]: the 10 bits of v spread to every third bit (a Morton code's one axis).
+constexpr auto kSpread3 = [] {
+  std::array<std::uint32_t, 1024> t{};
+  for (std::uint32_t v = 0; v < 1024; ++v)
+    for (int b = 0; b < 10; ++b) t[v] |= ((v >> b) & 1u) << (3 * b);
+  return t;
+}();
 
 /// Z-order (Morton) codes of positions over the solids' joint bounds: 1024 steps per axis of
 /// one quantum for all (a flat terrain's few centimetres of height must not outweigh metres
@@ -400,7 +405,7 @@ struct ZOrder {
   std::uint64_t code(const float* p) const {
     std::uint64_t c = 0;
     for (int k = 0; k < 3; ++k)
-      c |= spread3(std::uint64_t(std::clamp((double(p[k]) - origin[k]) * scale, 0.0, 1023.0))) << k;
+      c |= std::uint64_t(kSpread3[std::size_t(std::clamp((double(p[k]) - origin[k]) * scale, 0.0, 1023.0))]) << k;
     return c;
   }
   /// Sorts keys (code << 32 | index) by code, stably (radix, 10 bits at a time; tmp: scratch).
