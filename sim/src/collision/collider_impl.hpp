@@ -145,6 +145,10 @@ struct CollisionContext {
   int threads = 1;
   /// The system's particles may sleep (ParticleStore::rest): the pass leaves sleeping ones alone.
   bool sleep = false;
+  /// Set by collide(): no box, plane or solid with an inside (sphere, cylinder, capsule, closed
+  /// mesh) among the colliders, so a particle whose first sweep hits nothing keeps its state
+  /// exactly and its slow path can end there.
+  bool bare_misses = false;
 };
 
 /// Collides particles [begin, end) of one system with every collider, after integration. Each

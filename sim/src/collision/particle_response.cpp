@@ -188,7 +188,12 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   for (int contact = 0;; ++contact) {
     Hit hit;
     for (const Collider& c : colliders) sweep(c, a, b, r, contact == 0, hit);
-    if (hit.collider == nullptr) break;
+    if (hit.collider == nullptr) {
+      // Nothing hit and nothing below to push it out of or test it inside: b and v are the
+      // stored values (the writes back would store the same floats).
+      if (contact == 0 && ctx.bare_misses) return;
+      break;
+    }
     Material mat = hit.collider->material;
     if (ctx.on_hit != nullptr) {
       mat.on_hit = *ctx.on_hit;
@@ -614,6 +619,9 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
   // order): otherwise each resolve() changes its own particle alone, and large systems split
   // statically over ctx.threads with the same results; the removal count is an integer sum.
   bool shared = false;
+  ctx.bare_misses = std::all_of(colliders.begin(), colliders.end(), [](const Collider& c) {
+    return c.shape == Collider::Shape::mesh && !c.mesh->closed;
+  });
   for (const Collider& c : colliders) {
     const HitAction act = ctx.on_hit != nullptr ? *ctx.on_hit : c.material.on_hit;
     shared = shared || act == HitAction::split || (ctx.impulses != nullptr && ctx.impulses->logs(c));
