@@ -174,14 +174,14 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     cells = cell_keys_.size();
   }
   // Copy x, y, z, q, m into cell order, one array each: a neighbour cell's particles are then
-  // contiguous, and the distance pass over a cell's candidates reads them as vectors. The
-  // particles are read in their own order and written to their ranks (a scatter: the random
-  // accesses are independent stores, not loads the copy waits for).
+  // contiguous, and the distance pass over a cell's candidates reads them as vectors. Each
+  // sorted place reads its particle (a gather: independent loads, each written once in order;
+  // the scatter to the ranks was 9-16 % slower on the whole step, on Intel Xeon).
   sorted_.resize(5 * n + kCopyBlock, 0.0);  // (+ a block: the dense path's copies overshoot)
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t s = rank_[i];
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::size_t i = order[s];
     sx[s] = x[3 * i];
     sy[s] = x[3 * i + 1];
     sz[s] = x[3 * i + 2];
