@@ -509,6 +509,48 @@ TEST(SimCollisionMesh, ParticleInsideASolidIsRemovedAndCounted) {
   EXPECT_NEAR(world.particles(ps).position[0], 3.5, 1e-6);
 }
 
+TEST(SimCollisionMesh, MissesAmongOpenMeshesOnlyKeepTheirStateExactly) {
+  // Among open meshes only, a drop whose first sweep hits nothing leaves the slow path at once
+  // (CollisionContext::bare_misses: nothing to push it out of or find it inside). A plane far
+  // below everything turns that shortcut off and touches no drop, so both worlds must agree to
+  // the bit: drops falling past the bowl, into it, bouncing and resting in it, 6,000 of them
+  // (over the Z-ordered pass's threshold) and 1,000 (index order).
+  auto run = [](bool far_plane, int n) {
+    World world(WorldDef{1.0 / 240, 1, 0.05, 1});
+    world.add_mesh(bowl(2.0, 12, 24, mat(0.3, 0.4)));
+    if (far_plane) {
+      PlaneDef p;
+      p.point = Vec3(0, 0, -100);
+      world.add_plane(p);
+    }
+    const auto ps = world.add_particle_system(probes());
+    Rng rng(11);
+    for (int i = 0; i < n; ++i)
+      world.spawn_particle(ps, Vec3(rng.uniform(-2.5, 2.5), rng.uniform(-2.5, 2.5), rng.uniform(-1.8, 1.0)),
+                           Vec3(0, 0, -rng.uniform(0.5, 3.0)), 1e-3, 0.01, 100);
+    for (int k = 0; k < 120; ++k) world.advance(1.0 / 240);
+    const ParticleView v = world.particles(ps);
+    std::vector<float> state(v.position, v.position + 3 * v.count);
+    state.insert(state.end(), v.velocity, v.velocity + 3 * v.count);
+    return state;
+  };
+  for (const int n : {6000, 1000}) {
+    const auto bare = run(false, n), with_plane = run(true, n);
+    ASSERT_EQ(bare.size(), 6u * std::size_t(n));
+    EXPECT_TRUE(bare == with_plane) << n << " drops";
+    // Both kinds were there: drops held in the bowl (slow, inside its rim) and drops that missed it.
+    std::size_t held = 0, missed = 0;
+    for (std::size_t i = 0; i < std::size_t(n); ++i) {
+      const double x = bare[3 * i], y = bare[3 * i + 1], z = bare[3 * i + 2];
+      const double speed = Vec3(bare[3 * (n + i)], bare[3 * (n + i) + 1], bare[3 * (n + i) + 2]).norm();
+      if (x * x + y * y < 1.9 * 1.9 && z > -2.0 && z < 0.0 && speed < 1.0) ++held;
+      if (z < -2.5) ++missed;
+    }
+    EXPECT_GT(held, std::size_t(n) / 40) << n << " drops";
+    EXPECT_GT(missed, std::size_t(n) / 10) << n << " drops";
+  }
+}
+
 TEST(SimCollisionMesh, LargeRainOnMeshesIsBitIdenticalAtAnyThreadCount) {
   // 20,000 drops (above the parallel threshold) on a bowl and a closed box, some born inside the
   // box: bounce only, no bodies, so the pass splits over the threads. State and removal count
