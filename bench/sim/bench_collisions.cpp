@@ -52,6 +52,18 @@ MeshDef terrain() {
   return d;
 }
 
+/// terrain()'s triangles with their unit normals (local frame = world).
+std::vector<detail::Triangle> terrain_triangles() {
+  const MeshDef def = terrain();
+  std::vector<detail::Triangle> tris;
+  for (const auto& t : def.triangles) {
+    detail::Triangle x{def.vertices[t[0]], def.vertices[t[1]], def.vertices[t[2]], Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  return tris;
+}
+
 void rain_on_mesh(benchmark::State& state) {
   const auto n = std::size_t(state.range(0));
   World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
@@ -74,13 +86,7 @@ void rain_on_mesh(benchmark::State& state) {
 
 void mesh_phases(benchmark::State& state, bool narrow) {
   const auto n = std::size_t(state.range(0));
-  const MeshDef def = terrain();
-  std::vector<detail::Triangle> tris;
-  for (const auto& t : def.triangles) {
-    detail::Triangle x{def.vertices[t[0]], def.vertices[t[1]], def.vertices[t[2]], Vec3::Zero()};
-    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
-    tris.push_back(x);
-  }
+  const std::vector<detail::Triangle> tris = terrain_triangles();
   const detail::Bvh bvh(tris);
   Rng rng(42);
   std::vector<Vec3> a(n), d(n);
@@ -114,13 +120,7 @@ void mesh_phases(benchmark::State& state, bool narrow) {
 /// and with the swept-sphere triangle tests (broad + narrow).
 void mesh_grid_phases(benchmark::State& state, bool narrow) {
   const auto n = std::size_t(state.range(0));
-  const MeshDef def = terrain();
-  std::vector<detail::Triangle> tris;
-  for (const auto& t : def.triangles) {
-    detail::Triangle x{def.vertices[t[0]], def.vertices[t[1]], def.vertices[t[2]], Vec3::Zero()};
-    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
-    tris.push_back(x);
-  }
+  const std::vector<detail::Triangle> tris = terrain_triangles();
   const detail::Bvh bvh(tris);
   const detail::MeshGrid grid(tris, bvh.visit_order());
   Rng rng(42);
