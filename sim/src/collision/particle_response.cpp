@@ -3,7 +3,6 @@
 // §3.6.1 (impulse with restitution and Coulomb friction, critical friction), §3.6.3 (resting
 // contact under a normal-speed threshold, static friction).
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -11,6 +10,7 @@
 #include <utility>
 
 #include "collision/body_impulses.hpp"
+#include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
 #include "core/vector_clones.hpp"
@@ -305,159 +305,6 @@ void resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   for (const Collider& c : colliders)
     if (c.shape == Collider::Shape::plane) keep_stored_out(c, pf, r);
 }
-
-}  // namespace
-
-namespace {
-
-/// near[k] = 1 when particle k (x: n x 3 floats, r: n) ends the step closer than its radius to
-/// one of the planes: collide()'s rejection test, the same double arithmetic, in a loop the
-/// compiler vectorises.
-SIMREEL_VECTOR_CLONES
-void near_planes(const float* __restrict x, const float* __restrict r, std::size_t n,
-                 const Collider* planes, std::size_t count, std::uint8_t* __restrict near) {
-  for (std::size_t k = 0; k < n; ++k) near[k] = 0;
-  for (std::size_t c = 0; c < count; ++c) {
-    const double n0 = planes[c].normal[0], n1 = planes[c].normal[1], n2 = planes[c].normal[2];
-    const double q0 = planes[c].point[0], q1 = planes[c].point[1], q2 = planes[c].point[2];
-    for (std::size_t k = 0; k < n; ++k) {
-      const double e0 = double(x[3 * k]) - q0, e1 = double(x[3 * k + 1]) - q1,
-                   e2 = double(x[3 * k + 2]) - q2;
-      near[k] |= std::uint8_t(n0 * e0 + n1 * e1 + n2 * e2 - double(r[k]) < 0.0);
-    }
-  }
-}
-
-/// near[k] |= 1 when particle k's swept bounds, from its start of step to its end grown by its
-/// radius and surface_tol, overlap the solid's world AABB (center, half): collide()'s rejection
-/// test for a solid, the same double arithmetic, in a loop the compiler vectorises. Only for
-/// start_of_step()'s plain case (semi-implicit Euler without drag: x0 = x1 - dt v1 + dt²/2 g,
-/// dt = min(age, h)). x, v: n x 3 floats; age, r: n.
-SIMREEL_VECTOR_CLONES
-void near_solid_plain(const float* __restrict x, const float* __restrict v,
-                      const float* __restrict age, const float* __restrict r, std::size_t n,
-                      double h, const double* __restrict g, const double* __restrict center,
-                      const double* __restrict half, std::uint8_t* __restrict near) {
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a = double(age[k]);
-    const double dt = h < a ? h : a;  // std::min(age, h)
-    const double c = 0.5 * dt * dt;
-    const double p0 = double(x[3 * k]), p1 = double(x[3 * k + 1]), p2 = double(x[3 * k + 2]);
-    const double s0 = p0 - dt * double(v[3 * k]) + c * g[0];
-    const double s1 = p1 - dt * double(v[3 * k + 1]) + c * g[1];
-    const double s2 = p2 - dt * double(v[3 * k + 2]) + c * g[2];
-    // surface_tol(p1): 1e-7 + 5e-7 max |p1_i| (the largest of three is exact in any order).
-    const double m01 = std::abs(p0) < std::abs(p1) ? std::abs(p1) : std::abs(p0);
-    const double m = m01 < std::abs(p2) ? std::abs(p2) : m01;
-    const double grow = double(r[k]) + (1e-7 + 5e-7 * m);
-    const double e0 = half[0] + grow, e1 = half[1] + grow, e2 = half[2] + grow;
-    // Eigen's cwiseMin / cwiseMax: (b < a) ? b : a and (a < b) ? b : a.
-    const double lo0 = (p0 < s0 ? p0 : s0) - center[0], hi0 = (s0 < p0 ? p0 : s0) - center[0];
-    const double lo1 = (p1 < s1 ? p1 : s1) - center[1], hi1 = (s1 < p1 ? p1 : s1) - center[1];
-    const double lo2 = (p2 < s2 ? p2 : s2) - center[2], hi2 = (s2 < p2 ? p2 : s2) - center[2];
-    near[k] |= std::uint8_t((lo0 <= e0) & (lo1 <= e1) & (lo2 <= e2) & (hi0 >= -e0) & (hi1 >= -e1) &
-                            (hi2 >= -e2));
-  }
-}
-
-/// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
-/// positions or null; mass, radius, age: len), each lane's step min(age, h).
-SIMREEL_VECTOR_CLONES
-void gather_block(const float* __restrict x, const float* __restrict v,
-                  const float* __restrict prev, const float* __restrict mass,
-                  const float* __restrict radius, const float* __restrict age, double h,
-                  std::size_t len, PlaneRestLanes& l) {
-  for (std::size_t k = 0; k < len; ++k) {
-    l.bx[k] = x[3 * k];
-    l.by[k] = x[3 * k + 1];
-    l.bz[k] = x[3 * k + 2];
-    l.vx[k] = v[3 * k];
-    l.vy[k] = v[3 * k + 1];
-    l.vz[k] = v[3 * k + 2];
-    l.m[k] = mass[k];
-    l.r[k] = radius[k];
-    const double a = age[k];
-    l.dt[k] = h < a ? h : a;  // std::min(a, h)
-  }
-  if (prev != nullptr)
-    for (std::size_t k = 0; k < len; ++k) {
-      l.ax[k] = prev[3 * k];
-      l.ay[k] = prev[3 * k + 1];
-      l.az[k] = prev[3 * k + 2];
-    }
-}
-
-/// The lanes' outputs back into the block (x, v: len x 3): the results of the lanes that
-/// plane_rest() resolved, the others' values as they were.
-SIMREEL_VECTOR_CLONES
-void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x,
-                   float* __restrict v) {
-  for (std::size_t k = 0; k < len; ++k) {
-    x[3 * k] = l.ox[k];
-    x[3 * k + 1] = l.oy[k];
-    x[3 * k + 2] = l.oz[k];
-    v[3 * k] = l.ovx[k];
-    v[3 * k + 1] = l.ovy[k];
-    v[3 * k + 2] = l.ovz[k];
-  }
-}
-
-/// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of
-/// near_planes(), on the same values).
-SIMREEL_VECTOR_CLONES
-void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams& p,
-                std::uint8_t* __restrict near) {
-  const double n0 = p.n[0], n1 = p.n[1], n2 = p.n[2], q0 = p.q[0], q1 = p.q[1], q2 = p.q[2];
-  for (std::size_t k = 0; k < len; ++k)
-    near[k] = std::uint8_t(n0 * (l.bx[k] - q0) + n1 * (l.by[k] - q1) + n2 * (l.bz[k] - q2) -
-                               l.r[k] < 0.0);
-}
-
-/// kSpread3[v]: the 10 bits of v spread to every third bit (a Morton code's one axis).
-constexpr auto kSpread3 = [] {
-  std::array<std::uint32_t, 1024> t{};
-  for (std::uint32_t v = 0; v < 1024; ++v)
-    for (int b = 0; b < 10; ++b) t[v] |= ((v >> b) & 1u) << (3 * b);
-  return t;
-}();
-
-/// Z-order (Morton) codes of positions over the solids' joint bounds: 1024 steps per axis of
-/// one quantum for all (a flat terrain's few centimetres of height must not outweigh metres
-/// across it), clamped.
-struct ZOrder {
-  double origin[3] = {0.0, 0.0, 0.0};
-  double scale = 0.0;  ///< (1/m)
-  ZOrder() = default;
-  explicit ZOrder(const std::vector<Collider>& colliders) {
-    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (const Collider& c : colliders) {
-      if (c.shape == Collider::Shape::plane) continue;
-      lo = lo.cwiseMin(c.aabb_center - c.aabb_half);
-      hi = hi.cwiseMax(c.aabb_center + c.aabb_half);
-    }
-    scale = 1023.0 / std::max((hi - lo).maxCoeff(), 1e-9);
-    for (int k = 0; k < 3; ++k) origin[k] = lo[k];
-  }
-  /// The 30-bit code of position p (3 floats).
-  std::uint64_t code(const float* p) const {
-    std::uint64_t c = 0;
-    for (int k = 0; k < 3; ++k)
-      c |= std::uint64_t(kSpread3[std::size_t(std::clamp((double(p[k]) - origin[k]) * scale, 0.0, 1023.0))]) << k;
-    return c;
-  }
-  /// Sorts keys (code << 32 | index) by code, stably (radix, 10 bits at a time; tmp: scratch).
-  static void sort(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp) {
-    tmp.resize(keys.size());
-    for (int pass = 0; pass < 3; ++pass) {
-      const int shift = 32 + 10 * pass;
-      std::uint32_t count[1025] = {};
-      for (const std::uint64_t k : keys) ++count[((k >> shift) & 1023) + 1];
-      for (int d = 0; d < 1024; ++d) count[d + 1] += count[d];
-      for (const std::uint64_t k : keys) tmp[count[(k >> shift) & 1023]++] = k;
-      keys.swap(tmp);
-    }
-  }
-};
 
 /// Particles [i0, i0 + len) of s against the one plane colliders[0]: the fast path for those
 /// resting on it, resolve() for the others near it. Most of a block on the plane: every lane goes

@@ -1,0 +1,101 @@
+#pragma once
+// The particle collision pass's block kernels (private): the rejection tests of collide() for a
+// block of particles, the plane-rest lanes' gather and scatter, and the Z-order that visits
+// particles near solids in spatial order. Element-wise loops the compiler vectorises, built for
+// AVX2 and the baseline (SIMREEL_VECTOR_CLONES on the definitions: the same bits either way;
+// GCC 12 emits a broken resolver in every caller whose declaration carries target_clones, so the
+// declarations here do not); particle_response.cpp is their only user.
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "collision/collider_impl.hpp"
+#include "collision/plane_rest.hpp"
+
+namespace simreel::sim::detail {
+
+/// near[k] = 1 when particle k (x: n x 3 floats, r: n) ends the step closer than its radius to
+/// one of the planes: collide()'s rejection test, the same double arithmetic, in a loop the
+/// compiler vectorises.
+void near_planes(const float* __restrict x, const float* __restrict r, std::size_t n,
+                 const Collider* planes, std::size_t count, std::uint8_t* __restrict near);
+
+/// near[k] |= 1 when particle k's swept bounds, from its start of step to its end grown by its
+/// radius and surface_tol, overlap the solid's world AABB (center, half): collide()'s rejection
+/// test for a solid, the same double arithmetic, in a loop the compiler vectorises. Only for
+/// start_of_step()'s plain case (semi-implicit Euler without drag: x0 = x1 - dt v1 + dt²/2 g,
+/// dt = min(age, h)). x, v: n x 3 floats; age, r: n.
+void near_solid_plain(const float* __restrict x, const float* __restrict v,
+                      const float* __restrict age, const float* __restrict r, std::size_t n,
+                      double h, const double* __restrict g, const double* __restrict center,
+                      const double* __restrict half, std::uint8_t* __restrict near);
+
+/// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
+/// positions or null; mass, radius, age: len), each lane's step min(age, h).
+void gather_block(const float* __restrict x, const float* __restrict v,
+                  const float* __restrict prev, const float* __restrict mass,
+                  const float* __restrict radius, const float* __restrict age, double h,
+                  std::size_t len, PlaneRestLanes& l);
+
+/// The lanes' outputs back into the block (x, v: len x 3): the results of the lanes that
+/// plane_rest() resolved, the others' values as they were.
+void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x,
+                   float* __restrict v);
+
+/// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of
+/// near_planes(), on the same values).
+void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams& p,
+                std::uint8_t* __restrict near);
+
+/// kSpread3[v]: the 10 bits of v spread to every third bit (a Morton code's one axis).
+inline constexpr auto kSpread3 = [] {
+  std::array<std::uint32_t, 1024> t{};
+  for (std::uint32_t v = 0; v < 1024; ++v)
+    for (int b = 0; b < 10; ++b) t[v] |= ((v >> b) & 1u) << (3 * b);
+  return t;
+}();
+
+/// Z-order (Morton) codes of positions over the solids' joint bounds: 1024 steps per axis of
+/// one quantum for all (a flat terrain's few centimetres of height must not outweigh metres
+/// across it), clamped.
+struct ZOrder {
+  double origin[3] = {0.0, 0.0, 0.0};
+  double scale = 0.0;  ///< (1/m)
+  ZOrder() = default;
+  explicit ZOrder(const std::vector<Collider>& colliders) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Collider& c : colliders) {
+      if (c.shape == Collider::Shape::plane) continue;
+      lo = lo.cwiseMin(c.aabb_center - c.aabb_half);
+      hi = hi.cwiseMax(c.aabb_center + c.aabb_half);
+    }
+    scale = 1023.0 / std::max((hi - lo).maxCoeff(), 1e-9);
+    for (int k = 0; k < 3; ++k) origin[k] = lo[k];
+  }
+  /// The 30-bit code of position p (3 floats).
+  std::uint64_t code(const float* p) const {
+    std::uint64_t c = 0;
+    for (int k = 0; k < 3; ++k)
+      c |= std::uint64_t(kSpread3[std::size_t(std::clamp((double(p[k]) - origin[k]) * scale, 0.0, 1023.0))]) << k;
+    return c;
+  }
+  /// Sorts keys (code << 32 | index) by code, stably (radix, 10 bits at a time; tmp: scratch).
+  static void sort(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp) {
+    tmp.resize(keys.size());
+    for (int pass = 0; pass < 3; ++pass) {
+      const int shift = 32 + 10 * pass;
+      std::uint32_t count[1025] = {};
+      for (const std::uint64_t k : keys) ++count[((k >> shift) & 1023) + 1];
+      for (int d = 0; d < 1024; ++d) count[d + 1] += count[d];
+      for (const std::uint64_t k : keys) tmp[count[(k >> shift) & 1023]++] = k;
+      keys.swap(tmp);
+    }
+  }
+};
+
+
+}  // namespace simreel::sim::detail
