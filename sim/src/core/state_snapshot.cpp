@@ -126,6 +126,7 @@ void load_shapes(WorldState& w, StateReader& in) {
     in.value(c.prev_R);
     in.value(c.aabb_center);
     in.value(c.aabb_half);
+    c.note_pose();  // derived from the poses just read, as set_pose() derives it
   }
   in.end();
 }
