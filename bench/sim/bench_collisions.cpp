@@ -84,45 +84,9 @@ void rain_on_mesh(benchmark::State& state) {
       benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
-void mesh_phases(benchmark::State& state, bool narrow) {
-  const auto n = std::size_t(state.range(0));
-  const std::vector<detail::Triangle> tris = terrain_triangles();
-  const detail::Bvh bvh(tris);
-  Rng rng(42);
-  std::vector<Vec3> a(n), d(n);
-  for (std::size_t i = 0; i < n; ++i) {  // one step's segments of falling particles near the surface
-    a[i] = Vec3(rng.uniform(-45, 45), rng.uniform(-45, 45), rng.uniform(-0.5, 0.6));
-    d[i] = Vec3(0, 0, -rng.uniform(2, 8) / 240);
-  }
-  std::size_t found = 0;
-  for (auto _ : state) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 b = a[i] + d[i], g = Vec3::Constant(0.01);
-      detail::SweepHit h;
-      bvh.query(a[i].cwiseMin(b) - g, a[i].cwiseMax(b) + g, [&](std::uint32_t t) {
-        if (narrow) {
-          detail::sweep_triangle(tris[t], a[i], d[i], 0.01, h);
-        } else {
-          ++found;
-        }
-      });
-      found += std::isfinite(h.s);
-    }
-    benchmark::DoNotOptimize(found);
-  }
-  state.counters["segments"] =
-      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
-  state.counters["bvh_depth"] = bvh.depth();
-}
-
-/// The same segments against the mesh's uniform grid (MeshGrid, what the particle sweep asks
-/// first), visited in Z-order of where they are as collide() does: the grid query alone (broad)
-/// and with the swept-sphere triangle tests (broad + narrow).
-void mesh_grid_phases(benchmark::State& state, bool narrow) {
-  const auto n = std::size_t(state.range(0));
-  const std::vector<detail::Triangle> tris = terrain_triangles();
-  const detail::Bvh bvh(tris);
-  const detail::MeshGrid grid(tris, bvh.visit_order());
+/// One step's segments (start, displacement) of n particles falling near the terrain's surface,
+/// in Z-order of where they start when `zorder` (as collide() visits them), else as drawn.
+std::vector<std::pair<Vec3, Vec3>> falling_segments(std::size_t n, bool zorder) {
   Rng rng(42);
   std::vector<std::pair<std::uint64_t, std::pair<Vec3, Vec3>>> seg(n);
   for (auto& [code, ad] : seg) {
@@ -132,27 +96,66 @@ void mesh_grid_phases(benchmark::State& state, bool narrow) {
     const auto qx = std::uint64_t((ad.first.x() + 50) * 10.23), qy = std::uint64_t((ad.first.y() + 50) * 10.23);
     for (int b = 0; b < 10; ++b) code |= (qx >> b & 1) << (2 * b) | (qy >> b & 1) << (2 * b + 1);
   }
-  std::sort(seg.begin(), seg.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  if (zorder) std::stable_sort(seg.begin(), seg.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  std::vector<std::pair<Vec3, Vec3>> out;
+  for (const auto& s : seg) out.push_back(s.second);
+  return out;
+}
+
+/// Times query(a, d, box lo, box hi, hit, found) over every segment (its box grown by the 1 cm
+/// radius), counting segments per second.
+template <class Query>
+void time_segments(benchmark::State& state, const std::vector<std::pair<Vec3, Vec3>>& segs, const Query& query) {
   std::size_t found = 0;
   for (auto _ : state) {
-    for (const auto& [code, ad] : seg) {
-      const auto& [a, d] = ad;
+    for (const auto& [a, d] : segs) {
       const Vec3 b = a + d, g = Vec3::Constant(0.01);
       detail::SweepHit h;
-      const detail::SweepSegment seg(a, d);
-      grid.query(a.cwiseMin(b) - g, a.cwiseMax(b) + g, [&](const detail::SweepTriangle& t, std::uint32_t) {
-        if (narrow) {
-          detail::sweep_triangle(t, seg, 0.01, h);
-        } else {
-          ++found;
-        }
-      });
+      query(a, d, Vec3(a.cwiseMin(b) - g), Vec3(a.cwiseMax(b) + g), h, found);
       found += std::isfinite(h.s);
     }
     benchmark::DoNotOptimize(found);
   }
   state.counters["segments"] =
-      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
+      benchmark::Counter(double(segs.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void mesh_phases(benchmark::State& state, bool narrow) {
+  const std::vector<detail::Triangle> tris = terrain_triangles();
+  const detail::Bvh bvh(tris);
+  time_segments(state, falling_segments(std::size_t(state.range(0)), false),
+                [&](const Vec3& a, const Vec3& d, const Vec3& lo, const Vec3& hi, detail::SweepHit& h,
+                    std::size_t& found) {
+                  bvh.query(lo, hi, [&](std::uint32_t t) {
+                    if (narrow) {
+                      detail::sweep_triangle(tris[t], a, d, 0.01, h);
+                    } else {
+                      ++found;
+                    }
+                  });
+                });
+  state.counters["bvh_depth"] = bvh.depth();
+}
+
+/// The same segments against the mesh's uniform grid (MeshGrid, what the particle sweep asks
+/// first), visited in Z-order of where they are as collide() does: the grid query alone (broad)
+/// and with the swept-sphere triangle tests (broad + narrow).
+void mesh_grid_phases(benchmark::State& state, bool narrow) {
+  const std::vector<detail::Triangle> tris = terrain_triangles();
+  const detail::Bvh bvh(tris);
+  const detail::MeshGrid grid(tris, bvh.visit_order());
+  time_segments(state, falling_segments(std::size_t(state.range(0)), true),
+                [&](const Vec3& a, const Vec3& d, const Vec3& lo, const Vec3& hi, detail::SweepHit& h,
+                    std::size_t& found) {
+                  const detail::SweepSegment seg(a, d);
+                  grid.query(lo, hi, [&](const detail::SweepTriangle& t, std::uint32_t) {
+                    if (narrow) {
+                      detail::sweep_triangle(t, seg, 0.01, h);
+                    } else {
+                      ++found;
+                    }
+                  });
+                });
 }
 
 /// n particles of radius 1 cm at about 30 % volume fraction in a 3D box with random velocities.
