@@ -431,7 +431,7 @@ TEST(SimParticleCollision, WavefrontSweepsGiveTheBitsOfTheContactOrder) {
 
 TEST(SimParticleCollision, WavefrontSweepsOfBandsGiveTheBitsOfTheContactOrder) {
   // The same for a step of run() large enough to be solved in bands (even bands, odd bands,
-  // then the collider contacts), at 1 and 2 threads: positions and velocities to the bit.
+  // then the collider contacts), at 1, 2 and 3 threads: positions and velocities to the bit.
   const double h = 1.0 / 240;
   const std::vector<detail::Collider> cols = ground_and_moving_box();
   detail::ParticleStore start;
@@ -474,6 +474,9 @@ TEST(SimParticleCollision, WavefrontSweepsOfBandsGiveTheBitsOfTheContactOrder) {
   ASSERT_GT(contacts, 20000u);
   EXPECT_EQ(step(true, 1).first, plain);
   EXPECT_EQ(step(true, 2).first, plain);
+  // Three threads: a middle thread's bands take impulses from the band before them and give to
+  // the band after (the warm start's first application, the sweeps' split by contact count).
+  EXPECT_EQ(step(true, 3).first, plain);
   int changed = 0;
   for (std::size_t k = 0; k < 3 * n; ++k) changed += plain[3 * n + k] != start.velocity[k];
   EXPECT_GT(changed, 3 * 10000);

@@ -8,6 +8,9 @@
 #include <cmath>
 #include <limits>
 
+#include <omp.h>
+
+#include "core/counting_sort.hpp"
 #include "core/state_io.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
@@ -38,6 +41,15 @@ void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
   for (std::ptrdiff_t k = 0; k < n; ++k) tmp[order[std::size_t(k)]] = a[std::size_t(k)];
   a.swap(tmp);
+}
+
+/// dst = src, `threads` > 1 splitting the elements.
+template <class T>
+void copy(std::vector<T>& dst, const std::vector<T>& src, int threads) {
+  dst.resize(src.size());
+  const std::ptrdiff_t n = std::ptrdiff_t(src.size());
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (std::ptrdiff_t k = 0; k < n; ++k) dst[std::size_t(k)] = src[std::size_t(k)];
 }
 
 }  // namespace
@@ -99,7 +111,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   double g = 0.0;
   for (const auto& m : members) g = std::max(g, m.gravity);
   const double pair_rest_speed = contact_speed + g * h;
-  key_flat_ = key;
+  copy(key_flat_, key, par);
   // The working arrays go into cell order, so that every later pass reads neighbours from
   // nearby memory; perm_ maps them back.
   contacts.clear();
@@ -123,7 +135,11 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     }
     perm_.swap(order_);
     order_.resize(n);
-    for (std::size_t q = 0; q < n; ++q) order_[q] = std::uint32_t(q);
+    {
+      const std::ptrdiff_t np = std::ptrdiff_t(n);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+      for (std::ptrdiff_t q = 0; q < np; ++q) order_[std::size_t(q)] = std::uint32_t(q);
+    }
     find_pairs(pair_rest_speed, h);
   } else {
     perm_.resize(n);
@@ -150,7 +166,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     }
     load_warm_start(*cache);
   }
-  v_before_ = v;
+  copy(v_before_, v, par);
   solve();
   if (cache != nullptr) store_warm_start(*cache);
   if (contacts.empty()) {
@@ -162,7 +178,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   // constant force over the step (x1 = x0 + dt v0 + dt² a / 2 in every integrator for a constant
   // acceleration): dt Δv / 2. A stack whose weight the solve cancels stays where it was instead
   // of sinking g h² / 2 per step into overlaps the projection must undo.
-  x_before = x;
+  copy(x_before, x, par);
   {
     const std::ptrdiff_t np = std::ptrdiff_t(n);
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
@@ -367,18 +383,25 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
   // The first cache entry of each particle's key, by a walk over the particles in flat order
   // (keys ascending within a system, systems in registration order), searching only where a key
   // goes back.
+  // (The walk's cursor is lower_bound(ki, key) at every particle, so each thread's stretch of
+  // particles starts with one.)
   const std::size_t n = key_flat_.size();
   warm_first_.resize(n);
-  std::size_t cursor = 0;
-  for (std::size_t f = 0; f < n; ++f) {
-    const std::uint64_t kf = key_flat_[f];
-    if (f > 0 && kf < key_flat_[f - 1])
-      cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), kf) - c.ki.begin());
-    while (cursor < c.ki.size() && c.ki[cursor] < kf) ++cursor;
-    warm_first_[f] = std::uint32_t(cursor);
+  const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+#pragma omp parallel num_threads(par) if (par > 1)
+  {
+    const std::size_t t = std::size_t(omp_get_thread_num()), parts = std::size_t(omp_get_num_threads());
+    const std::size_t f0 = n * t / parts, f1 = n * (t + 1) / parts;
+    std::size_t cursor = 0;
+    for (std::size_t f = f0; f < f1; ++f) {
+      const std::uint64_t kf = key_flat_[f];
+      if (f == f0 || kf < key_flat_[f - 1])
+        cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), kf) - c.ki.begin());
+      while (cursor < c.ki.size() && c.ki[cursor] < kf) ++cursor;
+      warm_first_[f] = std::uint32_t(cursor);
+    }
   }
   const std::ptrdiff_t m = std::ptrdiff_t(contacts.size());
-  const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
   for (std::ptrdiff_t qc = 0; qc < m; ++qc) {
     Contact& ct = contacts[std::size_t(qc)];
@@ -415,30 +438,30 @@ void ParticleCollider::store_warm_start(WarmCache& c) {
   // Entries in the flat order of their first particle (a stable counting sort; ties in contact
   // order), which is ascending key order unless systems' keys interleave.
   const std::size_t n = key_flat_.size();
-  count_.assign(n + 1, 0);
-  std::size_t m = 0;
-  for (const Contact& ct : contacts) {
-    if (!(ct.pn > 0.0)) continue;
-    ++count_[perm_[ct.i == kCollider ? ct.j : ct.i] + 1];
-    ++m;
-  }
-  for (std::size_t f = 0; f < n; ++f) count_[f + 1] += count_[f];
-  c.ki.resize(m);
-  c.kj.resize(m);
-  c.n.resize(m);
-  c.pt.resize(m);
-  c.pn.resize(m);
-  for (const Contact& ct : contacts) {
-    if (!(ct.pn > 0.0)) continue;
-    const bool wall = ct.i == kCollider;
-    const std::uint32_t owner = wall ? ct.j : ct.i;
-    const std::size_t q = count_[perm_[owner]]++;
-    c.ki[q] = key[owner];
-    c.kj[q] = wall ? (kWall | ct.collider) : key[ct.j];
-    c.n[q] = ct.n;
-    c.pt[q] = ct.pt;
-    c.pn[q] = ct.pn;
-  }
+  const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+  const auto owner_of = [&](const Contact& ct) { return ct.i == kCollider ? ct.j : ct.i; };
+  stable_counting_sort(
+      contacts.size(), n, par, sort_scratch_,
+      [&](std::size_t q) {
+        const Contact& ct = contacts[q];
+        return ct.pn > 0.0 ? std::size_t(perm_[owner_of(ct)]) : n;
+      },
+      [&](std::size_t m) {
+        c.ki.resize(m);
+        c.kj.resize(m);
+        c.n.resize(m);
+        c.pt.resize(m);
+        c.pn.resize(m);
+      },
+      [&](std::size_t q, std::size_t e) {
+        const Contact& ct = contacts[q];
+        const std::uint32_t owner = owner_of(ct);
+        c.ki[e] = key[owner];
+        c.kj[e] = ct.i == kCollider ? (kWall | ct.collider) : key[ct.j];
+        c.n[e] = ct.n;
+        c.pt[e] = ct.pt;
+        c.pn[e] = ct.pn;
+      });
   if (std::is_sorted(c.ki.begin(), c.ki.end())) return;
   // Keys out of order (particles of several systems interleaved): sort by ki, ties in the order
   // above, so lookups stay deterministic.

@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/counting_sort.hpp"
 #include "collision/collider_impl.hpp"
 #include "particles/particle_store.hpp"
 #include "simreel/sim/types.hpp"
@@ -199,7 +200,6 @@ class ParticleCollider {
   std::vector<std::uint64_t> cell_key_;    ///< (particles) linear cell key, then occupied cells'
   std::vector<std::uint32_t> cell_first_;  ///< occupied cell -> first sorted position, + n
   std::vector<std::uint64_t> occupied_;    ///< occupied cells' keys, increasing
-  std::vector<std::uint32_t> count_;       ///< counting-sort scratch
   std::vector<double> sx_, sy_, sz_, sr_;  ///< x, y, z, radius in sorted order
   std::uint64_t stride_y_ = 0, stride_x_ = 0;  ///< linear key = cx stride_x + cy stride_y + cz
   std::uint64_t cells_x_ = 0;              ///< cells along x (the key's major axis)
@@ -213,6 +213,17 @@ class ParticleCollider {
     std::uint32_t pair_begin, pair_end, wall_begin, wall_end;
   };
   std::vector<Band> bands_;
+  std::vector<std::uint32_t> band_first_;  ///< band -> its first sorted position, + n
+  /// A split of the bands over `parts` threads, about even in contacts: thread t takes the bands
+  /// [cut[t], cut[t + 1]) (cut has parts + 1 entries).
+  void cut_bands(int parts, std::vector<std::size_t>& cut) const;
+  std::vector<std::size_t> band_cut_;
+  std::vector<std::size_t> sweep_cut_;  ///< sweep_bands(): per phase, each thread's first band
+  /// Applies each contact's impulse (pn n + pt) to its particles in contact order, as one pass
+  /// in contact order would to the bit: with bands over `parts` threads, each thread owning the
+  /// particles of its bands (the pairs of the band before its first reach into it).
+  void apply_impulses(int parts);
+  CountingSortScratch sort_scratch_;  ///< store_warm_start()'s and build_grid()'s
   /// Fills work_ with the contacts in wavefront order (sched_: work_ position -> contact):
   /// within each band's pairs and walls (the whole list without bands), windows of contacts
   /// sorted by wave, where no two contacts of a wave share a particle and each particle's

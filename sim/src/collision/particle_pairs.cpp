@@ -8,10 +8,13 @@
 #include <cmath>
 #include <limits>
 
+#include <omp.h>
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
+#include "core/counting_sort.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
@@ -84,8 +87,8 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
 bool ParticleCollider::build_grid() {
   const std::size_t n = x.size();
   const double inv = 1.0 / cell_size;
-  // The passes that write each particle's entry, and the minima and maxima (exact in any
-  // order), split over the threads for a large system; the counting sort stays in one.
+  // The passes that write each particle's entry, the minima and maxima (exact in any order) and
+  // the counting sort (the serial one's order) split over the threads for a large system.
   const int par = threads > 1 && n >= kParallelMin ? threads : 1;
   const std::ptrdiff_t np = std::ptrdiff_t(n);
   double lx = x[0][0], ly = x[0][1], lz = x[0][2];
@@ -136,10 +139,9 @@ bool ParticleCollider::build_grid() {
   order_.resize(n);
   const std::uint64_t cells = std::uint64_t(dim[0]) * stride_x_;
   if (cells <= 4 * std::uint64_t(n) + 4096) {
-    count_.assign(std::size_t(cells) + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++count_[std::size_t(cell_key_[i]) + 1];
-    for (std::size_t c = 0; c < cells; ++c) count_[c + 1] += count_[c];
-    for (std::size_t i = 0; i < n; ++i) order_[count_[std::size_t(cell_key_[i])]++] = std::uint32_t(i);
+    stable_counting_sort(
+        n, std::size_t(cells), par, sort_scratch_, [&](std::size_t i) { return std::size_t(cell_key_[i]); },
+        [](std::size_t) {}, [&](std::size_t i, std::size_t s) { order_[s] = std::uint32_t(i); });
   } else {
     for (std::size_t i = 0; i < n; ++i) order_[i] = std::uint32_t(i);
     std::sort(order_.begin(), order_.end(), [&](std::uint32_t p, std::uint32_t q) {
@@ -159,16 +161,34 @@ bool ParticleCollider::build_grid() {
     sz_[s] = x[i][2];
     sr_[s] = radius[i];
   }
-  occupied_.clear();
-  cell_first_.clear();
-  for (std::size_t s = 0; s < n; ++s) {
-    const std::uint32_t i = order_[s];
-    if (s == 0 || cell_key_[i] != occupied_.back()) {
-      occupied_.push_back(cell_key_[i]);
-      cell_first_.push_back(std::uint32_t(s));
+  // The occupied cells: each sorted position that starts a cell, in order, through a count of
+  // them per stretch of positions (one stretch per thread).
+  const auto starts_cell = [&](std::size_t s) {
+    return s == 0 || cell_key_[order_[s]] != cell_key_[order_[s - 1]];
+  };
+  cell_cut_.assign(std::size_t(par) + 1, 0);
+#pragma omp parallel num_threads(par) if (par > 1)
+  {
+    const std::size_t t = std::size_t(omp_get_thread_num()), p = std::size_t(omp_get_num_threads());
+    const std::size_t s0 = n * t / p, s1 = n * (t + 1) / p;
+    std::size_t k = 0;
+    for (std::size_t s = s0; s < s1; ++s) k += starts_cell(s) ? 1 : 0;
+    cell_cut_[t + 1] = k;
+#pragma omp barrier
+#pragma omp single
+    {
+      for (std::size_t u = 0; u < p; ++u) cell_cut_[u + 1] += cell_cut_[u];
+      occupied_.resize(cell_cut_[p]);
+      cell_first_.resize(cell_cut_[p] + 1);
+      cell_first_[cell_cut_[p]] = std::uint32_t(n);
     }
+    k = cell_cut_[t];
+    for (std::size_t s = s0; s < s1; ++s)
+      if (starts_cell(s)) {
+        occupied_[k] = cell_key_[order_[s]];
+        cell_first_[k++] = std::uint32_t(s);
+      }
   }
-  cell_first_.push_back(std::uint32_t(n));
   return true;
 }
 

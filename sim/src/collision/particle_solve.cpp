@@ -2,6 +2,7 @@
 // wavefront order of the sequential-impulse sweeps, the sweeps themselves and the overlap
 // projection. The contact search is in particle_pairs.cpp, the step in particle_collisions.cpp.
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <type_traits>
 
@@ -21,20 +22,53 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
     for (int it = 0; it < sweeps; ++it) over(std::size_t(0), contacts.size());
     return;
   }
-  const int nb = int(bands_.size());
-  // Two sweeps of bands per iteration, each a fork and a barrier: only for large systems.
-  const bool par = threads > 1 && x.size() >= kParallelMin;
-  // Pairs of the even bands, of the odd bands, then every collider contact (one particle each:
-  // the bands' are independent of each other).
-  for (int it = 0; it < sweeps; ++it) {
-    for (int phase = 0; phase < 2; ++phase) {
-#pragma omp parallel for schedule(static) num_threads(threads) if (par)
-      for (int b = phase; b < nb; b += 2)
-        over(std::size_t(bands_[std::size_t(b)].pair_begin), std::size_t(bands_[std::size_t(b)].pair_end));
+  const std::size_t nb = bands_.size();
+  // Phases: the pairs of the even bands, of the odd bands, then every collider contact (one
+  // particle each: the bands' are independent of each other). A phase's bands share no
+  // particle, so they may go in any order and on any thread: for a large system each thread
+  // takes a run of them about even in contacts, and one parallel region holds all the sweeps
+  // (a barrier after each phase).
+  const int parts = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+  const auto size = [&](int phase, std::size_t b) {
+    const Band& band = bands_[b];
+    return phase < 2 ? std::size_t(band.pair_end - band.pair_begin) : std::size_t(band.wall_end - band.wall_begin);
+  };
+  const std::size_t stride = std::size_t(parts) + 1;
+  sweep_cut_.assign(3 * stride, nb);
+  for (int phase = 0; phase < 3; ++phase) {
+    const std::size_t first = phase == 2 ? 0 : std::size_t(phase), step = phase == 2 ? 1 : 2;
+    std::size_t total = 0;
+    for (std::size_t b = first; b < nb; b += step) total += size(phase, b);
+    std::size_t* cut = &sweep_cut_[std::size_t(phase) * stride];
+    cut[0] = first;
+    std::size_t b = first, sum = 0;
+    for (int t = 1; t < parts; ++t) {
+      const std::size_t goal = total * std::size_t(t) / std::size_t(parts);
+      while (b < nb && sum + size(phase, b) / 2 < goal) {  // ends nearest the goal
+        sum += size(phase, b);
+        b += step;
+      }
+      cut[t] = std::min(b, nb);
     }
-#pragma omp parallel for schedule(static) num_threads(threads) if (par)
-    for (int b = 0; b < nb; ++b)
-      over(std::size_t(bands_[std::size_t(b)].wall_begin), std::size_t(bands_[std::size_t(b)].wall_end));
+  }
+#pragma omp parallel num_threads(parts) if (parts > 1)
+  {
+    const std::size_t t = std::size_t(omp_get_thread_num());
+    for (int it = 0; it < sweeps; ++it) {
+      for (int phase = 0; phase < 3; ++phase) {
+        const std::size_t* cut = &sweep_cut_[std::size_t(phase) * stride];
+        const std::size_t step = phase == 2 ? 1 : 2;
+        for (std::size_t b = cut[t]; b < cut[t + 1]; b += step) {
+          const Band& band = bands_[b];
+          if (phase < 2) {
+            over(std::size_t(band.pair_begin), std::size_t(band.pair_end));
+          } else {
+            over(std::size_t(band.wall_begin), std::size_t(band.wall_end));
+          }
+        }
+#pragma omp barrier
+      }
+    }
   }
 }
 
@@ -47,36 +81,101 @@ void ParticleCollider::make_bands(std::size_t pair_count) {
   const std::uint64_t width =
       x.size() >= kParallelMin ? std::max<std::uint64_t>(1, (cells_x_ + 63) / 64) : cells_x_;
   const std::size_t nb = std::size_t((cells_x_ + width - 1) / width);
-  // Sorted position -> band: the column of its cell (cell keys are x-major).
+  // Sorted position -> band: the column of its cell (cell keys are x-major), so the band grows
+  // with the sorted position, and the pairs (by their first particle) and the collider contacts
+  // (by their particle) are in sorted order: each band's range is found by a binary search.
   const auto band_of = [&](std::uint32_t s) {
     return std::size_t(cell_key_[perm_[s]] / stride_x_ / width);
   };
-  bands_.assign(nb, Band{0, 0, 0, 0});
-  std::size_t b = 0;
-  for (std::size_t q = 0; q <= pair_count; ++q) {
-    const std::size_t bq = q < pair_count ? band_of(contacts[q].i) : nb;
-    for (; b < bq; ++b) {
-      bands_[b].pair_end = std::uint32_t(q);
-      if (b + 1 < nb) bands_[b + 1].pair_begin = std::uint32_t(q);
+  band_first_.resize(nb + 1);
+  const std::uint32_t n = std::uint32_t(x.size());
+  for (std::size_t b = 0; b <= nb; ++b) {
+    std::uint32_t lo = b == 0 ? 0 : band_first_[b - 1], hi = n;
+    while (lo < hi) {  // the first sorted position in band b or later
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      if (band_of(mid) < b) lo = mid + 1; else hi = mid;
     }
+    band_first_[b] = lo;
   }
-  b = 0;
-  for (std::size_t q = pair_count; q <= contacts.size(); ++q) {
-    const std::size_t bq = q < contacts.size() ? band_of(contacts[q].j) : nb;
-    if (q == pair_count) bands_[0].wall_begin = std::uint32_t(q);
-    for (; b < bq; ++b) {
-      bands_[b].wall_end = std::uint32_t(q);
-      if (b + 1 < nb) bands_[b + 1].wall_begin = std::uint32_t(q);
+  const auto first_at = [&](std::size_t begin, std::size_t end, std::uint32_t s, bool wall) {
+    const auto it = std::partition_point(
+        contacts.begin() + std::ptrdiff_t(begin), contacts.begin() + std::ptrdiff_t(end),
+        [&](const Contact& c) { return (wall ? c.j : c.i) < s; });
+    return std::uint32_t(it - contacts.begin());
+  };
+  bands_.resize(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    Band& band = bands_[b];
+    band.pair_begin = b == 0 ? 0 : bands_[b - 1].pair_end;
+    band.pair_end = b + 1 == nb ? std::uint32_t(pair_count)
+                                : first_at(band.pair_begin, pair_count, band_first_[b + 1], false);
+    band.wall_begin = b == 0 ? std::uint32_t(pair_count) : bands_[b - 1].wall_end;
+    band.wall_end = b + 1 == nb ? std::uint32_t(contacts.size())
+                                : first_at(band.wall_begin, contacts.size(), band_first_[b + 1], true);
+  }
+#if !defined(NDEBUG)
+  for (std::size_t b = 0; b < nb; ++b) {
+    for (std::uint32_t q = bands_[b].pair_begin; q < bands_[b].pair_end; ++q) {
+      assert(band_of(contacts[q].i) == b);
+      assert(band_of(contacts[q].j) == b || band_of(contacts[q].j) == b + 1);
+    }
+    for (std::uint32_t q = bands_[b].wall_begin; q < bands_[b].wall_end; ++q)
+      assert(band_of(contacts[q].j) == b);
+  }
+#endif
+}
+
+void ParticleCollider::cut_bands(int parts, std::vector<std::size_t>& cut) const {
+  const std::size_t nb = bands_.size(), m = contacts.size();
+  cut.assign(std::size_t(parts) + 1, nb);
+  cut[0] = 0;
+  // Contacts up to the end of band b: its pairs' end plus its walls' count so far.
+  std::size_t b = 0;
+  for (int t = 1; t < parts; ++t) {
+    const std::size_t goal = m * std::size_t(t) / std::size_t(parts);
+    while (b < nb && std::size_t(bands_[b].pair_end) + (bands_[b].wall_end - bands_[0].wall_begin) < goal)
+      ++b;
+    cut[std::size_t(t)] = std::max(cut[std::size_t(t) - 1], std::min(nb, b + 1));
+  }
+}
+
+void ParticleCollider::apply_impulses(int parts) {
+  const auto apply_i = [&](const Contact& c) {
+    v[c.i] -= inv_mass[c.i] * Vec3(c.pn * c.n + c.pt);
+  };
+  const auto apply_j = [&](const Contact& c) { v[c.j] += inv_mass[c.j] * Vec3(c.pn * c.n + c.pt); };
+  if (parts <= 1 || bands_.size() < 2) {
+    for (const Contact& c : contacts) {
+      if (c.i != kCollider) apply_i(c);
+      apply_j(c);
+    }
+    return;
+  }
+  // A particle of band b takes impulses from the pairs of band b - 1 (as their second particle),
+  // then from those of band b, then from its collider contacts: the order of one pass, kept by
+  // each thread for the particles of its bands.
+  cut_bands(parts, band_cut_);
+#pragma omp parallel num_threads(parts)
+  {
+    const std::size_t t = std::size_t(omp_get_thread_num());
+    const std::size_t b0 = band_cut_[t], b1 = band_cut_[t + 1];
+    if (b0 < b1) {
+      const std::uint32_t p1 = band_first_[b1];
+      if (b0 > 0)
+        for (std::uint32_t q = bands_[b0 - 1].pair_begin; q < bands_[b0 - 1].pair_end; ++q)
+          if (contacts[q].j >= band_first_[b0]) apply_j(contacts[q]);
+      for (std::uint32_t q = bands_[b0].pair_begin; q < bands_[b1 - 1].pair_end; ++q) {
+        apply_i(contacts[q]);
+        if (contacts[q].j < p1) apply_j(contacts[q]);
+      }
+      for (std::uint32_t q = bands_[b0].wall_begin; q < bands_[b1 - 1].wall_end; ++q)
+        apply_j(contacts[q]);
     }
   }
 }
 
 void ParticleCollider::solve() {
-  for (Contact& c : contacts) {
-    const Vec3 p = c.pn * c.n + c.pt;
-    if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
-    v[c.j] += inv_mass[c.j] * p;
-  }
+  apply_impulses(threads > 1 && x.size() >= kParallelMin ? threads : 1);
   // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
   const auto update = [&](SolverContact& c, const Vec3& vc, auto wall_tag)
                           __attribute__((always_inline)) {
@@ -207,7 +306,11 @@ void ParticleCollider::solve() {
     }
   };
   const auto give_back = [&] {
-    for (std::size_t k = 0; k < work_.size(); ++k) {
+    const std::ptrdiff_t m = std::ptrdiff_t(work_.size());
+    const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t kk = 0; kk < m; ++kk) {
+      const std::size_t k = std::size_t(kk);
       Contact& c = contacts[sched_[k]];
       c.pn = work_[k].pn;
       c.pt = work_[k].pt;
