@@ -46,9 +46,13 @@ void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::
 /// dst = src, `threads` > 1 splitting the elements.
 template <class T>
 void copy(std::vector<T>& dst, const std::vector<T>& src, int threads) {
+  if (threads <= 1) {
+    dst = src;
+    return;
+  }
   dst.resize(src.size());
   const std::ptrdiff_t n = std::ptrdiff_t(src.size());
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t k = 0; k < n; ++k) dst[std::size_t(k)] = src[std::size_t(k)];
 }
 

@@ -161,13 +161,24 @@ bool ParticleCollider::build_grid() {
     sz_[s] = x[i][2];
     sr_[s] = radius[i];
   }
-  // The occupied cells: each sorted position that starts a cell, in order, through a count of
-  // them per stretch of positions (one stretch per thread).
+  // The occupied cells: each sorted position that starts a cell, in order (for a large system
+  // through a count of them per stretch of positions, one stretch per thread).
   const auto starts_cell = [&](std::size_t s) {
     return s == 0 || cell_key_[order_[s]] != cell_key_[order_[s - 1]];
   };
+  if (par == 1) {
+    occupied_.clear();
+    cell_first_.clear();
+    for (std::size_t s = 0; s < n; ++s)
+      if (starts_cell(s)) {
+        occupied_.push_back(cell_key_[order_[s]]);
+        cell_first_.push_back(std::uint32_t(s));
+      }
+    cell_first_.push_back(std::uint32_t(n));
+    return true;
+  }
   cell_cut_.assign(std::size_t(par) + 1, 0);
-#pragma omp parallel num_threads(par) if (par > 1)
+#pragma omp parallel num_threads(par)
   {
     const std::size_t t = std::size_t(omp_get_thread_num()), p = std::size_t(omp_get_num_threads());
     const std::size_t s0 = n * t / p, s1 = n * (t + 1) / p;

@@ -3,6 +3,7 @@
 // parallel radix sorts, e.g. Satish, Harris & Garland 2009).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -36,7 +37,19 @@ struct CountingSortScratch {
 template <class Bucket, class Ready, class Place>
 void stable_counting_sort(std::size_t m, std::size_t buckets, int parts, CountingSortScratch& scratch,
                           const Bucket& bucket, const Ready& ready, const Place& place) {
-  if (scratch.counts.size() < std::size_t(parts)) scratch.counts.resize(std::size_t(parts));
+  if (scratch.counts.size() < std::size_t(std::max(parts, 1))) scratch.counts.resize(std::size_t(std::max(parts, 1)));
+  if (parts <= 1) {  // one pass of prefix sums, no region
+    std::vector<std::uint32_t>& start = scratch.counts[0];
+    start.assign(buckets + 2, 0);
+    for (std::size_t q = 0; q < m; ++q) ++start[bucket(q) + 1];
+    for (std::size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+    ready(std::size_t(start[buckets]));
+    for (std::size_t q = 0; q < m; ++q) {
+      const std::size_t b = bucket(q);
+      if (b < buckets) place(q, std::size_t(start[b]++));
+    }
+    return;
+  }
   scratch.totals.assign(std::size_t(parts) + 1, 0);
 SIMREEL_OMP(omp parallel num_threads(parts) if (parts > 1))
   {
