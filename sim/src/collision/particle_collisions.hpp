@@ -81,6 +81,11 @@ class ParticleCollider {
   void run(const std::vector<ParticleGroupMember>& members, double contact_speed, double h,
            const std::vector<Collider>* colliders);
 
+  /// The member (flat) index of working index q, the index `contacts` and the other working
+  /// arrays use after run() (cell order when the grid sorted the particles); x, v and x_before
+  /// are back in member order then.
+  [[nodiscard]] std::uint32_t flat_index(std::uint32_t q) const { return q < perm_.size() ? perm_[q] : q; }
+
   // Flat working arrays, public for the solver test (set x, v, inv_mass, radius, e, mu, then
   // find_contacts() and solve()).
   std::vector<Vec3> x, v;

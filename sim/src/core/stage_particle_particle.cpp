@@ -33,11 +33,12 @@ void stage_particle_particle(WorldState& w, double t0, double t1) {
     pc.threads = w.threads;
     pc.run(members, w.def.contact_speed, h, &colliders);
     // §3.7: the collider contacts' impulses (pn n + pt on the particle) push dynamic bodies back,
-    // at the surface point under the particle's centre before the overlap correction.
+    // at the surface point under the particle's centre before the overlap correction. (The
+    // contacts and radii are in the collider's working order, x_before in the members'.)
     if (BodyImpulses* log = coupling_log(w); log != nullptr && !pc.x_before.empty())
       for (const ParticleCollider::Contact& c : pc.contacts) {
         if (c.i != ParticleCollider::kCollider) continue;
-        const Vec3 p = pc.x_before[c.j] - (pc.radius[c.j] - c.depth) * c.n;
+        const Vec3 p = pc.x_before[pc.flat_index(c.j)] - (pc.radius[c.j] - c.depth) * c.n;
         log->add(colliders[c.collider], -(c.pn * c.n + c.pt), p);
       }
     if (colliders.empty() || pc.x_before.empty()) continue;
