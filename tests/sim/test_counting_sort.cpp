@@ -34,7 +34,7 @@ TEST(CountingSort, RanksAreTheStableSortsAtAnyThreadCount) {
                    [&](std::size_t a, std::size_t b) { return bucket[a] < bucket[b]; });
   ASSERT_GT(expected.size(), 8500u);
   CountingSortScratch scratch;
-  for (int parts : {1, 2, 3, 4}) {
+  for (int parts : {1, 2, 3, 4, 16}) {  // (16: as many as kMaxSortParts take part)
     std::vector<std::size_t> at;
     std::atomic<int> readies{0};
     stable_counting_sort(

@@ -33,10 +33,14 @@ struct CountingSortScratch {
 /// buckets over that many threads in contiguous stretches (each with its own counts, so a
 /// bucket's items take their places stretch by stretch: the same ranks); bucket() and place()
 /// are then called concurrently, and place() must write only where its rank says.
-/// Cost: O(m + parts × buckets) work and parts × buckets counters of scratch.
+/// Cost: O(m + parts × buckets) work and parts × buckets counters of scratch, so at most
+/// kMaxSortParts threads take part (the grid's sort has up to 4 buckets a particle: 64 bytes of
+/// counters a particle at most, whatever the world's thread count).
+inline constexpr int kMaxSortParts = 4;
 template <class Bucket, class Ready, class Place>
 void stable_counting_sort(std::size_t m, std::size_t buckets, int parts, CountingSortScratch& scratch,
                           const Bucket& bucket, const Ready& ready, const Place& place) {
+  parts = std::min(parts, kMaxSortParts);
   if (scratch.counts.size() < std::size_t(std::max(parts, 1))) scratch.counts.resize(std::size_t(std::max(parts, 1)));
   if (parts <= 1) {  // one pass of prefix sums, no region
     std::vector<std::uint32_t>& start = scratch.counts[0];
