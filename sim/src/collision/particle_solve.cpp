@@ -140,14 +140,13 @@ void ParticleCollider::cut_bands(int parts, std::vector<std::size_t>& cut) const
 }
 
 void ParticleCollider::apply_impulses(int parts) {
-  const auto apply_i = [&](const Contact& c) {
-    v[c.i] -= inv_mass[c.i] * Vec3(c.pn * c.n + c.pt);
-  };
-  const auto apply_j = [&](const Contact& c) { v[c.j] += inv_mass[c.j] * Vec3(c.pn * c.n + c.pt); };
+  // The impulse on the second particle, p = pn n + pt (the first takes -p), once per contact.
+  const auto impulse = [](const Contact& c) { return Vec3(c.pn * c.n + c.pt); };
   if (parts <= 1 || bands_.size() < 2) {
     for (const Contact& c : contacts) {
-      if (c.i != kCollider) apply_i(c);
-      apply_j(c);
+      const Vec3 p = impulse(c);
+      if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
+      v[c.j] += inv_mass[c.j] * p;
     }
     return;
   }
@@ -162,14 +161,20 @@ void ParticleCollider::apply_impulses(int parts) {
     if (b0 < b1) {
       const std::uint32_t p1 = band_first_[b1];
       if (b0 > 0)
-        for (std::uint32_t q = bands_[b0 - 1].pair_begin; q < bands_[b0 - 1].pair_end; ++q)
-          if (contacts[q].j >= band_first_[b0]) apply_j(contacts[q]);
+        for (std::uint32_t q = bands_[b0 - 1].pair_begin; q < bands_[b0 - 1].pair_end; ++q) {
+          const Contact& c = contacts[q];
+          if (c.j >= band_first_[b0]) v[c.j] += inv_mass[c.j] * impulse(c);
+        }
       for (std::uint32_t q = bands_[b0].pair_begin; q < bands_[b1 - 1].pair_end; ++q) {
-        apply_i(contacts[q]);
-        if (contacts[q].j < p1) apply_j(contacts[q]);
+        const Contact& c = contacts[q];
+        const Vec3 p = impulse(c);
+        v[c.i] -= inv_mass[c.i] * p;
+        if (c.j < p1) v[c.j] += inv_mass[c.j] * p;
       }
-      for (std::uint32_t q = bands_[b0].wall_begin; q < bands_[b1 - 1].wall_end; ++q)
-        apply_j(contacts[q]);
+      for (std::uint32_t q = bands_[b0].wall_begin; q < bands_[b1 - 1].wall_end; ++q) {
+        const Contact& c = contacts[q];
+        v[c.j] += inv_mass[c.j] * impulse(c);
+      }
     }
   }
 }
