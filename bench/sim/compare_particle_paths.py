@@ -21,6 +21,8 @@ cases = [
  ("pair forces 100k 2T", "bench_particles", "pair_forces/100000/2/", "pair_forces/100000/2/"),
  ("rain on mesh 100k 1T", "bench_collisions", "rain_on_mesh/100000/1/", "rain_on_mesh/100000/1/"),
  ("rain on mesh 100k 2T", "bench_collisions", "rain_on_mesh/100000/2/", "rain_on_mesh/100000/2/"),
+ ("rain settled 100k 1T", "bench_collisions", "rain_on_mesh_settled/100000/1/", "rain_on_mesh_settled/100000/1/"),
+ ("rain settled 100k 2T", "bench_collisions", "rain_on_mesh_settled/100000/2/", "rain_on_mesh_settled/100000/2/"),
  ("internal_world 100k 1T", "bench_collisions", "internal_world/100000/1/", "internal_world/100000/1/"),
  ("internal_world 100k 2T", "bench_collisions", "internal_world/100000/2/", "internal_world/100000/2/"),
  ("internal_grid 100k", "bench_collisions", "internal_grid", "internal_grid"),

@@ -121,6 +121,7 @@ struct Collider {
 Collider make_collider(const ShapeDef& def, const std::string& what);
 
 struct BodyImpulses;  // collision/body_impulses.hpp
+class CollideMemo;   // collision/collide_memo.hpp
 
 /// A droplet requested by HitAction::split, appended to the system after the pass.
 struct SpawnRequest {
@@ -149,6 +150,10 @@ struct CollisionContext {
   /// mesh) among the colliders, so a particle whose first sweep hits nothing keeps its state
   /// exactly and its slow path can end there.
   bool bare_misses = false;
+  /// When set: the system's memo of responses (collide_memo.hpp), used where particles share
+  /// nothing and the start of the step is not stored (then a response is a function of the
+  /// particle's end state alone).
+  CollideMemo* memo = nullptr;
 };
 
 /// Collides particles [begin, end) of one system with every collider, after integration. Each

@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <utility>
 
 #include "collision/body_impulses.hpp"
+#include "collision/collide_memo.hpp"
 #include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
@@ -474,6 +476,47 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     shared = shared || act == HitAction::split || (ctx.impulses != nullptr && ctx.impulses->logs(c));
   }
   const bool par = !shared && ctx.threads > 1 && end - begin >= kParallelMin;
+  // The memo of responses (collide_memo.hpp): where particles share nothing, and each response
+  // is a function of the particle's stored end state alone (not of a stored start of step).
+  CollideMemo* memo = ctx.memo != nullptr && !shared && !s.track_prev ? ctx.memo : nullptr;
+  const std::uint32_t epoch =
+      memo != nullptr ? memo->begin_pass(s, colliders, f, h, ctx.contact_speed, ctx.on_hit,
+                                         ctx.on_hit_split)
+                      : 0;
+  // The output resolve() gave last time for the same input in the same environment, written
+  // back (true), or nothing (false). Only whole steps (dt = h) are kept: a newborn's dt is its
+  // age, which is not in the key.
+  const auto reuse = [&](std::size_t i, std::size_t& reused) __attribute__((always_inline)) {
+    if (memo == nullptr || !(double(s.age[i]) >= h) || s.memo_epoch[i] != epoch) return false;
+    float* pf = &s.position[3 * i];
+    float* vf = &s.velocity[3 * i];
+    const float key[CollideMemo::kKey] = {pf[0], pf[1], pf[2], vf[0], vf[1], vf[2], s.radius[i], s.mass[i]};
+    const float* e = &s.memo[CollideMemo::kStride * i];
+    if (std::memcmp(key, e, sizeof key) != 0) return false;
+    std::memcpy(pf, e + CollideMemo::kKey, 3 * sizeof(float));
+    std::memcpy(vf, e + CollideMemo::kKey + 3, 3 * sizeof(float));
+    ++reused;
+    return true;
+  };
+  // resolve(), its input and output kept for reuse. A response that removed the particle is not
+  // kept (it is not a function of the particle alone: the pass counts it).
+  const auto resolve_kept = [&](std::size_t i, CollisionContext& c) __attribute__((always_inline)) {
+    const double dt = std::min(double(s.age[i]), h);
+    if (memo == nullptr || dt != h) {
+      resolve(s, i, dt, colliders, c, f);
+      return;
+    }
+    float* pf = &s.position[3 * i];
+    float* vf = &s.velocity[3 * i];
+    const float key[CollideMemo::kKey] = {pf[0], pf[1], pf[2], vf[0], vf[1], vf[2], s.radius[i], s.mass[i]};
+    resolve(s, i, dt, colliders, c, f);
+    if (!(s.age[i] < s.lifetime[i])) return;
+    float* e = &s.memo[CollideMemo::kStride * i];
+    std::memcpy(e, key, sizeof key);
+    std::memcpy(e + CollideMemo::kKey, pf, 3 * sizeof(float));
+    std::memcpy(e + CollideMemo::kKey + 3, vf, 3 * sizeof(float));
+    s.memo_epoch[i] = epoch;
+  };
   // Fast rejection: end point clear of every plane, swept bounds clear of every solid; a
   // sleeping particle is put back where it sleeps by the caller.
   const float* rest = ctx.sleep && s.track_rest ? s.rest.data() : nullptr;
@@ -503,8 +546,9 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
                          return c.shape == Collider::Shape::mesh;
                        });
   std::uint64_t removed = 0;
+  std::size_t reused = 0;
   const ZOrder zorder = ordered ? ZOrder(colliders) : ZOrder();
-#pragma omp parallel num_threads(ctx.threads) if (par) reduction(+ : removed)
+#pragma omp parallel num_threads(ctx.threads) if (par) reduction(+ : removed, reused)
   {
     CollisionContext local = ctx;
     local.removed_inside = 0;
@@ -539,25 +583,29 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         } else {
           for (std::size_t k = 0; k < len; ++k) near[k] = is_near(i0 + k) ? 1 : 0;
         }
+        // A reused response is written here, in index order (its particle's arrays read in
+        // sequence, not scattered as in Z-order), and leaves the sort; it changes no other.
         for (std::size_t k = 0; k < len; ++k) {
           const std::size_t i = i0 + k;
-          if (near[k] != 0 && !(rest != nullptr && rest[4 * i + 3] >= kSleepTime))
+          if (near[k] != 0 && !(rest != nullptr && rest[4 * i + 3] >= kSleepTime) &&
+              !reuse(i, reused))
             keys.push_back(zorder.code(x + 3 * i) << 32 | std::uint64_t(i));
         }
       }
       zorder.sort(keys, tmp);
       for (const std::uint64_t k : keys) {
         const std::size_t i = std::size_t(k & 0xffffffffu);
-        resolve(s, i, std::min(double(s.age[i]), h), colliders, local, f);
+        resolve_kept(i, local);
       }
     } else {
 #pragma omp for schedule(static)
       for (std::size_t i = begin; i < end; ++i)
-        if (is_near(i)) resolve(s, i, std::min(double(s.age[i]), h), colliders, local, f);
+        if (is_near(i) && !reuse(i, reused)) resolve_kept(i, local);
     }
     removed += local.removed_inside;
   }
   ctx.removed_inside += removed;
+  if (memo != nullptr) memo->reused = reused;
 }
 
 void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,

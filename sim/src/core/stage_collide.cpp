@@ -40,6 +40,7 @@ void WorldState::collide_system(std::size_t index, std::size_t begin, std::size_
     ctx.on_hit_split = &ps.def.on_hit_split;
   }
   ctx.sleep = sleep_allowed(index);  // sleeping particles are not swept (put back after)
+  ctx.memo = &ps.collide_memo;
   ps.spawns.clear();
   collide(st, begin, end, h, shapes, ctx, ps.forces);
   ps.removed_inside += ctx.removed_inside;

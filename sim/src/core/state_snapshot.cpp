@@ -338,6 +338,10 @@ void load_store(detail::ParticleStore& st, StateReader& in, const std::string& n
   if (from_split) in.array(st.from_split, n, "particle split origins");
   else st.from_split.assign(n, 0);
   in.array(st.rest, st.track_rest ? 4 * n : 0, "particle rest states");
+  if (st.track_memo) {  // the collision pass's cache (collide_memo.hpp): no entry for anyone
+    st.memo.assign(detail::kMemoStride * n, 0.0f);
+    st.memo_epoch.assign(n, 0u);
+  }
   const bool ok = st.position.size() == 3 * n && st.velocity.size() == 3 * n &&
                   st.prev_position.size() == (st.track_prev ? 3 * n : 0) && st.color.size() == 4 * n &&
                   st.radius.size() == n && st.mass.size() == n && st.age.size() == n &&

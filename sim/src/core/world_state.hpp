@@ -10,6 +10,7 @@
 
 #include "cloth/cloth_particles.hpp"
 #include "cloth/cloth_self.hpp"
+#include "collision/collide_memo.hpp"
 #include "collision/collider_impl.hpp"
 #include "collision/particle_collisions.hpp"
 #include "core/body_dynamics.hpp"
@@ -48,6 +49,7 @@ struct ParticleSystemState {
   // Collisions (issue 5): splash droplets, §3.4.2 removals.
   Rng splash_rng;
   std::vector<SpawnRequest> spawns;
+  CollideMemo collide_memo;  ///< the pass's reuse of unchanged responses (a cache, not state)
   // Sub-emitters (SubEmitterDef): this system's, and the births other systems' (or its own)
   // deaths handed to it in the current step (stage_births.cpp).
   std::vector<SubEmitterDef> sub_emitters;

@@ -126,6 +126,9 @@ class Column {
 inline constexpr float kSleepSpeed = 0.01f;
 inline constexpr float kSleepTime = 0.5f;
 
+/// Floats per particle in ParticleStore::memo (CollideMemo::kStride).
+inline constexpr std::size_t kMemoStride = 14;
+
 /// Live particles of one system. Every array holds exactly `count` particles (xyz arrays
 /// 3 * count floats, color 4 * count); capacity for `max_particles` is reserved at creation so
 /// neither emission nor compaction allocates. The view's pointers move when the oldest die at
@@ -162,6 +165,15 @@ struct ParticleStore {
   /// collide with each other's particles); part of the state.
   Column<float> rest;
   bool track_rest = false;
+  /// The collision pass's memo of each particle's last response (collision/collide_memo.hpp):
+  /// (count x 14) the integrated position, velocity, radius and mass it saw, then the position
+  /// and velocity it wrote; memo_epoch (count) the pass environment it was recorded in, 0 for
+  /// none (a new particle). A cache, not state: the state hash and exports leave it out, and
+  /// dropping it changes no result. Kept once `track_memo` (set by the pass when it first
+  /// uses it).
+  Column<float> memo;
+  Column<std::uint32_t> memo_epoch;
+  bool track_memo = false;
 
   void reserve(std::size_t capacity);
   /// Appends n zero-initialised particles; returns the index of the first.

@@ -30,6 +30,10 @@ void ParticleStore::reserve(std::size_t capacity) {
   split_countdown.reserve(capacity);
   from_split.reserve(capacity);
   if (track_rest) rest.reserve(4 * capacity);
+  if (track_memo) {
+    memo.reserve(kMemoStride * capacity);
+    memo_epoch.reserve(capacity);
+  }
 }
 
 namespace {
@@ -50,6 +54,10 @@ void resize_all(ParticleStore& s, std::size_t n) {
   s.split_countdown.resize(n);
   s.from_split.resize(n);
   if (s.track_rest) s.rest.resize(4 * n);  // awake, no time at rest
+  if (s.track_memo) {
+    s.memo.resize(kMemoStride * n);
+    s.memo_epoch.resize(n);  // 0: no entry
+  }
   s.count = n;
 }
 
@@ -96,6 +104,10 @@ std::size_t ParticleStore::compact(std::size_t first) {
     split_countdown.drop_front(k);
     from_split.drop_front(k);
     if (track_rest) rest.drop_front(4 * k);
+    if (track_memo) {
+      memo.drop_front(kMemoStride * k);
+      memo_epoch.drop_front(k);
+    }
     count = n - k;
     return k + compact(0);
   }
@@ -122,6 +134,10 @@ std::size_t ParticleStore::compact(std::size_t first) {
     move_run(split_countdown, 1, w, run, len);
     move_run(from_split, 1, w, run, len);
     if (track_rest) move_run(rest, 4, w, run, len);
+    if (track_memo) {
+      move_run(memo, kMemoStride, w, run, len);
+      move_run(memo_epoch, 1, w, run, len);
+    }
     w += len;
   }
   resize_all(*this, w);
