@@ -9,9 +9,9 @@
 // surface is at a fixed point of the step: it is integrated to the same floats every step and
 // put back to the same floats (in the rain benchmark, 92 % of 100k drops after 1.5 s on a
 // 100k-triangle terrain, each otherwise re-swept against the mesh every step). The pass keeps
-// each particle's last (input -> output) and, when the input and the environment are the same
-// bits as then, writes the output instead of sweeping again: the same floats by construction,
-// at any thread count (each particle's entry is its own).
+// the (input -> output) of each particle it leaves at rest and, when the particle's next input and
+// the environment are the same bits as then, writes the output instead of sweeping again: the
+// same floats by construction, at any thread count (each particle's entry is its own).
 
 #include <cstddef>
 #include <cstdint>
