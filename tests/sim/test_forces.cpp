@@ -547,6 +547,48 @@ TEST(SimForces, CurlNoiseDragsParticlesTowardTheFlow) {
 // ---------------------------------------------------------------------------------------------
 // Threads
 
+// With pair forces the step takes integrate_system()'s general path (the forces of all
+// particles first, then each one's update), whose linear-drag update runs in vectorised blocks
+// of Dynamics::kBlock: each particle must still get the scalar semi-implicit step (drag at the
+// new velocity, Integrator::semi_implicit_euler) bit for bit, in every block and at any thread
+// count. 3 blocks and 5 particles, 2 m apart (no pair within the cut-off: a = g exactly).
+TEST(SimForces, SemiImplicitStepWithPairForcesIsTheScalarStepPerParticle) {
+  const double h = 1.0 / 240, drag = 0.3;
+  const Vec3 g(0.5, -0.25, -9.81);
+  const std::size_t n = 3 * detail::Dynamics::kBlock + 5;
+  for (int threads : {1, 2}) {
+    World world(WorldDef{h, 1, 0.05, threads});
+    auto d = probe_system(Integrator::semi_implicit_euler, g);
+    d.drag = drag;
+    d.pair_forces.coulomb_K = 2.0;
+    d.pair_forces.cutoff = 0.5;
+    d.emitter.max_particles = n;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double u = double(i);
+      d.initial_particles.push_back(particle(Vec3(2.0 * u, 0.1 * double(i % 7), 3.0), 0.5 + 0.01 * u,
+                                             1.0, Vec3(1.0 - 0.03 * u, 0.2, 0.5 * double(i % 5))));
+    }
+    const auto ps = world.add_particle_system(d);
+    const ParticleView before = world.particles(ps);
+    ASSERT_EQ(before.count, n);
+    std::vector<float> x0(before.position, before.position + 3 * n),
+        v0(before.velocity, before.velocity + 3 * n), m(before.mass, before.mass + n);
+    world.advance(h);
+    const ParticleView after = world.particles(ps);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double c = drag / double(m[i]);
+      const double damp = 1.0 / (1.0 + h * c);
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t e = 3 * i + std::size_t(k);
+        const double v = (double(v0[e]) + h * g[k]) * damp;
+        const double x = double(x0[e]) + (h * v - 0.5 * h * h * (g[k] - c * v) * damp * damp);
+        ASSERT_EQ(after.velocity[e], float(v)) << "particle " << i << " axis " << k << " " << threads;
+        ASSERT_EQ(after.position[e], float(x)) << "particle " << i << " axis " << k << " " << threads;
+      }
+    }
+  }
+}
+
 // Dense grids take each pair once, in one defined order: the particles ordered by (cell, index)
 // over cells of side = cut-off (x-major keys); in a first pass the particles whose cell's x is
 // even, then those whose cell's x is odd, each meets the particles after it in that order within

@@ -17,6 +17,14 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+// (the same guard as SIMREEL_VECTOR_CLONES: GCC's function attributes on x86-64 ELF)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__ELF__) && \
+    !defined(SIMREEL_NO_VECTOR_CLONES)
+#define SIMREEL_PAIR_AVX512 1
+#include <immintrin.h>
+#else
+#define SIMREEL_PAIR_AVX512 0
+#endif
 
 namespace simreel::sim::detail {
 
@@ -73,6 +81,81 @@ void pair_coefficients_once(double eps2, const double* __restrict r2, const doub
     const double s2 = r2[u] + eps2;
     coef[u] = num[u] / (s2 * std::sqrt(s2));
   }
+}
+
+/// f[3u + k] /= m[u] for u < len, k < 3: each particle's pair force over its mass, in place.
+/// Element-wise (one IEEE divide each, as the scalar form), so every clone gives the same bits;
+/// the divides, one a component, were most of the write-back's time when taken one by one.
+SIMREEL_VECTOR_CLONES
+void divide_rows(double* __restrict f, const double* __restrict m, std::size_t len) {
+  for (std::size_t u = 0; u < len; ++u) {
+    f[3 * u] /= m[u];
+    f[3 * u + 1] /= m[u];
+    f[3 * u + 2] /= m[u];
+  }
+}
+
+/// Appends the pairs (si, cs[u]) with r2[u] < cut2 (false for NaN), u < len, to (pi, pj, pr2)
+/// from place p, in candidate order; returns the new count. The order is the scalar loop's, so
+/// which form runs changes nothing but time. The AVX-512 form compresses eight candidates at a
+/// time in registers (a store per array per eight, against one per candidate: the scalar loop
+/// was ~15 % of the pair-force step); it reads up to 7 elements past len and writes up to 8
+/// past the result, which the callers' slack covers.
+std::size_t append_within_scalar(std::uint32_t si, const std::uint32_t* __restrict cs,
+                                 const double* __restrict r2, std::size_t len, double cut2,
+                                 std::uint32_t* __restrict pi, std::uint32_t* __restrict pj,
+                                 double* __restrict pr2, std::size_t p) {
+  // Branch-free: every candidate is written at the end of the list, which grows only when it
+  // lies within the cut-off.
+  for (std::size_t u = 0; u < len; ++u) {
+    pi[p] = si;
+    pj[p] = cs[u];
+    pr2[p] = r2[u];
+    p += std::size_t(r2[u] < cut2);
+  }
+  return p;
+}
+
+#if SIMREEL_PAIR_AVX512
+__attribute__((target("avx512f,avx512vl")))
+std::size_t append_within_avx512(std::uint32_t si, const std::uint32_t* __restrict cs,
+                                 const double* __restrict r2, std::size_t len, double cut2,
+                                 std::uint32_t* __restrict pi, std::uint32_t* __restrict pj,
+                                 double* __restrict pr2, std::size_t p) {
+  const __m512d c = _mm512_set1_pd(cut2);
+  const __m256i vi = _mm256_set1_epi32(int(si));
+  for (std::size_t u = 0; u < len; u += 8) {
+    const __m512d d = _mm512_loadu_pd(r2 + u);
+    __mmask8 k = _mm512_cmp_pd_mask(d, c, _CMP_LT_OQ);
+    if (len - u < 8) k = __mmask8(k & ((1u << (len - u)) - 1u));
+    const __m256i j = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(cs + u));
+    _mm512_storeu_pd(pr2 + p, _mm512_maskz_compress_pd(k, d));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(pj + p), _mm256_maskz_compress_epi32(k, j));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(pi + p), vi);
+    p += std::size_t(std::popcount(unsigned(k)));
+  }
+  return p;
+}
+
+#endif
+
+using AppendWithin = std::size_t (*)(std::uint32_t, const std::uint32_t*, const double*,
+                                     std::size_t, double, std::uint32_t*, std::uint32_t*, double*,
+                                     std::size_t);
+
+/// The append_within form this CPU runs (checked once, on first use).
+AppendWithin append_within() {
+#if SIMREEL_PAIR_AVX512
+  static const AppendWithin f = [] {
+    __builtin_cpu_init();  // (may run before the constructors that would do it)
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")
+               ? &append_within_avx512
+               : &append_within_scalar;
+  }();
+  return f;
+#else
+  return &append_within_scalar;
+#endif
 }
 
 /// Bit k set when r2[k] < cut2 (false for NaN, as the scalar test), k < len <= 64. Two lanes a
@@ -262,6 +345,7 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   // cell to its last. A particle of plane X thus receives, whatever the thread count, first the
   // contributions of the plane done in the first pass (X if even, X - 1 if X is odd), then those
   // of the other, each in that plane's own visiting order: a fixed sequence of additions.
+  const AppendWithin append = append_within();
   const auto half_cell = [&](PairGather& g, std::size_t c, std::size_t ix, std::size_t iy,
                              std::size_t iz) {
     const std::uint32_t* cnt = cell_count_.data();
@@ -304,22 +388,9 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
       // (over a multiple of 4 candidates, into the copies' slack: no remainder loop to mispredict)
       squared_distances(xi, yi, zi, g.x.data() + k0, g.y.data() + k0, g.z.data() + k0,
                         (len + 3) & ~std::size_t{3}, g.r2.data());
-      g.reserve_pairs(g.pairs + len);
-      // Branch-free compaction: every candidate is written at the end of the list, which grows
-      // only when it lies within the cut-off (false for NaN).
-      std::size_t p = g.pairs;
-      std::uint32_t* __restrict pi = g.pi.data();
-      std::uint32_t* __restrict pj = g.pj.data();
-      double* __restrict pr2 = g.pr2.data();
-      const std::uint32_t* __restrict cs = g.s.data() + k0;
-      const double* __restrict r2 = g.r2.data();
-      for (std::size_t u = 0; u < len; ++u) {
-        pi[p] = si;
-        pj[p] = cs[u];
-        pr2[p] = r2[u];
-        p += std::size_t(r2[u] < cut2);
-      }
-      g.pairs = p;
+      g.reserve_pairs(g.pairs + len + 8);  // (+ 8: append_within's overshoot)
+      g.pairs = append(std::uint32_t(si), g.s.data() + k0, g.r2.data(), len, cut2,
+                              g.pi.data(), g.pj.data(), g.pr2.data(), g.pairs);
     }
   };
   // The recorded pairs' coefficients in one vectorised pass, then their forces in record order.
@@ -365,12 +436,14 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
       };
       const auto write_back = [&](std::size_t ix) {  // force over mass, to the particle's row
         if (ix >= nx) return;
-        for (std::size_t s = cnt[ix * nyz]; s < cnt[(ix + 1) * nyz]; ++s) {
+        const std::size_t b = cnt[ix * nyz], e = cnt[(ix + 1) * nyz];
+        divide_rows(sacc + 3 * b, sm + b, e - b);
+        for (std::size_t s = b; s < e; ++s) {
           double* ai = a + 3 * std::size_t(order[s]);
           const double* o = sacc + 3 * s;
-          ai[0] += o[0] / sm[s];
-          ai[1] += o[1] / sm[s];
-          ai[2] += o[2] / sm[s];
+          ai[0] += o[0];
+          ai[1] += o[1];
+          ai[2] += o[2];
         }
       };
       const auto parity = [&](std::size_t ix) { return (lo[0] + std::int64_t(ix)) & 1; };
@@ -444,13 +517,14 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     }
   }
   if (dense) return;  // (written back plane by plane)
-  // Back to the particles' order, reading each one's rank (independent loads), force over mass.
+  // Force over mass in cell order (sm[rank i] = mass[i]), then back to the particles' order,
+  // reading each one's rank (independent loads).
+  divide_rows(sacc, sm, n);
   for (std::size_t i = 0; i < n; ++i) {
     const double* o = sacc + 3 * std::size_t(rank_[i]);
-    const double mi = mass[i];
-    a[3 * i] += o[0] / mi;
-    a[3 * i + 1] += o[1] / mi;
-    a[3 * i + 2] += o[2] / mi;
+    a[3 * i] += o[0];
+    a[3 * i + 1] += o[1];
+    a[3 * i + 2] += o[2];
   }
 }
 
