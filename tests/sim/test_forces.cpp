@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "particles/forces.hpp"  // private: curl noise is checked directly
@@ -178,6 +179,23 @@ TEST(SimForces, CoulombLikeRepelUnlikeAttractInverseSquare) {
   const auto beyond = run(1.0, 1.0, 1.01);
   EXPECT_EQ(beyond[0].x(), 0.0);
   EXPECT_EQ(beyond[1].x(), 0.0);
+}
+
+// 600 km from the origin (within the default max_distance of 1,000 km) a 0.5 m cut-off puts
+// the particles 1.2 million cells out, beyond the cell keys' +-2^20: the pair must still meet
+// once (the keys once clamped its neighbour columns onto one another, and it met three times).
+TEST(SimForces, CoulombPairFarFromTheOriginMeetsOnce) {
+  const double h = 1e-4;
+  World world(WorldDef{h, 1, 0.05});
+  auto d = probe_system(Integrator::explicit_euler);
+  d.pair_forces.coulomb_K = 2.0;
+  d.pair_forces.cutoff = 0.5;
+  const Vec3 o(6e5, -6e5, 6e5);  // (0.25 m apart stays exact in float out there)
+  d.initial_particles = {particle(o, 1.0, 1.0), particle(o + Vec3(0.25, 0, 0), 0.5, 1.0)};
+  const auto ps = world.add_particle_system(d);
+  const auto a = initial_accelerations(world, ps, h);
+  EXPECT_NEAR(a[0].x(), -2.0 / 0.0625, 1e-3);  // K q q / r² / m
+  EXPECT_NEAR(a[1].x(), 2.0 / 0.0625 / 0.5, 2e-3);
 }
 
 TEST(SimForces, GravitationalPairAttracts) {
@@ -691,17 +709,21 @@ TEST(SimForces, PairForcesBitIdenticalAtOneToFourThreads) {
 }
 
 // Against the O(n²) sum (long double) for 2,000 particles with charges of both signs and
-// softening, on a dense grid (one cloud) and a sparse one (two clouds 1 km apart): every
+// softening, on a dense grid (one cloud), a sparse one (two clouds 1 km apart), and beyond
+// the 32-bit cell coordinates' +-2^20 (0.5 m cells: 524 km): one cloud 10,000 km from the origin
+// and two clouds 10,000 km apart (their cells more than the keys' 2^21 apart): every
 // component within 1e-12 of the sum of its terms' magnitudes (the scale its rounding is
 // relative to; the sum itself can cancel to near zero).
 TEST(SimForces, PairForcesMatchBruteForce) {
   const std::size_t n = 2000;
   const PairForceDef pf{0.9, 1.7, 0.5, 2e-2};
-  for (const double apart : {0.0, 1000.0}) {
+  const std::pair<double, double> cases[] = {{0.0, 0.0}, {1000.0, 0.0}, {0.0, 1e7}, {1e7, 0.0}};
+  for (const auto& [apart, shift] : cases) {
     Rng rng(11);
     std::vector<double> x(3 * n), mass(n), charge(n);
     for (std::size_t i = 0; i < n; ++i) {
       for (int d = 0; d < 3; ++d) x[3 * i + std::size_t(d)] = rng.uniform(-2.0, 2.5);
+      x[3 * i + 1] += shift;
       if (i % 2 == 1) x[3 * i] += apart;
       mass[i] = rng.uniform(0.5, 2.0);
       charge[i] = rng.uniform(-1.0, 1.0);
@@ -734,9 +756,9 @@ TEST(SimForces, PairForcesMatchBruteForce) {
       interacting += mag[0] > 0;
       for (int c = 0; c < 3; ++c)
         ASSERT_LE(std::abs((long double)got[3 * i + std::size_t(c)] - sum[c] / mass[i]), 1e-12L * mag[c] / mass[i])
-            << "apart " << apart << " particle " << i << " component " << c;
+            << "apart " << apart << " shift " << shift << " particle " << i << " component " << c;
     }
-    EXPECT_GT(interacting, 1800) << apart;  // dense enough to test something
+    EXPECT_GT(interacting, 1800) << apart << " " << shift;  // dense enough to test something
   }
 }
 

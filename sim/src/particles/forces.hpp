@@ -94,7 +94,8 @@ struct Dynamics {
   std::vector<std::uint64_t> cell_keys_;    // sparse grids: occupied cells' keys, increasing
   std::vector<std::uint32_t> cell_start_;   // sparse grids: first particle of each cell, + n
   std::vector<std::uint32_t> cell_count_;   // dense grids: run start of every bounding-box cell
-  std::vector<std::int64_t> cell_xyz_;      // (n x 3) integer cell coordinates
+  std::vector<std::int32_t> cell32_;        // (n x 3) integer cell coordinates (within +-2^20)
+  std::vector<std::int64_t> cell_xyz_;      // (n x 3) the same, clamped to +-2^40 (when beyond)
   /// One thread's candidates of a cell (the particles of its 27 neighbour cells, in run order):
   /// positions, sorted index, squared distances to the current particle; then the ones kept
   /// (candidate index, squared distance, charge, mass) and their force coefficients.

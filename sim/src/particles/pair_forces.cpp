@@ -37,11 +37,14 @@ constexpr std::int64_t kCellBias = 1 << 20;  // 21 bits per axis: +-1M cells
 constexpr std::size_t kCopyBlock = 8;         // particles per block copy of a candidate run
 static_assert(kCopyBlock >= 3, "the distance pass rounds its length up to 4 into this slack");
 
-std::uint64_t cell_key(std::int64_t cx, std::int64_t cy, std::int64_t cz) {
-  auto c = [](std::int64_t v) {
-    return std::uint64_t(std::clamp<std::int64_t>(v + kCellBias, 0, 2 * kCellBias - 1));
-  };
-  return (c(cx) << 42) | (c(cy) << 21) | c(cz);
+constexpr std::int64_t kKeyMax = 2 * kCellBias - 1;
+
+/// The key of the cell (vx, vy, vz), coordinates relative to a base below the particles' cells:
+/// 21 bits each, clamped to [0, kKeyMax], x-major. Clamping merges cells (a cloud more than 2^21
+/// cells across), which costs candidates, never a neighbour: the lookups clamp alike.
+std::uint64_t cell_key(std::int64_t vx, std::int64_t vy, std::int64_t vz) {
+  auto c = [](std::int64_t v) { return std::uint64_t(std::clamp<std::int64_t>(v, 0, kKeyMax)); };
+  return (c(vx) << 42) | (c(vy) << 21) | c(vz);
 }
 
 /// r2[k] = |(xi, yi, zi) - (cx, cy, cz)[k]|² for k < m: element-wise, so every lane does the
@@ -81,6 +84,39 @@ void pair_coefficients_once(double eps2, const double* __restrict r2, const doub
     const double s2 = r2[u] + eps2;
     coef[u] = num[u] / (s2 * std::sqrt(s2));
   }
+}
+
+/// The cells of particles [0, len): c[3i + d] = ⌊x[3i + d] inv⌋ (the cell's integer coordinate
+/// along d), with lo[d] and hi[d] lowered and raised to take them in; returns false when some
+/// |⌊x inv⌋| >= kCellBias or is NaN (the caller then takes the 64-bit form, whose clamping a
+/// key needs; what is written here then goes unused). Element-wise, and min, max and "and" are
+/// exact in any order, so every clone gives the same values (the baseline cannot vectorise
+/// floor: SSE4.1's roundpd is the first to round a vector).
+SIMREEL_VECTOR_CLONES
+bool floor_cells(const double* __restrict x, std::size_t len, double inv,
+                 std::int32_t* __restrict c, std::int32_t* __restrict lo,
+                 std::int32_t* __restrict hi) {
+  constexpr double kClamp = double(2 * kCellBias);  // (so the conversion is defined)
+  std::int32_t l0 = lo[0], l1 = lo[1], l2 = lo[2], h0 = hi[0], h1 = hi[1], h2 = hi[2];
+  unsigned ok = 1;
+  for (std::size_t i = 0; i < len; ++i) {
+    std::int32_t ci[3];
+    for (int d = 0; d < 3; ++d) {
+      const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
+      ok &= unsigned(std::abs(f) < double(kCellBias));  // (false for NaN)
+      const double g = f < -kClamp ? -kClamp : f > kClamp ? kClamp : f == f ? f : 0.0;
+      ci[d] = std::int32_t(g);
+      c[3 * i + std::size_t(d)] = ci[d];
+    }
+    l0 = std::min(l0, ci[0]);
+    l1 = std::min(l1, ci[1]);
+    l2 = std::min(l2, ci[2]);
+    h0 = std::max(h0, ci[0]);
+    h1 = std::max(h1, ci[1]);
+    h2 = std::max(h2, ci[2]);
+  }
+  lo[0] = l0, lo[1] = l1, lo[2] = l2, hi[0] = h0, hi[1] = h1, hi[2] = h2;
+  return ok != 0;
 }
 
 /// f[3u + k] /= m[u] for u < len, k < 3: each particle's pair force over its mass, in place.
@@ -180,28 +216,49 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   const double inv = 1.0 / cut;
   // Build: each particle's cell, the particles sorted by (cell key, index) (a total order, so the
   // layout is independent of the thread count), then where each cell's run starts.
-  cell_xyz_.resize(3 * n);
-  std::int64_t lo[3], hi[3];
+  // Each particle's cell in 32 bits, in chunks (any split gives the same values: per particle,
+  // and min, max and "and" are exact). Beyond +-kCellBias cells (or NaN) the 64-bit form below,
+  // clamped as the keys need; the grid is then sparse.
+  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
+  cell32_.resize(3 * n);
+  std::int32_t lo32[3], hi32[3];
   for (int d = 0; d < 3; ++d) {
-    lo[d] = std::numeric_limits<std::int64_t>::max();
-    hi[d] = std::numeric_limits<std::int64_t>::min();
+    lo32[d] = std::numeric_limits<std::int32_t>::max();
+    hi32[d] = std::numeric_limits<std::int32_t>::min();
   }
   bool finite = true;
-  // (per particle, and min, max and "and" are exact: any split gives the same values)
-  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
+  constexpr std::size_t kChunk = 4096;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1) \
-    reduction(min : lo[:3]) reduction(max : hi[:3]) reduction(&& : finite)
-  for (std::size_t i = 0; i < n; ++i) {
+    reduction(min : lo32[:3]) reduction(max : hi32[:3]) reduction(&& : finite)
+  for (std::size_t ch = 0; ch < chunks; ++ch) {
+    const std::size_t b = ch * kChunk, len = std::min(n, b + kChunk) - b;
+    std::int32_t l[3], u[3];
     for (int d = 0; d < 3; ++d) {
-      const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
-      finite = finite && std::abs(f) < double(kCellBias);
+      l[d] = std::numeric_limits<std::int32_t>::max();
+      u[d] = std::numeric_limits<std::int32_t>::min();
+    }
+    finite = floor_cells(x + 3 * b, len, inv, cell32_.data() + 3 * b, l, u) && finite;
+    for (int d = 0; d < 3; ++d) {
+      lo32[d] = std::min(lo32[d], l[d]);
+      hi32[d] = std::max(hi32[d], u[d]);
+    }
+  }
+  std::int64_t lo[3] = {lo32[0], lo32[1], lo32[2]}, hi[3] = {hi32[0], hi32[1], hi32[2]};
+  if (!finite) {
+    cell_xyz_.resize(3 * n);
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::numeric_limits<std::int64_t>::max();
+      hi[d] = std::numeric_limits<std::int64_t>::min();
+    }
+    for (std::size_t k = 0; k < 3 * n; ++k) {
+      const double f = std::floor(x[k] * inv);
       // (a cast of a value beyond +-2^40 would gain nothing: cell_key() clamps it anyway)
       constexpr double kFar = double(std::int64_t{1} << 40);
-      const std::int64_t c = f >= kFar ? std::int64_t{1} << 40 : f <= -kFar ? -(std::int64_t{1} << 40)
-                             : f == f ? std::int64_t(f) : 0;
-      cell_xyz_[3 * i + std::size_t(d)] = c;
-      lo[d] = std::min(lo[d], c);
-      hi[d] = std::max(hi[d], c);
+      cell_xyz_[k] = f >= kFar ? std::int64_t{1} << 40 : f <= -kFar ? -(std::int64_t{1} << 40)
+                     : f == f ? std::int64_t(f) : 0;
+      lo[k % 3] = std::min(lo[k % 3], cell_xyz_[k]);
+      hi[k % 3] = std::max(hi[k % 3], cell_xyz_[k]);
     }
   }
   std::vector<std::uint32_t>& order = order_;
@@ -224,7 +281,7 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
     cell_count_.assign(cells + 2, 0);
     std::uint32_t* cnt = cell_count_.data();
     const auto lin = [&](std::size_t i) {
-      const std::int64_t* c = &cell_xyz_[3 * i];
+      const std::int32_t* c = &cell32_[3 * i];
       return std::size_t((std::uint64_t(c[0] - lo[0]) * ny + std::uint64_t(c[1] - lo[1])) * nz +
                          std::uint64_t(c[2] - lo[2]));
     };
@@ -238,8 +295,15 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   } else {
     std::vector<std::uint64_t>& keys = cell_key_;
     keys.resize(n);
+    // Relative to one below the lowest cell, so where the cloud lies does not matter, only how
+    // far it spreads (a cloud 10,000 km from the origin at a 0.5 m cut-off once shared keys
+    // with its neighbour cells, and met each neighbour up to three times).
+    const std::int64_t bx = lo[0] - 1, by = lo[1] - 1, bz = lo[2] - 1;
     for (std::size_t i = 0; i < n; ++i)
-      keys[i] = cell_key(cell_xyz_[3 * i], cell_xyz_[3 * i + 1], cell_xyz_[3 * i + 2]);
+      keys[i] = finite ? cell_key(cell32_[3 * i] - bx, cell32_[3 * i + 1] - by,
+                                  cell32_[3 * i + 2] - bz)
+                       : cell_key(cell_xyz_[3 * i] - bx, cell_xyz_[3 * i + 1] - by,
+                                  cell_xyz_[3 * i + 2] - bz);
     for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
     std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
       return keys[p] != keys[q] ? keys[p] < keys[q] : p < q;
@@ -434,17 +498,10 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
       const auto zero = [&](std::size_t ix) {
         if (ix < nx) std::fill(sacc + 3 * cnt[ix * nyz], sacc + 3 * cnt[(ix + 1) * nyz], 0.0);
       };
-      const auto write_back = [&](std::size_t ix) {  // force over mass, to the particle's row
+      const auto write_back = [&](std::size_t ix) {  // force over mass (to a's rows below)
         if (ix >= nx) return;
         const std::size_t b = cnt[ix * nyz], e = cnt[(ix + 1) * nyz];
         divide_rows(sacc + 3 * b, sm + b, e - b);
-        for (std::size_t s = b; s < e; ++s) {
-          double* ai = a + 3 * std::size_t(order[s]);
-          const double* o = sacc + 3 * s;
-          ai[0] += o[0];
-          ai[1] += o[1];
-          ai[2] += o[2];
-        }
       };
       const auto parity = [&](std::size_t ix) { return (lo[0] + std::int64_t(ix)) & 1; };
       for (std::int64_t pass = 0; pass < 2; ++pass) {
@@ -488,16 +545,19 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
       }
     } else {
       // Keys order cells by (x, y, z), and as the cells are visited in key order each column's
-      // start only moves forward: nine cursors replace 27 lookups.
+      // start only moves forward: nine cursors replace 27 lookups. A cell's coordinates are its
+      // key's, so where keys were clamped the lookups are too (and stay monotonic); columns
+      // clamped onto one another are taken once.
       const std::uint64_t* ck = cell_keys_.data();
       const std::uint32_t* cs = cell_start_.data();
+      // (relative coordinates 1 .. hi - lo + 1, looked up from 0 to hi - lo + 2)
+      const bool clamped = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) + 2 > kKeyMax;
       const std::size_t c_begin = cells * t / nt, c_end = cells * (t + 1) / nt;
       std::size_t cursor[9];
       for (std::size_t c = c_begin; c < c_end; ++c) {
-        const std::size_t s0 = cs[c];
-        const std::int64_t cx = std::int64_t(std::floor(sx[s0] * inv)),
-                           cy = std::int64_t(std::floor(sy[s0] * inv)),
-                           cz = std::int64_t(std::floor(sz[s0] * inv));
+        const std::int64_t cx = std::int64_t(ck[c] >> 42),
+                           cy = std::int64_t((ck[c] >> 21) & std::uint64_t(kKeyMax)),
+                           cz = std::int64_t(ck[c] & std::uint64_t(kKeyMax));
         for (int col = 0; col < 9; ++col) {
           const std::int64_t dx = col / 3 - 1, dy = col % 3 - 1;
           const std::uint64_t lo_key = cell_key(cx + dx, cy + dy, cz - 1);
@@ -512,16 +572,29 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
           run_b[col] = cs[cur];
           run_e[col] = cs[end];
         }
+        // A column clamped onto another is the same run: kept once, in the centre column where
+        // it is that one (cell_forces() finds the cell itself there).
+        const auto same = [&](int p, int q) {
+          return run_b[p] != run_e[p] && run_b[p] == run_b[q] && run_e[p] == run_e[q];
+        };
+        for (int col = 0; col < 9 && clamped; ++col) {
+          bool dup = col != 4 && same(4, col);
+          for (int r = 0; r < col && !dup; ++r) dup = r != 4 && col != 4 && same(r, col);
+          if (dup) run_e[col] = run_b[col];
+        }
         cell_forces(g, cs[c], cs[c + 1], run_b, run_e);
       }
     }
   }
-  if (dense) return;  // (written back plane by plane)
-  // Force over mass in cell order (sm[rank i] = mass[i]), then back to the particles' order,
-  // reading each one's rank (independent loads).
-  divide_rows(sacc, sm, n);
+  // Force over mass in cell order (sm[rank i] = mass[i]; dense grids did it plane by plane),
+  // then back to the particles' order, each row reading its rank's: independent loads, where a
+  // scatter to the rows in cell order was a read-modify-write of a random line (~7 % of a step).
+  // One addition per row, so any split over threads gives the same bits.
+  if (!dense) divide_rows(sacc, sm, n);
+  const std::uint32_t* rank = rank_.data();
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
   for (std::size_t i = 0; i < n; ++i) {
-    const double* o = sacc + 3 * std::size_t(rank_[i]);
+    const double* o = sacc + 3 * std::size_t(rank[i]);
     a[3 * i] += o[0];
     a[3 * i + 1] += o[1];
     a[3 * i + 2] += o[2];
