@@ -47,6 +47,21 @@ std::vector<Vec3> initial_accelerations(World& world, ParticleSystemHandle ps, d
   return a;
 }
 
+/// Initial accelerations of `particles` under pair forces alone (G, K, cut-off; the default
+/// softening), from one explicit Euler step of 1e-4 s.
+std::vector<Vec3> pair_accelerations(double G, double K, double cutoff,
+                                     std::vector<InitialParticle> particles) {
+  const double h = 1e-4;
+  World world(WorldDef{h, 1, 0.05});
+  auto d = probe_system(Integrator::explicit_euler);
+  d.pair_forces.gravitational_G = G;
+  d.pair_forces.coulomb_K = K;
+  d.pair_forces.cutoff = cutoff;
+  d.initial_particles = std::move(particles);
+  const auto ps = world.add_particle_system(d);
+  return initial_accelerations(world, ps, h);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Drag (§3.3.2)
 
@@ -158,15 +173,9 @@ TEST(SimForces, AddSpringBetweenLiveIdsUsesCurrentDistance) {
 // Pair forces (§3.3.4)
 
 TEST(SimForces, CoulombLikeRepelUnlikeAttractInverseSquare) {
-  const double h = 1e-4;
   auto run = [&](double q1, double q2, double r) {
-    World world(WorldDef{h, 1, 0.05});
-    auto d = probe_system(Integrator::explicit_euler);
-    d.pair_forces.coulomb_K = 2.0;
-    d.pair_forces.cutoff = 1.0;
-    d.initial_particles = {particle(Vec3(0, 0, 0), 1.0, q1), particle(Vec3(r, 0, 0), 0.5, q2)};
-    const auto ps = world.add_particle_system(d);
-    return initial_accelerations(world, ps, h);
+    return pair_accelerations(0.0, 2.0, 1.0,
+                              {particle(Vec3(0, 0, 0), 1.0, q1), particle(Vec3(r, 0, 0), 0.5, q2)});
   };
   const auto like = run(1.0, 1.0, 0.5);
   EXPECT_NEAR(like[0].x(), -2.0 / 0.25, 1e-4);  // pushed to -x, K q q / r² / m
@@ -183,30 +192,18 @@ TEST(SimForces, CoulombLikeRepelUnlikeAttractInverseSquare) {
 
 // 600 km from the origin (within the default max_distance of 1,000 km) a 0.5 m cut-off puts
 // the particles 1.2 million cells out, beyond the cell keys' +-2^20: the pair must still meet
-// once (the keys once clamped its neighbour columns onto one another, and it met three times).
+// once (the keys once clamped its neighbour columns onto one another: it met nine times).
 TEST(SimForces, CoulombPairFarFromTheOriginMeetsOnce) {
-  const double h = 1e-4;
-  World world(WorldDef{h, 1, 0.05});
-  auto d = probe_system(Integrator::explicit_euler);
-  d.pair_forces.coulomb_K = 2.0;
-  d.pair_forces.cutoff = 0.5;
   const Vec3 o(6e5, -6e5, 6e5);  // (0.25 m apart stays exact in float out there)
-  d.initial_particles = {particle(o, 1.0, 1.0), particle(o + Vec3(0.25, 0, 0), 0.5, 1.0)};
-  const auto ps = world.add_particle_system(d);
-  const auto a = initial_accelerations(world, ps, h);
+  const auto a = pair_accelerations(0.0, 2.0, 0.5,
+                                    {particle(o, 1.0, 1.0), particle(o + Vec3(0.25, 0, 0), 0.5, 1.0)});
   EXPECT_NEAR(a[0].x(), -2.0 / 0.0625, 1e-3);  // K q q / r² / m
   EXPECT_NEAR(a[1].x(), 2.0 / 0.0625 / 0.5, 2e-3);
 }
 
 TEST(SimForces, GravitationalPairAttracts) {
-  const double h = 1e-4;
-  World world(WorldDef{h, 1, 0.05});
-  auto d = probe_system(Integrator::explicit_euler);
-  d.pair_forces.gravitational_G = 3.0;
-  d.pair_forces.cutoff = 5.0;
-  d.initial_particles = {particle(Vec3(0, 0, 0), 2.0), particle(Vec3(0, 0, 2), 1.0)};
-  const auto ps = world.add_particle_system(d);
-  const auto a = initial_accelerations(world, ps, h);
+  const auto a = pair_accelerations(3.0, 0.0, 5.0,
+                                    {particle(Vec3(0, 0, 0), 2.0), particle(Vec3(0, 0, 2), 1.0)});
   EXPECT_NEAR(a[0].z(), 3.0 * 1.0 / 4.0, 1e-5);   // G m2 / r², toward the other
   EXPECT_NEAR(a[1].z(), -3.0 * 2.0 / 4.0, 1e-5);
 }
