@@ -16,6 +16,11 @@
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__ELF__) && \
     !defined(SIMREEL_NO_VECTOR_CLONES)
 #define SIMREEL_VECTOR_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+/// 1 where GCC's per-function targets work (x86-64 ELF): a kernel that a compiler cannot
+/// vectorise by itself (a compress) may then carry a hand-written AVX-512 form beside its
+/// scalar one, picked at run time by __builtin_cpu_supports.
+#define SIMREEL_HAS_VECTOR_CLONES 1
 #else
 #define SIMREEL_VECTOR_CLONES
+#define SIMREEL_HAS_VECTOR_CLONES 0
 #endif

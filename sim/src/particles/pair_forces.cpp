@@ -11,19 +11,15 @@
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"
 
+#if SIMREEL_HAS_VECTOR_CLONES
+#include <immintrin.h>
+#endif
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
 #if defined(__SSE2__)
 #include <emmintrin.h>
-#endif
-// (the same guard as SIMREEL_VECTOR_CLONES: GCC's function attributes on x86-64 ELF)
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__ELF__) && \
-    !defined(SIMREEL_NO_VECTOR_CLONES)
-#define SIMREEL_PAIR_AVX512 1
-#include <immintrin.h>
-#else
-#define SIMREEL_PAIR_AVX512 0
 #endif
 
 namespace simreel::sim::detail {
@@ -152,7 +148,7 @@ std::size_t append_within_scalar(std::uint32_t si, const std::uint32_t* __restri
   return p;
 }
 
-#if SIMREEL_PAIR_AVX512
+#if SIMREEL_HAS_VECTOR_CLONES
 __attribute__((target("avx512f,avx512vl")))
 std::size_t append_within_avx512(std::uint32_t si, const std::uint32_t* __restrict cs,
                                  const double* __restrict r2, std::size_t len, double cut2,
@@ -181,7 +177,7 @@ using AppendWithin = std::size_t (*)(std::uint32_t, const std::uint32_t*, const 
 
 /// The append_within form this CPU runs (checked once, on first use).
 AppendWithin append_within() {
-#if SIMREEL_PAIR_AVX512
+#if SIMREEL_HAS_VECTOR_CLONES
   static const AppendWithin f = [] {
     __builtin_cpu_init();  // (may run before the constructors that would do it)
     return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")
