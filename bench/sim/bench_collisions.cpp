@@ -11,6 +11,9 @@
 //   internal_world/N/T    N particles in a box with particle–particle collisions, whole step (the
 //                         first 10 steps from the same start, so that runs compare),
 //                         T threads
+//   internal_world_after_first/N/T
+//                         the same cloud's steps 2-11: its first step (every array's pages
+//                         touched for the first time, no warm start) costs several later ones
 //   internal_grid/N, internal_solve/N
 //                         the grid pair search (broad) and the sequential-impulse solve (narrow
 //                         and response) of the same particles
@@ -180,7 +183,8 @@ detail::ParticleCollider cloud(std::size_t n) {
   return pc;
 }
 
-void internal_world(benchmark::State& state) {
+/// internal_world(state) after `untimed` steps.
+void internal(benchmark::State& state, int untimed) {
   const auto n = std::size_t(state.range(0));
   World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
   ParticleSystemDef def;
@@ -191,6 +195,7 @@ void internal_world(benchmark::State& state) {
   const auto ps = world.add_particle_system(def);
   const detail::ParticleCollider pc = cloud(n);
   for (std::size_t i = 0; i < n; ++i) world.spawn_particle(ps, pc.x[i], pc.v[i], 1e-3, 0.01, 1e9);
+  for (int k = 0; k < untimed; ++k) world.advance(1.0 / 240);
   for (auto _ : state) {
     world.advance(1.0 / 240);
     benchmark::DoNotOptimize(world.particles(ps).position);
@@ -198,7 +203,8 @@ void internal_world(benchmark::State& state) {
   state.counters["particle_steps"] =
       benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
-
+void internal_world(benchmark::State& state) { internal(state, 0); }
+void internal_world_after_first(benchmark::State& state) { internal(state, 1); }
 
 /// Five steps of internal_world/N/T, then a hash of the positions and velocities (its low 48 bits
 /// as a counter): old and new builds and thread counts compared bit for bit.
@@ -314,6 +320,7 @@ BENCHMARK_CAPTURE(mesh_phases, mesh_broad_narrow, true)->Arg(100'000)->Unit(benc
 BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(internal_world_after_first)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(internal_hash)->Args({30'000, 1})->Args({30'000, 2})->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_solve, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
