@@ -183,10 +183,8 @@ detail::ParticleCollider cloud(std::size_t n) {
   return pc;
 }
 
-/// internal_world(state) after `untimed` steps.
-void internal(benchmark::State& state, int untimed) {
-  const auto n = std::size_t(state.range(0));
-  World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
+/// cloud(n) as a particle system of `world` (no gravity, particle–particle collisions).
+ParticleSystemHandle add_cloud(World& world, std::size_t n) {
   ParticleSystemDef def;
   def.emitter.rate = 0.0;
   def.emitter.max_particles = n;
@@ -195,6 +193,14 @@ void internal(benchmark::State& state, int untimed) {
   const auto ps = world.add_particle_system(def);
   const detail::ParticleCollider pc = cloud(n);
   for (std::size_t i = 0; i < n; ++i) world.spawn_particle(ps, pc.x[i], pc.v[i], 1e-3, 0.01, 1e9);
+  return ps;
+}
+
+/// internal_world(state) after `untimed` steps.
+void internal(benchmark::State& state, int untimed) {
+  const auto n = std::size_t(state.range(0));
+  World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
+  const ParticleSystemHandle ps = add_cloud(world, n);
   for (int k = 0; k < untimed; ++k) world.advance(1.0 / 240);
   for (auto _ : state) {
     world.advance(1.0 / 240);
@@ -213,14 +219,7 @@ void internal_hash(benchmark::State& state) {
   std::uint64_t h = 0;
   for (auto _ : state) {
     World world(WorldDef{1.0 / 240, 1, 0.05, int(state.range(1))});
-    ParticleSystemDef def;
-    def.emitter.rate = 0.0;
-    def.emitter.max_particles = n;
-    def.gravity = Vec3::Zero();
-    def.collide_particles = true;
-    const auto ps = world.add_particle_system(def);
-    const detail::ParticleCollider pc = cloud(n);
-    for (std::size_t i = 0; i < n; ++i) world.spawn_particle(ps, pc.x[i], pc.v[i], 1e-3, 0.01, 1e9);
+    const ParticleSystemHandle ps = add_cloud(world, n);
     for (int s = 0; s < 5; ++s) world.advance(1.0 / 240);
     const ParticleView v = world.particles(ps);
     h = 0xcbf29ce484222325ull;
