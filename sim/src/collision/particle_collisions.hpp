@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "core/counting_sort.hpp"
+#include "core/run_claims.hpp"
 #include "collision/collider_impl.hpp"
 #include "particles/particle_store.hpp"
 #include "simreel/sim/types.hpp"
@@ -187,16 +188,17 @@ class ParticleCollider {
                 std::vector<Contact>& out);
   /// One pair search's scratch: a cell's candidates (sorted position, x, y, z, radius), their
   /// squared distances within reach (0: out of reach) and the ones kept; the same of its awake
-  /// candidates (index into cand_s); and, for a search over part of the cells, its contacts.
+  /// candidates (index into cand_s).
   struct PairSearch {
     std::vector<std::uint32_t> cand_s, cand_keep;
     std::vector<double> cand_x, cand_y, cand_z, cand_r, cand_d2;
     std::vector<std::uint32_t> awake_s;
     std::vector<double> awake_x, awake_y, awake_z, awake_r, awake_d2;
-    std::vector<Contact> out;
   };
   std::vector<PairSearch> search_;  ///< one per thread of find_pairs()
-  std::vector<std::size_t> cell_cut_;
+  std::vector<std::size_t> cell_cut_;  ///< find_pairs(): each chunk's first cell, + cells (scratch)
+  std::vector<std::vector<Contact>> chunk_out_;  ///< find_pairs(): a chunk's contacts
+  std::vector<ClaimRun> pair_runs_;              ///< find_pairs(): each thread's run of chunks
   /// find_pairs() over the occupied cells [cell_begin, cell_end), appending to `out`.
   void find_pairs_in(std::size_t cell_begin, std::size_t cell_end, double contact_speed, double h,
                      PairSearch& ps, std::vector<Contact>& out);
@@ -223,7 +225,7 @@ class ParticleCollider {
   /// [cut[t], cut[t + 1]) (cut has parts + 1 entries).
   void cut_bands(int parts, std::vector<std::size_t>& cut) const;
   std::vector<std::size_t> band_cut_;
-  std::vector<std::size_t> sweep_cut_;  ///< sweep_bands(): per phase, each thread's first band
+  std::vector<ClaimRun> run_;  ///< sweep_bands(): each thread's run of bands per sweep and phase
   /// Applies each contact's impulse (pn n + pt) to its particles in contact order, as one pass
   /// in contact order would to the bit: with bands over `parts` threads, each thread owning the
   /// particles of its bands (the pairs of the band before its first reach into it).

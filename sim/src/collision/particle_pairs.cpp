@@ -15,6 +15,7 @@
 #endif
 
 #include "core/counting_sort.hpp"
+#include "core/run_claims.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
@@ -245,27 +246,43 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
     find_pairs_in(0, cells, contact_speed, h, search_[0], contacts);
     return;
   }
+  // The cells in chunks of about equal particle counts, kChunks a thread, each thread owning a
+  // run of them (run_claims.hpp: a thread done early takes chunks from the back of the
+  // others'). Thread 0 takes its own run's chunks in order from the first, so it appends them
+  // to `contacts` directly; every other chunk's contacts go to a list of its own, joined after
+  // them in chunk order. Any split of the cells gives the same list.
+  constexpr std::size_t kChunks = 8;
+  const std::size_t p = std::size_t(parts), chunks = kChunks * p;
   std::vector<std::size_t>& cut = cell_cut_;
-  cut.assign(std::size_t(parts) + 1, cells);
+  cut.assign(chunks + 1, cells);
   cut[0] = 0;
-  for (int t = 1; t < parts; ++t) {  // the first cell at or past t / parts of the particles
-    const std::uint32_t at = std::uint32_t(n * std::size_t(t) / std::size_t(parts));
-    cut[std::size_t(t)] = std::size_t(std::lower_bound(cell_first_.begin(), cell_first_.end() - 1, at) -
-                                      cell_first_.begin());
+  for (std::size_t c = 1; c < chunks; ++c) {  // the first cell at or past c / chunks of the particles
+    const std::uint32_t at = std::uint32_t(n * c / chunks);
+    cut[c] = std::size_t(std::lower_bound(cell_first_.begin(), cell_first_.end() - 1, at) - cell_first_.begin());
   }
-#pragma omp parallel for schedule(static, 1) num_threads(parts)
-  for (int t = 0; t < parts; ++t) {
-    PairSearch& ps = search_[std::size_t(t)];
-    ps.out.clear();
-    if (t > 0) {
-      const std::size_t own = cell_first_[cut[std::size_t(t) + 1]] - cell_first_[cut[std::size_t(t)]];
-      ps.out.reserve(own + own / 2);
-    }
-    find_pairs_in(cut[std::size_t(t)], cut[std::size_t(t) + 1], contact_speed, h, ps,
-                  t == 0 ? contacts : ps.out);
+  if (chunk_out_.size() < chunks) chunk_out_.resize(chunks);
+  pair_runs_.resize(p);
+  for (std::size_t t = 0; t < p; ++t) pair_runs_[t] = claim_run(kChunks * t, kChunks * (t + 1));
+  std::size_t direct = 0;  // chunks [0, direct) are in `contacts`
+#pragma omp parallel num_threads(parts)
+  {
+    const std::size_t t = std::size_t(omp_get_thread_num());
+    PairSearch& ps = search_[t];
+    drain_runs(pair_runs_.data(), p, t, [&](std::size_t c) {
+      if (t == 0 && c == direct) {
+        find_pairs_in(cut[c], cut[c + 1], contact_speed, h, ps, contacts);
+        ++direct;
+        return;
+      }
+      std::vector<Contact>& out = chunk_out_[c];
+      out.clear();
+      const std::size_t own = cell_first_[cut[c + 1]] - cell_first_[cut[c]];
+      out.reserve(own + own / 2);
+      find_pairs_in(cut[c], cut[c + 1], contact_speed, h, ps, out);
+    });
   }
-  for (int t = 1; t < parts; ++t)
-    contacts.insert(contacts.end(), search_[std::size_t(t)].out.begin(), search_[std::size_t(t)].out.end());
+  for (std::size_t c = direct; c < chunks; ++c)
+    contacts.insert(contacts.end(), chunk_out_[c].begin(), chunk_out_[c].end());
 }
 
 void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_end,
@@ -281,7 +298,12 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
   // later in key order. Cells are visited in key order, so each column's first occupied cell
   // only moves forward: a cursor per column instead of a search.
   const std::uint64_t off[4] = {stride_y_, stride_x_ - stride_y_, stride_x_, stride_x_ + stride_y_};
+  // A search from a cell past the first starts each column's cursor where the walk from the
+  // first cell would have brought it.
   std::size_t cursor[4] = {0, 0, 0, 0};
+  if (cell_begin > 0 && cell_begin < cell_end)
+    for (int col = 0; col < 4; ++col)
+      cursor[col] = std::size_t(std::lower_bound(key_of, key_of + cells, key_of[cell_begin] + off[col] - 1) - key_of);
   std::uint32_t run_b[5], run_e[5];
   for (std::size_t c = cell_begin; c < cell_end; ++c) {
     const std::uint64_t kc = key_of[c];
