@@ -16,7 +16,9 @@ struct WorldDef {
                                   ///< gravity adds (not counted as impact speed)
   int threads = 0;                ///< OpenMP threads for large systems (>= 16384 particles);
                                   ///< 0 = the hardware's count. Results are bit-identical at any
-                                  ///< count (static partitioning, per-particle gathers)
+                                  ///< count: work is cut into items fixed by the scene, not by
+                                  ///< the count, and no item's result depends on the thread
+                                  ///< that takes it (fixed reduction order, per-particle gathers)
   double max_speed = 1e4;         ///< (m/s) > 0: a particle velocity component beyond it is a
                                   ///< blow-up (divergence), reported as NonFiniteState
   double max_distance = 1e6;      ///< (m) > 0: a particle coordinate beyond it (from the world
