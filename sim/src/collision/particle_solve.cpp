@@ -29,6 +29,9 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
   // particle, so they may go in any order and on any thread, and which thread solves a band
   // changes nothing in the result.
   const int parts = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+  // A phase's bands: first, first + step, ... (the even, the odd, then all of them).
+  const auto first_of = [](int phase) { return phase == 1 ? std::size_t(1) : std::size_t(0); };
+  const auto step_of = [](int phase) { return phase == 2 ? std::size_t(1) : std::size_t(2); };
   const auto solve_band = [&](int phase, std::size_t b) {
     const Band& band = bands_[b];
     if (phase < 2) {
@@ -40,7 +43,7 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
   if (parts == 1) {
     for (int it = 0; it < sweeps; ++it)
       for (int phase = 0; phase < 3; ++phase)
-        for (std::size_t b = phase == 1 ? 1 : 0; b < nb; b += phase == 2 ? 1 : 2) solve_band(phase, b);
+        for (std::size_t b = first_of(phase); b < nb; b += step_of(phase)) solve_band(phase, b);
     return;
   }
   // For a large system one parallel region holds all the sweeps (a barrier after each phase).
@@ -60,7 +63,7 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
   const std::size_t p = std::size_t(parts);
   run_.resize(std::size_t(3 * sweeps) * p);
   for (int phase = 0; phase < 3; ++phase) {
-    const std::size_t first = phase == 2 ? 0 : std::size_t(phase), step = phase == 2 ? 1 : 2;
+    const std::size_t first = first_of(phase), step = step_of(phase);
     const std::size_t count = nb > first ? (nb - first + step - 1) / step : 0;
     std::size_t total = 0;
     for (std::size_t k = 0; k < count; ++k) total += size(phase, first + step * k);
@@ -85,7 +88,7 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
     const std::size_t t = std::size_t(omp_get_thread_num());
     for (int it = 0; it < sweeps; ++it) {
       for (int phase = 0; phase < 3; ++phase) {
-        const std::size_t first = phase == 2 ? 0 : std::size_t(phase), step = phase == 2 ? 1 : 2;
+        const std::size_t first = first_of(phase), step = step_of(phase);
         drain_runs(&run_[std::size_t(3 * it + phase) * p], p, t,
                    [&](std::size_t k) { solve_band(phase, first + step * k); });
 #pragma omp barrier
