@@ -3,6 +3,7 @@
 // registration (Coutinho §2.2: bounding-volume hierarchies; §2.1: queries move into the body's
 // frame instead of moving the body). Private.
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -70,6 +71,47 @@ class Bvh {
       } else {
         stack[top++] = n.right;
         stack[top++] = n.first;  // left child: visited first
+      }
+    }
+  }
+  /// Calls f(triangle index) for every triangle whose leaf box, grown by `pad` on every side,
+  /// the segment {p + t dir : 0 <= t <= len} meets (slab test, Kay & Kajiya 1986; a superset of
+  /// the triangles the segment crosses, as long as `pad` covers the rounding of the caller's
+  /// exact test). Unlike query() over the segment's box, a long oblique segment visits only the
+  /// leaves along it, not every leaf in the box it spans. `dir` need not be unit; a zero
+  /// component tests that axis as a point. Fixed visiting order (depth first, left first).
+  template <class F>
+  void ray_query(const Vec3& p, const Vec3& dir, double len, double pad, F&& f) const {
+    if (nodes_.empty()) return;
+    Vec3 inv;
+    for (int k = 0; k < 3; ++k) inv[k] = dir[k] != 0.0 ? 1.0 / dir[k] : 0.0;
+    const auto crosses = [&](const Aabb& b) {
+      double t0 = 0.0, t1 = len;
+      for (int k = 0; k < 3; ++k) {
+        const double lo = b.lo[k] - pad, hi = b.hi[k] + pad;
+        if (dir[k] == 0.0) {
+          if (p[k] < lo || p[k] > hi) return false;
+          continue;
+        }
+        double a = (lo - p[k]) * inv[k], c = (hi - p[k]) * inv[k];
+        if (a > c) std::swap(a, c);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, c);
+        if (t0 > t1) return false;
+      }
+      return true;
+    };
+    std::uint32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if (!crosses(n.box)) continue;
+      if (n.count > 0) {
+        for (std::uint32_t k = 0; k < n.count; ++k) f(order_[n.first + k]);
+      } else {
+        stack[top++] = n.right;
+        stack[top++] = n.first;
       }
     }
   }

@@ -26,9 +26,11 @@ bool MeshShape::contains(const Vec3& p) const {
   // meshes, where a crossing may count twice or not at all.
   const Vec3 dir = Vec3(0.2138, 0.1402, 0.9668).normalized();
   const double len = 2.0 * ((p - local_center).norm() + local_half.norm());
-  const Vec3 q = p + len * dir;
+  // Only the leaves along the ray: the box the ray spans holds most of a bowl's triangles.
+  // The pad (far above the rounding of ray_crosses' barycentric test) keeps every triangle it
+  // counts among those visited, so the parity is the one a test of every triangle gives.
   int crossings = 0;
-  bvh.query(p.cwiseMin(q), p.cwiseMax(q), [&](std::uint32_t t) {
+  bvh.ray_query(p, dir, len, 1e-9 * len, [&](std::uint32_t t) {
     crossings += ray_crosses(triangles[t], p, dir, len) ? 1 : 0;
   });
   return (crossings & 1) != 0;
