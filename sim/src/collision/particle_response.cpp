@@ -551,6 +551,24 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
                        });
   std::uint64_t removed = 0;
   std::size_t reused = 0;
+  if (shared && ctx.threads > 1 && end - begin >= kParallelMin) {
+    // The responses share state, so they run in index order on one thread, but the rejection
+    // test before them reads only its own particle, which no earlier response writes: a large
+    // system (the rain demo's splashing drops) tests on every thread first. The same results.
+    thread_local std::vector<std::uint8_t> near_flags;
+    near_flags.resize(end - begin);
+    std::uint8_t* flags = near_flags.data();  // this thread's vector, not each worker's own
+    const std::ptrdiff_t m = std::ptrdiff_t(end - begin);
+#pragma omp parallel for schedule(static) num_threads(ctx.threads)
+    for (std::ptrdiff_t k = 0; k < m; ++k) flags[k] = is_near(begin + std::size_t(k)) ? 1 : 0;
+    CollisionContext local = ctx;
+    local.removed_inside = 0;
+    for (std::size_t i = begin; i < end; ++i)
+      if (near_flags[i - begin] != 0 && !reuse(i, reused)) resolve_kept(i, local);
+    ctx.removed_inside += local.removed_inside;
+    if (memo != nullptr) memo->reused = reused;
+    return;
+  }
   const ZOrder zorder = ordered ? ZOrder(colliders) : ZOrder();
 #pragma omp parallel num_threads(ctx.threads) if (par) reduction(+ : removed, reused)
   {
