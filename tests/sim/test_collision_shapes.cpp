@@ -88,18 +88,24 @@ ParticleSystemDef probes(bool gravity = true) {
 // ---------------------------------------------------------------------------------------------
 // AABB tree and narrow phase
 
-TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
-  Rng rng(7, 1);
+/// `count` triangles with corners within `size` (m) of centres uniform in [-1, 1]^3.
+std::vector<detail::Triangle> random_triangles(Rng& rng, int count, double size) {
   std::vector<detail::Triangle> tris;
-  for (int t = 0; t < 400; ++t) {
+  const auto corner = [&](const Vec3& c) {
+    return Vec3(c + Vec3(rng.uniform(-size, size), rng.uniform(-size, size), rng.uniform(-size, size)));
+  };
+  for (int t = 0; t < count; ++t) {
     const Vec3 c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
-    detail::Triangle x{c + Vec3(rng.uniform(-.1, .1), rng.uniform(-.1, .1), rng.uniform(-.1, .1)),
-                       c + Vec3(rng.uniform(-.1, .1), rng.uniform(-.1, .1), rng.uniform(-.1, .1)),
-                       c + Vec3(rng.uniform(-.1, .1), rng.uniform(-.1, .1), rng.uniform(-.1, .1)),
-                       Vec3::Zero()};
+    detail::Triangle x{corner(c), corner(c), corner(c), Vec3::Zero()};  // braces: in order
     x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
     tris.push_back(x);
   }
+  return tris;
+}
+
+TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
+  Rng rng(7, 1);
+  const std::vector<detail::Triangle> tris = random_triangles(rng, 400, 0.1);
   const detail::Bvh bvh(tris);
   EXPECT_LE(bvh.depth(), 10);  // median split: ceil(log2(400 / 4)) + 1 = 8
   int hits = 0;
@@ -129,16 +135,7 @@ TEST(SimCollisionMesh, BvhQueryEqualsBruteForceOnRandomSegments) {
 // visit far fewer than the segment's box does.
 TEST(SimCollisionMesh, BvhRayQueryMeetsEveryCrossedTriangleAndFewOthers) {
   Rng rng(11, 1);
-  std::vector<detail::Triangle> tris;
-  for (int t = 0; t < 2000; ++t) {
-    const Vec3 c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
-    detail::Triangle x{c + Vec3(rng.uniform(-.08, .08), rng.uniform(-.08, .08), rng.uniform(-.08, .08)),
-                       c + Vec3(rng.uniform(-.08, .08), rng.uniform(-.08, .08), rng.uniform(-.08, .08)),
-                       c + Vec3(rng.uniform(-.08, .08), rng.uniform(-.08, .08), rng.uniform(-.08, .08)),
-                       Vec3::Zero()};
-    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
-    tris.push_back(x);
-  }
+  const std::vector<detail::Triangle> tris = random_triangles(rng, 2000, 0.08);
   const detail::Bvh bvh(tris);
   std::size_t crossed = 0, by_ray = 0, by_box = 0;
   for (int q = 0; q < 3000; ++q) {

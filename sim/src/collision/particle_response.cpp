@@ -555,6 +555,7 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     // The responses share state, so they run in index order on one thread, but the rejection
     // test before them reads only its own particle, which no earlier response writes: a large
     // system (the rain demo's splashing drops) tests on every thread first. The same results.
+    // (No memo here: it is kept only where particles share nothing.)
     thread_local std::vector<std::uint8_t> near_flags;
     near_flags.resize(end - begin);
     std::uint8_t* flags = near_flags.data();  // this thread's vector, not each worker's own
@@ -564,9 +565,8 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     CollisionContext local = ctx;
     local.removed_inside = 0;
     for (std::size_t i = begin; i < end; ++i)
-      if (near_flags[i - begin] != 0 && !reuse(i, reused)) resolve_kept(i, local);
+      if (near_flags[i - begin] != 0) resolve_kept(i, local);
     ctx.removed_inside += local.removed_inside;
-    if (memo != nullptr) memo->reused = reused;
     return;
   }
   const ZOrder zorder = ordered ? ZOrder(colliders) : ZOrder();
