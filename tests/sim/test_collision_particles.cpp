@@ -238,6 +238,62 @@ TEST(SimParticleCollision, SortedGridFindsExactlyTheBruteForcePairs) {
   }
 }
 
+TEST(SimParticleCollision, SortedGridKeepsPairsAtTheEdgeOfReachInEveryDirection) {
+  // The pair search skips candidates farther than the largest reach from the box around a cell's
+  // particles along some axis. Pairs of the largest spheres set 1e-12 of their reach inside it,
+  // and one ulp inside and outside it, along the 26 directions of a cube around a random point
+  // (so across cell faces, edges and corners), among smaller filler particles: each pair 1e-12
+  // inside must be found, and the pairs found must be those of the same squared-distance test
+  // the search uses (rounding of the positions decides the ones an ulp from the edge).
+  for (double h : {0.0, 1.0 / 240}) {
+    detail::ParticleCollider pc;
+    const double r_max = 0.012, margin = h > 0.0 ? pc.pair_margin_fraction : 0.0;
+    const double reach = r_max + r_max + margin * r_max;
+    Rng rng(23, 0);
+    auto add = [&](const Vec3& p, double r) {
+      pc.x.push_back(p);
+      pc.v.emplace_back(Vec3::Zero());
+      pc.inv_mass.push_back(1.0);
+      pc.radius.push_back(r);
+      pc.restitution.push_back(0.5);
+      pc.friction.push_back(0.1);
+    };
+    for (int i = 0; i < 1500; ++i)
+      add(Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(0.0, 0.3)), 0.004);
+    std::size_t edge_pairs = 0;
+    for (int k = 0; k < 300; ++k) {
+      const int d = 1 + k % 26;  // one of the 26 directions (dx, dy, dz) in {-1, 0, 1}^3 \ 0
+      const int c = d < 14 ? d - 1 : d;
+      Vec3 dir(double(c / 9 - 1), double(c / 3 % 3 - 1), double(c % 3 - 1));
+      dir.normalize();
+      const Vec3 a(rng.uniform(-0.25, 0.25), rng.uniform(-0.25, 0.25), rng.uniform(0.05, 0.25));
+      const double dist = k % 3 == 0   ? reach * (1.0 - 1e-12)
+                          : k % 3 == 1 ? std::nextafter(reach, 0.0)
+                                       : std::nextafter(reach, 1.0);
+      add(a, r_max);
+      add(a + dist * dir, r_max);
+      edge_pairs += k % 3 == 0;
+    }
+    pc.find_contacts(0.05, h);
+    ASSERT_EQ(pc.levels, 1);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> found, brute;
+    for (const auto& c : pc.contacts) found.emplace_back(std::min(c.i, c.j), std::max(c.i, c.j));
+    std::sort(found.begin(), found.end());
+    for (std::uint32_t i = 0; i < pc.x.size(); ++i)
+      for (std::uint32_t j = i + 1; j < pc.x.size(); ++j) {
+        const double dx = pc.x[j][0] - pc.x[i][0], dy = pc.x[j][1] - pc.x[i][1], dz = pc.x[j][2] - pc.x[i][2];
+        const double e = dx * dx + dy * dy + dz * dz;
+        const double ri = pc.radius[i], rj = pc.radius[j];
+        const double rc = ri + rj + margin * (rj < ri ? rj : ri);
+        if (e < rc * rc && e > 0.0) brute.emplace_back(i, j);
+      }
+    std::size_t edge_found = 0;
+    for (const auto& [i, j] : found) edge_found += i >= 1500 && j == i + 1 && (i - 1500) % 6 == 0;
+    EXPECT_EQ(edge_found, edge_pairs);
+    EXPECT_EQ(found, brute) << "h " << h;
+  }
+}
+
 TEST(SimParticleCollision, LargeCollidingSystemIsBitIdenticalAtAnyThreadCount) {
   // Above the parallel threshold the solve sweeps slabs of grid cells two at a time (even, then
   // odd), on as many threads as given: the state must not depend on the count.

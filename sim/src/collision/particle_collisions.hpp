@@ -174,6 +174,7 @@ class ParticleCollider {
   // the solve and the projection read memory in order.
   /// Picks cell_size and levels for the current radii (h > 0: with the speculative margin).
   void choose_cells(double h);
+  double max_radius_ = 0.0;  ///< (m) the largest radius at the last choose_cells()
   /// Sorts the particles into cells of cell_size (order_, cell_key_/cell_first_, sx_..sr_);
   /// false when the particles span more than 2^21 cells on an axis (the hashed grid then).
   bool build_grid();
@@ -190,7 +191,7 @@ class ParticleCollider {
   /// squared distances within reach (0: out of reach) and the ones kept; the same of its awake
   /// candidates (index into cand_s).
   struct PairSearch {
-    std::vector<std::uint32_t> cand_s, cand_keep;
+    std::vector<std::uint32_t> cand_s;
     std::vector<double> cand_x, cand_y, cand_z, cand_r, cand_d2;
     std::vector<std::uint32_t> awake_s;
     std::vector<double> awake_x, awake_y, awake_z, awake_r, awake_d2;

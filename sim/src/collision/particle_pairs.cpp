@@ -19,6 +19,10 @@
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
+#if SIMREEL_HAS_VECTOR_CLONES
+#include <immintrin.h>
+#endif
+
 namespace simreel::sim::detail {
 
 namespace {
@@ -48,6 +52,94 @@ void within_reach(double xi, double yi, double zi, double ri, double margin,
   }
 }
 
+/// A box (m) around a cell's particles: lo, hi per axis, and how far past it a pair still reaches.
+struct ReachBox {
+  double lx, ly, lz, hx, hy, hz, reach;
+};
+
+/// Appends the sorted positions s in [b, e) that are not farther than box.reach past the box
+/// along any axis (fl(c - hi) <= reach and fl(lo - c) <= reach on x, y and z) to the candidate
+/// arrays (cs: s; cx, cy, cz, cr: its position and radius) from place k, in order; returns the
+/// new count. Which form runs changes nothing but time. The AVX-512 form tests eight at a time
+/// and compresses in registers; it writes up to 8 entries past the result (the callers' slack).
+std::size_t gather_in_box_scalar(std::uint32_t b, std::uint32_t e, const double* __restrict px,
+                                 const double* __restrict py, const double* __restrict pz,
+                                 const double* __restrict pr, const ReachBox& box,
+                                 std::uint32_t* __restrict cs, double* __restrict cx,
+                                 double* __restrict cy, double* __restrict cz,
+                                 double* __restrict cr, std::size_t k) {
+  // Branch-free: every position is written at the end of the list, which grows only when kept.
+  for (std::uint32_t s = b; s < e; ++s) {
+    const double x = px[s], y = py[s], z = pz[s];
+    cs[k] = s;
+    cx[k] = x;
+    cy[k] = y;
+    cz[k] = z;
+    cr[k] = pr[s];
+    k += std::size_t((x - box.hx <= box.reach) & (box.lx - x <= box.reach) & (y - box.hy <= box.reach) &
+                     (box.ly - y <= box.reach) & (z - box.hz <= box.reach) & (box.lz - z <= box.reach));
+  }
+  return k;
+}
+
+#if SIMREEL_HAS_VECTOR_CLONES
+__attribute__((target("avx512f,avx512vl")))
+std::size_t gather_in_box_avx512(std::uint32_t b, std::uint32_t e, const double* __restrict px,
+                                 const double* __restrict py, const double* __restrict pz,
+                                 const double* __restrict pr, const ReachBox& box,
+                                 std::uint32_t* __restrict cs, double* __restrict cx,
+                                 double* __restrict cy, double* __restrict cz,
+                                 double* __restrict cr, std::size_t k) {
+  const __m512d hx = _mm512_set1_pd(box.hx), hy = _mm512_set1_pd(box.hy), hz = _mm512_set1_pd(box.hz);
+  const __m512d lx = _mm512_set1_pd(box.lx), ly = _mm512_set1_pd(box.ly), lz = _mm512_set1_pd(box.lz);
+  const __m512d reach = _mm512_set1_pd(box.reach);
+  const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  for (std::uint32_t s = b; s < e; s += 8) {
+    // Masked loads: nothing read past e.
+    const __mmask8 live = e - s >= 8 ? __mmask8(0xff) : __mmask8((1u << (e - s)) - 1u);
+    const __m512d x = _mm512_maskz_loadu_pd(live, px + s), y = _mm512_maskz_loadu_pd(live, py + s);
+    const __m512d z = _mm512_maskz_loadu_pd(live, pz + s), r = _mm512_maskz_loadu_pd(live, pr + s);
+    __mmask8 keep = live;
+    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(x, hx), reach, _CMP_LE_OQ);
+    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lx, x), reach, _CMP_LE_OQ);
+    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(y, hy), reach, _CMP_LE_OQ);
+    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(ly, y), reach, _CMP_LE_OQ);
+    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(z, hz), reach, _CMP_LE_OQ);
+    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lz, z), reach, _CMP_LE_OQ);
+    if (keep == 0) continue;
+    // Compress in registers, then a full store (a compressing store to memory is microcoded
+    // and slow on some cores).
+    _mm512_storeu_pd(cx + k, _mm512_maskz_compress_pd(keep, x));
+    _mm512_storeu_pd(cy + k, _mm512_maskz_compress_pd(keep, y));
+    _mm512_storeu_pd(cz + k, _mm512_maskz_compress_pd(keep, z));
+    _mm512_storeu_pd(cr + k, _mm512_maskz_compress_pd(keep, r));
+    const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(s)), step);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(cs + k), _mm256_maskz_compress_epi32(keep, idx));
+    k += std::size_t(std::popcount(unsigned(keep)));
+  }
+  return k;
+}
+#endif
+
+using GatherInBox = std::size_t (*)(std::uint32_t, std::uint32_t, const double*, const double*,
+                                    const double*, const double*, const ReachBox&, std::uint32_t*,
+                                    double*, double*, double*, double*, std::size_t);
+
+/// The gather_in_box form this CPU runs (checked once, on first use).
+GatherInBox gather_in_box() {
+#if SIMREEL_HAS_VECTOR_CLONES
+  static const GatherInBox f = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")
+               ? &gather_in_box_avx512
+               : &gather_in_box_scalar;
+  }();
+  return f;
+#else
+  return &gather_in_box_scalar;
+#endif
+}
+
 }  // namespace
 
 void ParticleCollider::choose_cells(double h) {
@@ -58,6 +150,7 @@ void ParticleCollider::choose_cells(double h) {
     max_r = std::max(max_r, radius[i]);
     min_r = std::min(min_r, radius[i]);
   }
+  max_radius_ = max_r;
   const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
   const double reach_d = 2.0 + 2.0 * margin;  // a sphere's reach, times its radius
   // Uniform grid (§2.3.1) unless sizes differ by about an order of magnitude or more; then the
@@ -293,6 +386,13 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
   const std::uint64_t* key_of = occupied_.data();
   const std::uint32_t* first = cell_first_.data();
   const double *px = sx_.data(), *py = sy_.data(), *pz = sz_.data(), *pr = sr_.data();
+  // No pair reaches further than two of the largest spheres: reach_box is within_reach()'s reach
+  // on the largest radius by the same rounded operations, so no pair's reach exceeds it. A
+  // candidate farther than it along an axis from every particle of a cell (fl(c - x_i) >
+  // reach_box, so fl(c - x_i)² >= reach², and the squared distance is no smaller) is out of
+  // reach of each of them.
+  const double reach_box = (max_radius_ + max_radius_) + margin * max_radius_;
+  const GatherInBox gather = gather_in_box();
   // Half stencil: the cell itself (later particles) and the cell above it (z + 1), then the
   // columns (dx, dy) = (0, 1), (1, -1), (1, 0), (1, 1), three cells each (z - 1 .. z + 1), all
   // later in key order. Cells are visited in key order, so each column's first occupied cell
@@ -324,20 +424,28 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
     // the pairs within reach, then try_pair() in order.
     std::size_t m = 0;
     for (int col = 0; col < 5; ++col) m += run_e[col] - run_b[col];
-    if (ps.cand_s.size() < m) {
-      ps.cand_s.resize(m);
-      ps.cand_keep.resize(m);
-      for (auto* a : {&ps.cand_x, &ps.cand_y, &ps.cand_z, &ps.cand_r, &ps.cand_d2}) a->resize(m);
+    if (ps.cand_s.size() < m + 8) {  // + 8: gather_in_box()'s slack
+      ps.cand_s.resize(m + 8);
+      for (auto* a : {&ps.cand_x, &ps.cand_y, &ps.cand_z, &ps.cand_r, &ps.cand_d2}) a->resize(m + 8);
+    }
+    // Only the candidates within reach_box of the box around the cell's particles: one farther
+    // along an axis is out of reach of all of them (within_reach() would give 0 for each, see
+    // reach_box), so the pairs and their order are those of the whole runs. The cell's own
+    // particles lie in the box and keep their places at the front.
+    ReachBox box{px[first[c]], py[first[c]], pz[first[c]], px[first[c]], py[first[c]], pz[first[c]], reach_box};
+    for (std::uint32_t si = first[c] + 1; si < first[c + 1]; ++si) {
+      box.lx = std::min(box.lx, px[si]);
+      box.hx = std::max(box.hx, px[si]);
+      box.ly = std::min(box.ly, py[si]);
+      box.hy = std::max(box.hy, py[si]);
+      box.lz = std::min(box.lz, pz[si]);
+      box.hz = std::max(box.hz, pz[si]);
     }
     std::size_t k = 0;
     for (int col = 0; col < 5; ++col)
-      for (std::uint32_t sj = run_b[col]; sj < run_e[col]; ++sj, ++k) {
-        ps.cand_s[k] = sj;
-        ps.cand_x[k] = px[sj];
-        ps.cand_y[k] = py[sj];
-        ps.cand_z[k] = pz[sj];
-        ps.cand_r[k] = pr[sj];
-      }
+      k = gather(run_b[col], run_e[col], px, py, pz, pr, box, ps.cand_s.data(), ps.cand_x.data(),
+                 ps.cand_y.data(), ps.cand_z.data(), ps.cand_r.data(), k);
+    m = k;
     // With particles asleep, a sleeping one meets only the awake candidates (try_pair() would
     // drop a pair of sleepers): the same contacts in the same order, and a settled pile's cells
     // cost a scan of their flags.
