@@ -187,9 +187,9 @@ class ParticleCollider {
   /// and approaching faster than contact_speed (see find_contacts()).
   void try_pair(std::uint32_t i, std::uint32_t j, double d2, double contact_speed, double h,
                 std::vector<Contact>& out);
-  /// One pair search's scratch: a cell's candidates (sorted position, x, y, z, radius), their
-  /// squared distances within reach (0: out of reach) and the ones kept; the same of its awake
-  /// candidates (index into cand_s).
+  /// One pair search's scratch: a cell's candidates (sorted position, x, y, z, radius; 8 spare
+  /// entries for gather_in_box()) and their squared distances within reach (0: out of reach);
+  /// the same of its awake candidates (index into cand_s).
   struct PairSearch {
     std::vector<std::uint32_t> cand_s;
     std::vector<double> cand_x, cand_y, cand_z, cand_r, cand_d2;

@@ -128,12 +128,7 @@ using GatherInBox = std::size_t (*)(std::uint32_t, std::uint32_t, const double*,
 /// The gather_in_box form this CPU runs (checked once, on first use).
 GatherInBox gather_in_box() {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const GatherInBox f = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")
-               ? &gather_in_box_avx512
-               : &gather_in_box_scalar;
-  }();
+  static const GatherInBox f = cpu_has_avx512vl() ? &gather_in_box_avx512 : &gather_in_box_scalar;
   return f;
 #else
   return &gather_in_box_scalar;

@@ -178,12 +178,7 @@ using AppendWithin = std::size_t (*)(std::uint32_t, const std::uint32_t*, const 
 /// The append_within form this CPU runs (checked once, on first use).
 AppendWithin append_within() {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const AppendWithin f = [] {
-    __builtin_cpu_init();  // (may run before the constructors that would do it)
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")
-               ? &append_within_avx512
-               : &append_within_scalar;
-  }();
+  static const AppendWithin f = cpu_has_avx512vl() ? &append_within_avx512 : &append_within_scalar;
   return f;
 #else
   return &append_within_scalar;
