@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "collision/bvh.hpp"
@@ -351,6 +352,54 @@ TEST(SimCollisionMesh, CulledTriangleSweepEqualsEveryFeatureTested) {
   }
   EXPECT_GT(hits, 8000);         // hits of every kind are compared, not only misses
   EXPECT_GT(culled_cases, 2000);  // and misses at the edge of an edge's reach
+}
+
+TEST(SimCollisionMesh, MeshGridPrefetchNamesOnlyCellsOfTheGrid) {
+  // collide() walks the particles near a mesh ahead of their sweeps and asks the grid for the
+  // memory each will read (MeshGrid::cell_of, then prefetch() stage by stage). A hint, so no
+  // result can show it; what can go wrong is an index past the grid. Points inside, on every
+  // face and corner of the bounds, just outside, far away and not finite: a cell of the grid
+  // exactly when inside the bounds, and each stage reads only the grid's own arrays (the
+  // sanitizer build runs this).
+  std::vector<detail::Triangle> tris;
+  Rng rng(5, 1);
+  for (int t = 0; t < 400; ++t) {
+    const Vec3 c(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-0.3, 0.3));
+    detail::Triangle x{c, c + Vec3(0.2, 0, 0.05), c + Vec3(0, 0.2, -0.05), Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  const detail::Bvh bvh(tris);
+  const detail::MeshGrid grid(tris, bvh.visit_order());
+  ASSERT_GT(grid.cell_count(), 8u);
+  Vec3 lo = tris[0].a, hi = tris[0].a;
+  for (const auto& t : tris)
+    for (const Vec3* v : {&t.a, &t.b, &t.c}) {
+      lo = lo.cwiseMin(*v);
+      hi = hi.cwiseMax(*v);
+    }
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  int inside = 0;
+  for (int q = 0; q < 3000; ++q) {
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) {
+      const double u = rng.uniform();
+      p[k] = u < 0.3 ? lo[k] : u < 0.6 ? hi[k] : u < 0.65 ? std::nextafter(hi[k], inf)
+           : u < 0.7 ? std::nextafter(lo[k], -inf) : rng.uniform(lo[k] - 1, hi[k] + 1);
+    }
+    if (q % 50 == 0) p[q / 50 % 3] = q % 100 == 0 ? nan : -inf;
+    const bool in = (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+    const std::int64_t cell = grid.cell_of(p);
+    if (in) {
+      ++inside;
+      ASSERT_GE(cell, 0) << q;
+      ASSERT_LT(std::size_t(cell), grid.cell_count()) << q;
+    } else {
+      ASSERT_EQ(cell, -1) << q;
+    }
+    for (int stage = 0; stage < 3; ++stage) grid.prefetch(cell, stage, p);
+  }
+  EXPECT_GT(inside, 500);
 }
 
 TEST(SimCollisionMesh, MeshGridGivesTheTreesTrianglesInTheTreesOrder) {

@@ -75,10 +75,10 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
         order.emplace_back(code, std::uint32_t(c));
       }
   std::sort(order.begin(), order.end());
-  cell_.assign(cells, Range{0, 0});
+  cell_.assign(cells, Cell{0, 0});
   std::uint32_t next = 0;
   for (const auto& [code, c] : order) {
-    cell_[c] = Range{next, next};
+    cell_[c].begin = cell_[c].end = next;
     next += (count[c] + kLanes - 1) / kLanes;
   }
   Block empty;
