@@ -15,6 +15,7 @@
 #include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
+#include "core/prefetch.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
@@ -622,36 +623,50 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       const std::size_t nk = keys.size();
       // The mesh grids' cells, blocks and triangles those particles will read are asked for
       // further ahead, one link of their chain per distance (MeshGrid::prefetch): each link's
-      // address comes from the one fetched before.
-      constexpr std::size_t kCellAhead = 24, kBlockAhead = 16, kTriAhead = 8, kRing = 32;
+      // address comes from the one fetched before, the first from the particle's position,
+      // itself asked for further ahead still.
+      constexpr std::size_t kPosAhead = 40, kCellAhead = 24, kBlockAhead = 16, kTriAhead = 8, kRing = 32;
       constexpr int kMeshes = 4;
       const Collider* meshes[kMeshes];
       int nmesh = 0;
       for (const Collider& c : colliders)
         if (c.shape == Collider::Shape::mesh && nmesh < kMeshes) meshes[nmesh++] = &c;
-      std::int64_t ring[kMeshes][kRing];
-      const auto local_at = [&](const Collider& c, std::size_t q) {
+      struct Ahead {
+        Vec3 p;             // the particle's position, the mesh's frame
+        std::int64_t cell;  // MeshGrid::cell_of(p)
+      };
+      Ahead ring[kMeshes][kRing];
+      const auto locate = [&](std::size_t q) {
         const std::size_t j = std::size_t(keys[q] & 0xffffffffu);
         const Vec3 p(x[3 * j], x[3 * j + 1], x[3 * j + 2]);
-        return c.unposed ? p : Vec3(c.R.transpose() * (p - c.center));
-      };
-      const auto ask = [&](std::size_t q, std::size_t ahead, int stage) {
-        if (q + ahead >= nk) return;
         for (int m = 0; m < nmesh; ++m) {
-          const MeshGrid& g = meshes[m]->mesh->grid;
-          const Vec3 p = local_at(*meshes[m], q + ahead);
-          std::int64_t& cell = ring[m][(q + ahead) % kRing];
-          if (stage == 0) cell = g.cell_of(p);
-          g.prefetch(cell, stage, p);
+          const Collider& c = *meshes[m];
+          Ahead& a = ring[m][q % kRing];
+          a.p = c.unposed ? p : Vec3(c.R.transpose() * (p - c.center));
+          a.cell = c.mesh->grid.cell_of(a.p);
         }
       };
-      for (std::size_t q = 0; q < std::min(nk, kCellAhead); ++q)
-        for (int m = 0; m < nmesh; ++m)
-          ring[m][q % kRing] = meshes[m]->mesh->grid.cell_of(local_at(*meshes[m], q));
+      const auto ask = [&](std::size_t q, int stage) {
+        for (int m = 0; m < nmesh; ++m) {
+          const Ahead& a = ring[m][q % kRing];
+          meshes[m]->mesh->grid.prefetch(a.cell, stage, a.p);
+        }
+      };
+      if (nmesh > 0) {
+        for (std::size_t q = 0; q < std::min(nk, kPosAhead); ++q)
+          prefetch_line(x + 3 * (keys[q] & 0xffffffffu));
+        for (std::size_t q = 0; q < std::min(nk, kCellAhead); ++q) locate(q);
+      }
       for (std::size_t q = 0; q < nk; ++q) {
-        ask(q, kCellAhead, 0);
-        ask(q, kBlockAhead, 1);
-        ask(q, kTriAhead, 2);
+        if (nmesh > 0) {
+          if (q + kPosAhead < nk) prefetch_line(x + 3 * (keys[q + kPosAhead] & 0xffffffffu));
+          if (q + kCellAhead < nk) {
+            locate(q + kCellAhead);
+            ask(q + kCellAhead, 0);
+          }
+          if (q + kBlockAhead < nk) ask(q + kBlockAhead, 1);
+          if (q + kTriAhead < nk) ask(q + kTriAhead, 2);
+        }
         if (q + kAhead < nk) {
           const std::size_t j = std::size_t(keys[q + kAhead] & 0xffffffffu);
           __builtin_prefetch(x + 3 * j, 1);
