@@ -101,6 +101,47 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
       }
       b.rank[l] = std::uint32_t(r);
     });
+  // The columns' z extents: each triangle's box, rounded outward to floats and one ulp further
+  // (what the blocks' float tests see), over the columns its box spans; then to levels, one
+  // more level outward (the rounding of the level arithmetic is far below a level).
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const std::size_t columns = std::size_t(dim_[0] * dim_[1]);
+  std::vector<float> zcol(2 * columns);
+  for (std::size_t col = 0; col < columns; ++col) {
+    zcol[2 * col] = kInf;
+    zcol[2 * col + 1] = -kInf;
+  }
+  for (std::size_t r = 0; r < n; ++r) {
+    float zlo = float(box[6 * r + 2]), zhi = float(box[6 * r + 5]);
+    if (double(zlo) > box[6 * r + 2]) zlo = std::nextafter(zlo, -kInf);
+    if (double(zhi) < box[6 * r + 5]) zhi = std::nextafter(zhi, kInf);
+    zlo = std::nextafter(zlo, -kInf);
+    zhi = std::nextafter(zhi, kInf);
+    std::int64_t c0[2], c1[2];
+    for (int k = 0; k < 2; ++k) cell_range(r, k, c0[k], c1[k]);
+    for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
+      for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
+        const std::size_t col = std::size_t(y * dim_[0] + x);
+        zcol[2 * col] = std::min(zcol[2 * col], zlo);
+        zcol[2 * col + 1] = std::max(zcol[2 * col + 1], zhi);
+      }
+  }
+  const double z0 = lo_[2], step = std::max(hi_[2] - lo_[2], 1e-9) / 254.0;
+  level_[0] = -std::numeric_limits<double>::infinity();
+  level_[255] = std::numeric_limits<double>::infinity();
+  for (int q = 1; q < 255; ++q) level_[q] = z0 + q * step;
+  column_.assign(2 * columns, 0);
+  for (std::size_t col = 0; col < columns; ++col) {
+    if (!(zcol[2 * col] <= zcol[2 * col + 1])) {  // no triangle over it
+      column_[2 * col] = 255;
+      column_[2 * col + 1] = 0;
+      continue;
+    }
+    const double lo = std::floor((double(zcol[2 * col]) - z0) / step) - 1.0;
+    const double hi = std::ceil((double(zcol[2 * col + 1]) - z0) / step) + 1.0;
+    column_[2 * col] = std::uint8_t(std::clamp(lo, 0.0, 253.0));
+    column_[2 * col + 1] = std::uint8_t(std::clamp(hi, 1.0, 255.0));
+  }
   for (std::size_t c = 0; c < cells; ++c) cell_[c].end = cell_[c].begin + (count[c] + kLanes - 1) / kLanes;
   visit_ = visit;
   tris_.reserve(n);

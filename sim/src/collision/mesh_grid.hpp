@@ -80,6 +80,35 @@ class MeshGrid {
     }
   }
 
+  /// True when no triangle's box overlaps [lo, hi] (local frame, m), shown cheaply: the box lies
+  /// outside the mesh's bounds, or above or below the boxes of every triangle over the (at most
+  /// 2 x 2) columns of cells it spans in x and y. So query() would hand out nothing, not even a
+  /// triangle within float rounding (the columns' bounds are floats rounded outward by one more
+  /// ulp, then to a step of 1/254 of the bounds' height and one step further). False where it
+  /// cannot tell. Two bytes per column, so the table stays in cache while particles visit it in
+  /// no order: rain above a terrain is told from the columns alone, without reading its cells
+  /// (collide()'s rejection test, §2.3.1).
+  [[nodiscard]] bool clear_of(const Vec3& lo, const Vec3& hi) const {
+    if (cell_.empty()) return false;
+    for (int k = 0; k < 3; ++k)
+      if (lo[k] > hi_[k] || hi[k] < lo_[k]) return true;
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])) return false;  // NaN or empty
+    int c0[2], c1[2];
+    for (int k = 0; k < 2; ++k) {
+      c0[k] = int(std::min(std::max((lo[k] - lo_[k]) * inv_cell_, 0.0), last_[k]));
+      c1[k] = int(std::min(std::max((hi[k] - lo_[k]) * inv_cell_, 0.0), last_[k]));
+      if (c1[k] - c0[k] > 1) return false;
+    }
+    std::uint8_t qlo = 255, qhi = 0;
+    for (int y = c0[1]; y <= c1[1]; ++y)
+      for (int x = c0[0]; x <= c1[0]; ++x) {
+        const std::size_t col = std::size_t(y) * std::size_t(dim_[0]) + std::size_t(x);
+        qlo = std::min(qlo, column_[2 * col]);
+        qhi = std::max(qhi, column_[2 * col + 1]);
+      }
+    return lo[2] > level_[qhi] || hi[2] < level_[qlo];
+  }
+
   /// Calls f(triangle with its edge data, its index in the mesh) for every triangle whose own box overlaps [lo, hi]
   /// (local frame, m) — and
   /// perhaps a few more within float rounding of it, which a swept-sphere test rejects
@@ -210,6 +239,11 @@ class MeshGrid {
   std::int64_t dim_[3] = {0, 0, 0};             ///< cells per axis
   double last_[3] = {0.0, 0.0, 0.0};            ///< dim - 1, the last cell's index
   std::vector<Cell> cell_;                      ///< (cells) row order (x fastest)
+  /// (2 x columns) per (x, y) column of cells, row order: the z extent of the boxes of the
+  /// triangles over it as levels (below), rounded outward (empty: 255, 0). For clear_of().
+  std::vector<std::uint8_t> column_;
+  /// (m) level q's height: -inf for 0, lo_z + q (hi_z - lo_z) / 254 for 1..254, +inf for 255.
+  double level_[256] = {};
   std::vector<Block> blocks_;                   ///< the cells' runs, in Z-order of the cells
   std::vector<SweepTriangle> tris_;             ///< the triangles by rank
   std::vector<std::uint32_t> visit_;            ///< rank -> triangle index (the tree's order)

@@ -522,6 +522,13 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     std::memcpy(e + CollideMemo::kKey + 3, vf, 3 * sizeof(float));
     s.memo_epoch[i] = epoch;
   };
+  // An open mesh that does not move: a particle whose swept bounds (grown by its radius and
+  // surface_tol, as below) clear every triangle's box meets nothing there (sweep_mesh() would be
+  // handed no triangle, and an open mesh has no inside to remove it from), so the mesh's own
+  // columns (MeshGrid::clear_of) can reject it after its AABB: rain above a terrain.
+  const auto column_test = [](const Collider& c) {
+    return c.shape == Collider::Shape::mesh && c.unposed && !c.mesh->closed;
+  };
   // Fast rejection: end point clear of every plane, swept bounds clear of every solid; a
   // sleeping particle is put back where it sleeps by the caller.
   const float* rest = ctx.sleep && s.track_rest ? s.rest.data() : nullptr;
@@ -539,8 +546,12 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         const Vec3 p0 = start_of_step(s, i, p1, v1, dt, f);
         const Vec3 lo = p0.cwiseMin(p1) - c.aabb_center;
         const Vec3 hi = p0.cwiseMax(p1) - c.aabb_center;
-        const Vec3 ext = c.aabb_half + Vec3::Constant(r + surface_tol(p1));
+        const double grow = r + surface_tol(p1);
+        const Vec3 ext = c.aabb_half + Vec3::Constant(grow);
         near = (lo.array() <= ext.array()).all() && (hi.array() >= -ext.array()).all();
+        if (near && column_test(c))
+          near = !c.mesh->grid.clear_of(p0.cwiseMin(p1) - Vec3::Constant(grow),
+                                        p0.cwiseMax(p1) + Vec3::Constant(grow));
       }
       if (near) return true;
     }
@@ -598,9 +609,30 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
             if (c.shape == Collider::Shape::plane) {
               near_planes(x + 3 * i0, s.radius.data() + i0, len, &c, 1, near_c);
               for (std::size_t k = 0; k < len; ++k) near[k] |= near_c[k];
-            } else {
+            } else if (!column_test(c)) {
               near_solid_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0,
                                len, h, g, c.aabb_center.data(), c.aabb_half.data(), near);
+            } else {
+              std::fill(near_c, near_c + len, std::uint8_t{0});
+              near_solid_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0,
+                               len, h, g, c.aabb_center.data(), c.aabb_half.data(), near_c);
+              for (std::size_t k = 0; k < len; ++k) {
+                if (near_c[k] == 0 || near[k] != 0) continue;
+                // near_solid_plain()'s swept bounds, by the same operations.
+                const std::size_t i = i0 + k;
+                const double dt = std::min(double(s.age[i]), h), cdt = 0.5 * dt * dt;
+                Vec3 lo, hi;
+                double m = 0.0;
+                for (int a = 0; a < 3; ++a) {
+                  const double p1 = double(x[3 * i + a]);
+                  const double p0 = p1 - dt * double(vel[3 * i + a]) + cdt * g[a];
+                  lo[a] = p1 < p0 ? p1 : p0;
+                  hi[a] = p0 < p1 ? p1 : p0;
+                  m = std::max(m, std::abs(p1));
+                }
+                const Vec3 grow = Vec3::Constant(double(s.radius[i]) + (1e-7 + 5e-7 * m));
+                near[k] = c.mesh->grid.clear_of(lo - grow, hi + grow) ? 0 : 1;
+              }
             }
           }
         } else {
