@@ -529,33 +529,54 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
   const auto column_test = [](const Collider& c) {
     return c.shape == Collider::Shape::mesh && c.unposed && !c.mesh->closed;
   };
+  // Particle i's swept bounds from p0 to p1, grown by its radius and surface_tol(p1), against
+  // solid c's AABB.
+  const auto near_aabb = [&](const Collider& c, const Vec3& p0, const Vec3& p1, double grow) {
+    const Vec3 lo = p0.cwiseMin(p1) - c.aabb_center;
+    const Vec3 hi = p0.cwiseMax(p1) - c.aabb_center;
+    const Vec3 ext = c.aabb_half + Vec3::Constant(grow);
+    return (lo.array() <= ext.array()).all() && (hi.array() >= -ext.array()).all();
+  };
+  // True when every column-tested mesh whose AABB particle i's swept bounds overlap shows by its
+  // columns that they clear its triangles.
+  const auto columns_clear = [&](std::size_t i) {
+    const Vec3 p1(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+    const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
+    const Vec3 p0 = start_of_step(s, i, p1, v1, std::min(double(s.age[i]), h), f);
+    const double grow = s.radius[i] + surface_tol(p1);
+    for (const Collider& c : colliders)
+      if (column_test(c) && near_aabb(c, p0, p1, grow) &&
+          !c.mesh->grid.clear_of(p0.cwiseMin(p1) - Vec3::Constant(grow),
+                                 p0.cwiseMax(p1) + Vec3::Constant(grow)))
+        return false;
+    return true;
+  };
   // Fast rejection: end point clear of every plane, swept bounds clear of every solid; a
-  // sleeping particle is put back where it sleeps by the caller.
+  // sleeping particle is put back where it sleeps by the caller. 0: not near; 1: near; 2: near
+  // only the AABBs of column-tested meshes, left to columns_clear() (with `defer`; without, it
+  // is asked here and 2 is not returned). The Z-order pass defers: a particle lying on a
+  // terrain is answered by the memo, in index order, before the columns are read in no order.
   const float* rest = ctx.sleep && s.track_rest ? s.rest.data() : nullptr;
-  const auto is_near = [&](std::size_t i) __attribute__((always_inline)) {
-    if (rest != nullptr && rest[4 * i + 3] >= kSleepTime) return false;
+  const auto is_near = [&](std::size_t i, bool defer) __attribute__((always_inline)) {
+    if (rest != nullptr && rest[4 * i + 3] >= kSleepTime) return 0;
     const Vec3 p1(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
     const double r = s.radius[i];
+    int pending = 0;
     for (const Collider& c : colliders) {
-      bool near;
       if (c.shape == Collider::Shape::plane) {
-        near = c.normal.dot(p1 - c.point) - r < 0.0;
-      } else {
-        const double dt = std::min(double(s.age[i]), h);
-        const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
-        const Vec3 p0 = start_of_step(s, i, p1, v1, dt, f);
-        const Vec3 lo = p0.cwiseMin(p1) - c.aabb_center;
-        const Vec3 hi = p0.cwiseMax(p1) - c.aabb_center;
-        const double grow = r + surface_tol(p1);
-        const Vec3 ext = c.aabb_half + Vec3::Constant(grow);
-        near = (lo.array() <= ext.array()).all() && (hi.array() >= -ext.array()).all();
-        if (near && column_test(c))
-          near = !c.mesh->grid.clear_of(p0.cwiseMin(p1) - Vec3::Constant(grow),
-                                        p0.cwiseMax(p1) + Vec3::Constant(grow));
+        if (c.normal.dot(p1 - c.point) - r < 0.0) return 1;
+        continue;
       }
-      if (near) return true;
+      if (pending != 0 && column_test(c)) continue;
+      const double dt = std::min(double(s.age[i]), h);
+      const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
+      const Vec3 p0 = start_of_step(s, i, p1, v1, dt, f);
+      if (!near_aabb(c, p0, p1, r + surface_tol(p1))) continue;
+      if (!column_test(c)) return 1;
+      pending = 2;
     }
-    return false;
+    if (pending != 0 && !defer) return columns_clear(i) ? 0 : 1;
+    return pending;
   };
   const bool ordered = !shared && end - begin >= kSpatialOrderMin &&
                        std::any_of(colliders.begin(), colliders.end(), [](const Collider& c) {
@@ -573,7 +594,7 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     std::uint8_t* flags = near_flags.data();  // this thread's vector, not each worker's own
     const std::ptrdiff_t m = std::ptrdiff_t(end - begin);
 #pragma omp parallel for schedule(static) num_threads(ctx.threads)
-    for (std::ptrdiff_t k = 0; k < m; ++k) flags[k] = is_near(begin + std::size_t(k)) ? 1 : 0;
+    for (std::ptrdiff_t k = 0; k < m; ++k) flags[k] = is_near(begin + std::size_t(k), false) != 0 ? 1 : 0;
     CollisionContext local = ctx;
     local.removed_inside = 0;
     for (std::size_t i = begin; i < end; ++i)
@@ -598,52 +619,39 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       keys.clear();
       // The rejection test a chunk at a time, vectorised in start_of_step()'s plain case.
       constexpr std::size_t kChunk = 256;
-      std::uint8_t near[kChunk], near_c[kChunk];
+      std::uint8_t near[kChunk], near_c[kChunk], pend[kChunk];
       const bool plain = !s.track_prev && f.drag == 0.0f && f.drag_quadratic == 0.0f;
       const double g[3] = {f.gravity[0], f.gravity[1], f.gravity[2]};
       for (std::size_t i0 = b; i0 < e; i0 += kChunk) {
         const std::size_t len = std::min(kChunk, e - i0);
         if (plain) {
           std::fill(near, near + len, std::uint8_t{0});
+          std::fill(pend, pend + len, std::uint8_t{0});
           for (const Collider& c : colliders) {
             if (c.shape == Collider::Shape::plane) {
               near_planes(x + 3 * i0, s.radius.data() + i0, len, &c, 1, near_c);
               for (std::size_t k = 0; k < len; ++k) near[k] |= near_c[k];
-            } else if (!column_test(c)) {
-              near_solid_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0,
-                               len, h, g, c.aabb_center.data(), c.aabb_half.data(), near);
             } else {
-              std::fill(near_c, near_c + len, std::uint8_t{0});
               near_solid_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0,
-                               len, h, g, c.aabb_center.data(), c.aabb_half.data(), near_c);
-              for (std::size_t k = 0; k < len; ++k) {
-                if (near_c[k] == 0 || near[k] != 0) continue;
-                // near_solid_plain()'s swept bounds, by the same operations.
-                const std::size_t i = i0 + k;
-                const double dt = std::min(double(s.age[i]), h), cdt = 0.5 * dt * dt;
-                Vec3 lo, hi;
-                double m = 0.0;
-                for (int a = 0; a < 3; ++a) {
-                  const double p1 = double(x[3 * i + a]);
-                  const double p0 = p1 - dt * double(vel[3 * i + a]) + cdt * g[a];
-                  lo[a] = p1 < p0 ? p1 : p0;
-                  hi[a] = p0 < p1 ? p1 : p0;
-                  m = std::max(m, std::abs(p1));
-                }
-                const Vec3 grow = Vec3::Constant(double(s.radius[i]) + (1e-7 + 5e-7 * m));
-                near[k] = c.mesh->grid.clear_of(lo - grow, hi + grow) ? 0 : 1;
-              }
+                               len, h, g, c.aabb_center.data(), c.aabb_half.data(),
+                               column_test(c) ? pend : near);
             }
           }
         } else {
-          for (std::size_t k = 0; k < len; ++k) near[k] = is_near(i0 + k) ? 1 : 0;
+          for (std::size_t k = 0; k < len; ++k) {
+            const int v = is_near(i0 + k, true);
+            near[k] = v == 1 ? 1 : 0;
+            pend[k] = v == 2 ? 1 : 0;
+          }
         }
         // A reused response is written here, in index order (its particle's arrays read in
-        // sequence, not scattered as in Z-order), and leaves the sort; it changes no other.
+        // sequence, not scattered as in Z-order), and leaves the sort; it changes no other. A
+        // particle near only column-tested meshes' AABBs is asked of the memo first (one lying
+        // on a terrain is answered there), then of the columns.
         for (std::size_t k = 0; k < len; ++k) {
           const std::size_t i = i0 + k;
-          if (near[k] != 0 && !(rest != nullptr && rest[4 * i + 3] >= kSleepTime) &&
-              !reuse(i, reused))
+          if ((near[k] | pend[k]) != 0 && !(rest != nullptr && rest[4 * i + 3] >= kSleepTime) &&
+              !reuse(i, reused) && (near[k] != 0 || !columns_clear(i)))
             keys.push_back(zorder.code(x + 3 * i) << 32 | std::uint64_t(i));
         }
       }
@@ -713,7 +721,7 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     } else {
 #pragma omp for schedule(static)
       for (std::size_t i = begin; i < end; ++i)
-        if (is_near(i) && !reuse(i, reused)) resolve_kept(i, local);
+        if (is_near(i, false) != 0 && !reuse(i, reused)) resolve_kept(i, local);
     }
     removed += local.removed_inside;
   }
