@@ -2,6 +2,7 @@
 // Helpers shared by the sim tests: single-particle worlds, view accessors, one-shape bodies.
 
 #include <cstddef>
+#include <cstdint>
 
 #include "simreel/sim/world.hpp"
 
@@ -25,6 +26,23 @@ inline ForceFieldDef blast_field(const Vec3& centre, double Pi, double time) {
   f.impulse = Pi;
   f.time = time;
   return f;
+}
+
+/// An n x n height field over [-half, half]² (m): vertices z = height(x, y) on the grid, two
+/// triangles a square wound counter-clockwise from +z, appended to d (a MeshDef or a ShapeDef).
+template <class Def, class Height>
+void fill_height_field(Def& d, int n, double half, const Height& height) {
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = -half + 2.0 * half * i / n, y = -half + 2.0 * half * j / n;
+      d.vertices.emplace_back(x, y, height(x, y));
+    }
+  const auto at = [&](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      d.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      d.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
 }
 
 inline Vec3 position_of(const ParticleView& v, std::size_t i) {

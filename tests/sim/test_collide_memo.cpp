@@ -15,6 +15,7 @@
 
 #include "collision/collide_memo.hpp"
 #include "collision/collider_impl.hpp"
+#include "sim_test_util.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/world.hpp"
 
@@ -40,18 +41,7 @@ Transform box_pose(double z, double tilt) {
 std::vector<detail::Collider> terrain_scene() {
   ShapeDef md;
   md.type = ShapeType::mesh;
-  const int n = 48;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      const double x = -2.0 + 4.0 * i / n, y = -2.0 + 4.0 * j / n;
-      md.vertices.emplace_back(x, y, height(x, y));
-    }
-  const auto at = [&](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      md.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      md.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
+  test::fill_height_field(md, 48, 2.0, height);
   md.material = Material(0.3, 0.4);
   std::vector<detail::Collider> cols;
   cols.push_back(detail::make_collider(md, "terrain"));
@@ -194,18 +184,7 @@ TEST(CollideMemo, ALoadedStateContinuesAsTheSavedWorld) {
   const auto make = [] {
     auto w = std::make_unique<World>(WorldDef{1.0 / 240, 1, 0.05, 1});
     MeshDef md;
-    const int n = 24;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const double x = -2.0 + 4.0 * i / n, y = -2.0 + 4.0 * j / n;
-        md.vertices.emplace_back(x, y, height(x, y));
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const auto at = [&](int a, int b) { return std::uint32_t(b * (n + 1) + a); };
-        md.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-        md.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-      }
+    test::fill_height_field(md, 24, 2.0, height);
     md.material = Material(0.3, 0.4);
     w->add_mesh(md);
     ParticleSystemDef def;

@@ -435,18 +435,7 @@ TEST(SimCollisionMesh, RainOnAnOpenTerrainLandsOnItAtAnyThreadCount) {
   const auto run = [&](int threads, double drag, std::vector<float>& z_out, std::vector<float>& ground) {
     World w(WorldDef{1.0 / 240, 1, 0.05, threads});
     MeshDef md;
-    const int n = 64;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const double x = -3.0 + 6.0 * i / n, y = -3.0 + 6.0 * j / n;
-        md.vertices.emplace_back(x, y, height(x, y));
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const auto at = [&](int a, int b) { return std::uint32_t(b * (n + 1) + a); };
-        md.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-        md.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-      }
+    test::fill_height_field(md, 64, 3.0, height);
     md.material = Material(0.2, 0.5);
     w.add_mesh(md);
     ParticleSystemDef def;
