@@ -128,11 +128,11 @@ class MeshGrid {
       cells *= c1[k] - c0[k] + 1;
     }
     if (cells > kMaxCells) return false;
-    const Query q(lo, hi);
     if (cells == 1) {
       // One cell (a particle's box, most of the time): its ranks are increasing and each once.
       const Cell& rg = cell_[index(c0)];
       if (kLanes * int(rg.end - rg.begin) > kMaxCandidates) return false;
+      const Query q(lo, hi);
       for (std::uint32_t b = rg.begin; b < rg.end; ++b)
         for (unsigned mask = q.mask(blocks_[b]); mask != 0; mask &= mask - 1) {
           const std::uint32_t rank = blocks_[b].rank[std::countr_zero(mask)];
@@ -143,6 +143,7 @@ class MeshGrid {
     // The query box and the entries' boxes to the nearest floats: rounding is monotonic
     // (a <= b gives float(a) <= float(b)), so no triangle whose box overlaps is missed; one
     // whose box misses by less than float rounding may come too.
+    const Query q(lo, hi);
     std::uint32_t cand[kMaxCandidates + kLanes];
     int count = 0;
     for (int z = c0[2]; z <= c1[2]; ++z)
@@ -182,21 +183,18 @@ class MeshGrid {
   struct Query {
 #if defined(__SSE2__)
     __m128 lo[3], hi[3];
-    float slo[3], shi[3];
     Query(const Vec3& l, const Vec3& h) {
       for (int k = 0; k < 3; ++k) {
-        slo[k] = float(l[k]);
-        shi[k] = float(h[k]);
-        lo[k] = _mm_set1_ps(slo[k]);
-        hi[k] = _mm_set1_ps(shi[k]);
+        lo[k] = _mm_set1_ps(float(l[k]));
+        hi[k] = _mm_set1_ps(float(h[k]));
       }
     }
 #else
-    float slo[3], shi[3];
+    float lo[3], hi[3];
     Query(const Vec3& l, const Vec3& h) {
       for (int k = 0; k < 3; ++k) {
-        slo[k] = float(l[k]);
-        shi[k] = float(h[k]);
+        lo[k] = float(l[k]);
+        hi[k] = float(h[k]);
       }
     }
 #endif
@@ -214,7 +212,7 @@ class MeshGrid {
       mask = 0;
       for (int l = 0; l < kLanes; ++l) {
         bool in = true;
-        for (int k = 0; k < 3; ++k) in = in && b.lo[k][l] <= shi[k] && b.hi[k][l] >= slo[k];
+        for (int k = 0; k < 3; ++k) in = in && b.lo[k][l] <= hi[k] && b.hi[k][l] >= lo[k];
         mask |= unsigned(in) << l;
       }
 #endif
