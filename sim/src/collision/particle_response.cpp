@@ -12,10 +12,10 @@
 
 #include "collision/body_impulses.hpp"
 #include "collision/collide_memo.hpp"
+#include "collision/mesh_prefetch.hpp"
 #include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
-#include "core/prefetch.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
@@ -661,52 +661,10 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       // turn (a hint only: no result depends on it).
       constexpr std::size_t kAhead = 8;
       const std::size_t nk = keys.size();
-      // The mesh grids' cells, blocks and triangles those particles will read are asked for
-      // further ahead, one link of their chain per distance (MeshGrid::prefetch): each link's
-      // address comes from the one fetched before, the first from the particle's position,
-      // itself asked for further ahead still.
-      constexpr std::size_t kPosAhead = 40, kCellAhead = 24, kBlockAhead = 16, kTriAhead = 8, kRing = 32;
-      constexpr int kMeshes = 4;
-      const Collider* meshes[kMeshes];
-      int nmesh = 0;
-      for (const Collider& c : colliders)
-        if (c.shape == Collider::Shape::mesh && nmesh < kMeshes) meshes[nmesh++] = &c;
-      struct Ahead {
-        Vec3 p;             // the particle's position, the mesh's frame
-        std::int64_t cell;  // MeshGrid::cell_of(p)
-      };
-      Ahead ring[kMeshes][kRing];
-      const auto locate = [&](std::size_t q) {
-        const std::size_t j = std::size_t(keys[q] & 0xffffffffu);
-        const Vec3 p(x[3 * j], x[3 * j + 1], x[3 * j + 2]);
-        for (int m = 0; m < nmesh; ++m) {
-          const Collider& c = *meshes[m];
-          Ahead& a = ring[m][q % kRing];
-          a.p = c.unposed ? p : Vec3(c.R.transpose() * (p - c.center));
-          a.cell = c.mesh->grid.cell_of(a.p);
-        }
-      };
-      const auto ask = [&](std::size_t q, int stage) {
-        for (int m = 0; m < nmesh; ++m) {
-          const Ahead& a = ring[m][q % kRing];
-          meshes[m]->mesh->grid.prefetch(a.cell, stage, a.p);
-        }
-      };
-      if (nmesh > 0) {
-        for (std::size_t q = 0; q < std::min(nk, kPosAhead); ++q)
-          prefetch_line(x + 3 * (keys[q] & 0xffffffffu));
-        for (std::size_t q = 0; q < std::min(nk, kCellAhead); ++q) locate(q);
-      }
+      // The mesh grids' cells, blocks and triangles they will read are asked for further ahead.
+      MeshPrefetch mesh_ahead(colliders, x, keys);
       for (std::size_t q = 0; q < nk; ++q) {
-        if (nmesh > 0) {
-          if (q + kPosAhead < nk) prefetch_line(x + 3 * (keys[q + kPosAhead] & 0xffffffffu));
-          if (q + kCellAhead < nk) {
-            locate(q + kCellAhead);
-            ask(q + kCellAhead, 0);
-          }
-          if (q + kBlockAhead < nk) ask(q + kBlockAhead, 1);
-          if (q + kTriAhead < nk) ask(q + kTriAhead, 2);
-        }
+        mesh_ahead.before(q);
         if (q + kAhead < nk) {
           const std::size_t j = std::size_t(keys[q + kAhead] & 0xffffffffu);
           __builtin_prefetch(x + 3 * j, 1);
