@@ -25,16 +25,11 @@ void near_planes(const float* __restrict x, const float* __restrict r, std::size
   }
 }
 
-/// near[k] |= 1 when particle k's swept bounds, from its start of step to its end grown by its
-/// radius and surface_tol, overlap the solid's world AABB (center, half): collide()'s rejection
-/// test for a solid, the same double arithmetic, in a loop the compiler vectorises. Only for
-/// start_of_step()'s plain case (semi-implicit Euler without drag: x0 = x1 - dt v1 + dt²/2 g,
-/// dt = min(age, h)). x, v: n x 3 floats; age, r: n.
+/// b = the swept bounds of particles [0, n): see particle_blocks.hpp.
 SIMREEL_VECTOR_CLONES
-void near_solid_plain(const float* __restrict x, const float* __restrict v,
-                      const float* __restrict age, const float* __restrict r, std::size_t n,
-                      double h, const double* __restrict g, const double* __restrict center,
-                      const double* __restrict half, std::uint8_t* __restrict near) {
+void swept_bounds_plain(const float* __restrict x, const float* __restrict v,
+                        const float* __restrict age, const float* __restrict r, std::size_t n,
+                        double h, const double* __restrict g, SweptBounds& b) {
   for (std::size_t k = 0; k < n; ++k) {
     const double a = double(age[k]);
     const double dt = h < a ? h : a;  // std::min(age, h)
@@ -46,14 +41,41 @@ void near_solid_plain(const float* __restrict x, const float* __restrict v,
     // surface_tol(p1): 1e-7 + 5e-7 max |p1_i| (the largest of three is exact in any order).
     const double m01 = std::abs(p0) < std::abs(p1) ? std::abs(p1) : std::abs(p0);
     const double m = m01 < std::abs(p2) ? std::abs(p2) : m01;
-    const double grow = double(r[k]) + (1e-7 + 5e-7 * m);
+    b.grow[k] = double(r[k]) + (1e-7 + 5e-7 * m);
+    // Eigen's cwiseMin / cwiseMax of start s and end p: (p < s) ? p : s and (s < p) ? p : s.
+    b.lo[0][k] = p0 < s0 ? p0 : s0;
+    b.hi[0][k] = s0 < p0 ? p0 : s0;
+    b.lo[1][k] = p1 < s1 ? p1 : s1;
+    b.hi[1][k] = s1 < p1 ? p1 : s1;
+    b.lo[2][k] = p2 < s2 ? p2 : s2;
+    b.hi[2][k] = s2 < p2 ? p2 : s2;
+  }
+}
+
+/// near[k] |= 1 when bounds k overlap the solid's AABB: see particle_blocks.hpp.
+SIMREEL_VECTOR_CLONES
+void near_solid(const SweptBounds& b, std::size_t n, const double* __restrict center,
+                const double* __restrict half, std::uint8_t* __restrict near) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const double grow = b.grow[k];
     const double e0 = half[0] + grow, e1 = half[1] + grow, e2 = half[2] + grow;
-    // Eigen's cwiseMin / cwiseMax: (b < a) ? b : a and (a < b) ? b : a.
-    const double lo0 = (p0 < s0 ? p0 : s0) - center[0], hi0 = (s0 < p0 ? p0 : s0) - center[0];
-    const double lo1 = (p1 < s1 ? p1 : s1) - center[1], hi1 = (s1 < p1 ? p1 : s1) - center[1];
-    const double lo2 = (p2 < s2 ? p2 : s2) - center[2], hi2 = (s2 < p2 ? p2 : s2) - center[2];
-    near[k] |= std::uint8_t((lo0 <= e0) & (lo1 <= e1) & (lo2 <= e2) & (hi0 >= -e0) & (hi1 >= -e1) &
-                            (hi2 >= -e2));
+    near[k] |= std::uint8_t((b.lo[0][k] - center[0] <= e0) & (b.lo[1][k] - center[1] <= e1) &
+                            (b.lo[2][k] - center[2] <= e2) & (b.hi[0][k] - center[0] >= -e0) &
+                            (b.hi[1][k] - center[1] >= -e1) & (b.hi[2][k] - center[2] >= -e2));
+  }
+}
+
+void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
+                         const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
+  std::uint8_t near[SweptBounds::kBlock] = {};
+  near_solid(b, n, c.aabb_center.data(), c.aabb_half.data(), near);
+  const MeshGrid& grid = c.mesh->grid;
+  for (std::size_t k = 0; k < n; ++k) {
+    if ((pend[k] & near[k]) == 0) continue;
+    const double grow = b.grow[k];
+    const Vec3 lo(b.lo[0][k] - grow, b.lo[1][k] - grow, b.lo[2][k] - grow);
+    const Vec3 hi(b.hi[0][k] + grow, b.hi[1][k] + grow, b.hi[2][k] + grow);
+    if (!grid.clear_of(lo, hi)) clear[k] = 0;
   }
 }
 

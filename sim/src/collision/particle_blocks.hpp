@@ -24,15 +24,32 @@ namespace simreel::sim::detail {
 void near_planes(const float* __restrict x, const float* __restrict r, std::size_t n,
                  const Collider* planes, std::size_t count, std::uint8_t* __restrict near);
 
-/// near[k] |= 1 when particle k's swept bounds, from its start of step to its end grown by its
-/// radius and surface_tol, overlap the solid's world AABB (center, half): collide()'s rejection
-/// test for a solid, the same double arithmetic, in a loop the compiler vectorises. Only for
-/// start_of_step()'s plain case (semi-implicit Euler without drag: x0 = x1 - dt v1 + dt²/2 g,
-/// dt = min(age, h)). x, v: n x 3 floats; age, r: n.
-void near_solid_plain(const float* __restrict x, const float* __restrict v,
-                      const float* __restrict age, const float* __restrict r, std::size_t n,
-                      double h, const double* __restrict g, const double* __restrict center,
-                      const double* __restrict half, std::uint8_t* __restrict near);
+/// A block's swept bounds in start_of_step()'s plain case (semi-implicit Euler without drag:
+/// x0 = x1 - dt v1 + dt²/2 g, dt = min(age, h)): per axis the smaller and the larger of the start
+/// and end positions (Eigen's cwiseMin / cwiseMax of start and end), and the growth r +
+/// surface_tol(end) (m); structure of arrays for up to kBlock particles.
+struct SweptBounds {
+  static constexpr std::size_t kBlock = 256;
+  double lo[3][kBlock], hi[3][kBlock], grow[kBlock];
+};
+
+/// b = the swept bounds of particles [0, n) (x, v: n x 3 floats; age, r: n; n <= kBlock): the
+/// same double arithmetic as collide()'s start_of_step() and surface_tol(), in a loop the
+/// compiler vectorises.
+void swept_bounds_plain(const float* __restrict x, const float* __restrict v,
+                        const float* __restrict age, const float* __restrict r, std::size_t n,
+                        double h, const double* __restrict g, SweptBounds& b);
+
+/// near[k] |= 1 when bounds k of b, grown by b.grow[k], overlap the solid's world AABB (center,
+/// half): collide()'s rejection test for a solid (near_aabb), the same double arithmetic.
+void near_solid(const SweptBounds& b, std::size_t n, const double* __restrict center,
+                const double* __restrict half, std::uint8_t* __restrict near);
+
+/// clear[k] = 0 for each k with pend[k] set whose bounds overlap column-tested mesh c's AABB (as
+/// near_solid()) and are not cleared by its columns (c.mesh->grid.clear_of() of the bounds grown
+/// by b.grow[k]); the others' entries untouched. collide()'s columns_clear() for a block.
+void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
+                         const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear);
 
 /// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
 /// positions or null; mass, radius, age: len), each lane's step min(age, h).

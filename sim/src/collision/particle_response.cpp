@@ -619,7 +619,9 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       keys.clear();
       // The rejection test a chunk at a time, vectorised in start_of_step()'s plain case.
       constexpr std::size_t kChunk = 256;
-      std::uint8_t near[kChunk], near_c[kChunk], pend[kChunk];
+      static_assert(kChunk == SweptBounds::kBlock);
+      std::uint8_t near[kChunk], near_c[kChunk], pend[kChunk], clear[kChunk];
+      thread_local SweptBounds bounds;
       const bool plain = !s.track_prev && f.drag == 0.0f && f.drag_quadratic == 0.0f;
       const double g[3] = {f.gravity[0], f.gravity[1], f.gravity[2]};
       for (std::size_t i0 = b; i0 < e; i0 += kChunk) {
@@ -627,14 +629,15 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         if (plain) {
           std::fill(near, near + len, std::uint8_t{0});
           std::fill(pend, pend + len, std::uint8_t{0});
+          swept_bounds_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0, len,
+                             h, g, bounds);
           for (const Collider& c : colliders) {
             if (c.shape == Collider::Shape::plane) {
               near_planes(x + 3 * i0, s.radius.data() + i0, len, &c, 1, near_c);
               for (std::size_t k = 0; k < len; ++k) near[k] |= near_c[k];
             } else {
-              near_solid_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0,
-                               len, h, g, c.aabb_center.data(), c.aabb_half.data(),
-                               column_test(c) ? pend : near);
+              near_solid(bounds, len, c.aabb_center.data(), c.aabb_half.data(),
+                         column_test(c) ? pend : near);
             }
           }
         } else {
@@ -647,11 +650,22 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         // A reused response is written here, in index order (its particle's arrays read in
         // sequence, not scattered as in Z-order), and leaves the sort; it changes no other. A
         // particle near only column-tested meshes' AABBs is asked of the memo first (one lying
-        // on a terrain is answered there), then of the columns.
+        // on a terrain is answered there), then of the columns: in the plain case for the
+        // block at once (its bounds computed once), else one at a time.
         for (std::size_t k = 0; k < len; ++k) {
           const std::size_t i = i0 + k;
-          if ((near[k] | pend[k]) != 0 && !(rest != nullptr && rest[4 * i + 3] >= kSleepTime) &&
-              !reuse(i, reused) && (near[k] != 0 || !columns_clear(i)))
+          const bool ask = (near[k] | pend[k]) != 0 &&
+                           !(rest != nullptr && rest[4 * i + 3] >= kSleepTime) && !reuse(i, reused);
+          pend[k] = ask && near[k] == 0 ? 1 : 0;
+          near[k] = ask && near[k] != 0 ? 1 : 0;
+        }
+        std::fill(clear, clear + len, std::uint8_t{1});
+        if (plain)
+          for (const Collider& c : colliders)
+            if (column_test(c)) columns_clear_block(bounds, len, c, pend, clear);
+        for (std::size_t k = 0; k < len; ++k) {
+          const std::size_t i = i0 + k;
+          if (near[k] != 0 || (pend[k] != 0 && !(plain ? clear[k] != 0 : columns_clear(i))))
             keys.push_back(zorder.code(x + 3 * i) << 32 | std::uint64_t(i));
         }
       }
