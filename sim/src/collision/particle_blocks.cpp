@@ -1,6 +1,7 @@
 // The particle collision pass's block kernels: see particle_blocks.hpp.
 #include "collision/particle_blocks.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/vector_clones.hpp"
@@ -62,6 +63,24 @@ void near_solid(const SweptBounds& b, std::size_t n, const double* __restrict ce
     near[k] |= std::uint8_t((b.lo[0][k] - center[0] <= e0) & (b.lo[1][k] - center[1] <= e1) &
                             (b.lo[2][k] - center[2] <= e2) & (b.hi[0][k] - center[0] >= -e0) &
                             (b.hi[1][k] - center[1] >= -e1) & (b.hi[2][k] - center[2] >= -e2));
+  }
+}
+
+void near_block_plain(const float* __restrict x, const float* __restrict v,
+                      const float* __restrict age, const float* __restrict r, std::size_t n,
+                      double h, const double* g, const std::vector<Collider>& colliders,
+                      SweptBounds& b, std::uint8_t* __restrict near, std::uint8_t* __restrict pend) {
+  std::fill(near, near + n, std::uint8_t{0});
+  std::fill(pend, pend + n, std::uint8_t{0});
+  swept_bounds_plain(x, v, age, r, n, h, g, b);
+  std::uint8_t near_c[SweptBounds::kBlock];
+  for (const Collider& c : colliders) {
+    if (c.shape == Collider::Shape::plane) {
+      near_planes(x, r, n, &c, 1, near_c);
+      for (std::size_t k = 0; k < n; ++k) near[k] |= near_c[k];
+    } else {
+      near_solid(b, n, c.aabb_center.data(), c.aabb_half.data(), column_tested(c) ? pend : near);
+    }
   }
 }
 

@@ -45,6 +45,24 @@ void swept_bounds_plain(const float* __restrict x, const float* __restrict v,
 void near_solid(const SweptBounds& b, std::size_t n, const double* __restrict center,
                 const double* __restrict half, std::uint8_t* __restrict near);
 
+/// An open mesh that does not move: a particle whose swept bounds (grown by its radius and
+/// surface_tol) clear every triangle's box meets nothing there (sweep_mesh() would be handed no
+/// triangle, and an open mesh has no inside to remove it from), so the mesh's own columns
+/// (MeshGrid::clear_of) can reject it after its AABB: rain above a terrain.
+inline bool column_tested(const Collider& c) {
+  return c.shape == Collider::Shape::mesh && c.unposed && !c.mesh->closed;
+}
+
+/// collide()'s rejection test for a block of particles [0, n) (n <= kBlock) in
+/// start_of_step()'s plain case: b = their swept bounds (swept_bounds_plain()); near[k] = 1 when
+/// particle k ends the step within a plane (near_planes()) or its bounds overlap the AABB of a
+/// solid that is not column-tested (near_solid()); pend[k] = 1 when they overlap a
+/// column-tested mesh's AABB (for columns_clear_block()).
+void near_block_plain(const float* __restrict x, const float* __restrict v,
+                      const float* __restrict age, const float* __restrict r, std::size_t n,
+                      double h, const double* g, const std::vector<Collider>& colliders,
+                      SweptBounds& b, std::uint8_t* __restrict near, std::uint8_t* __restrict pend);
+
 /// clear[k] = 0 for each k with pend[k] set whose bounds overlap column-tested mesh c's AABB (as
 /// near_solid()) and are not cleared by its columns (c.mesh->grid.clear_of() of the bounds grown
 /// by b.grow[k]); the others' entries untouched. collide()'s columns_clear() for a block.

@@ -522,13 +522,6 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     std::memcpy(e + CollideMemo::kKey + 3, vf, 3 * sizeof(float));
     s.memo_epoch[i] = epoch;
   };
-  // An open mesh that does not move: a particle whose swept bounds (grown by its radius and
-  // surface_tol, as below) clear every triangle's box meets nothing there (sweep_mesh() would be
-  // handed no triangle, and an open mesh has no inside to remove it from), so the mesh's own
-  // columns (MeshGrid::clear_of) can reject it after its AABB: rain above a terrain.
-  const auto column_test = [](const Collider& c) {
-    return c.shape == Collider::Shape::mesh && c.unposed && !c.mesh->closed;
-  };
   // Particle i's swept bounds from p0 to p1, grown by its radius and surface_tol(p1), against
   // solid c's AABB.
   const auto near_aabb = [&](const Collider& c, const Vec3& p0, const Vec3& p1, double grow) {
@@ -545,7 +538,7 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     const Vec3 p0 = start_of_step(s, i, p1, v1, std::min(double(s.age[i]), h), f);
     const double grow = s.radius[i] + surface_tol(p1);
     for (const Collider& c : colliders)
-      if (column_test(c) && near_aabb(c, p0, p1, grow) &&
+      if (column_tested(c) && near_aabb(c, p0, p1, grow) &&
           !c.mesh->grid.clear_of(p0.cwiseMin(p1) - Vec3::Constant(grow),
                                  p0.cwiseMax(p1) + Vec3::Constant(grow)))
         return false;
@@ -567,12 +560,12 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         if (c.normal.dot(p1 - c.point) - r < 0.0) return 1;
         continue;
       }
-      if (pending != 0 && column_test(c)) continue;
+      if (pending != 0 && column_tested(c)) continue;
       const double dt = std::min(double(s.age[i]), h);
       const Vec3 v1(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]);
       const Vec3 p0 = start_of_step(s, i, p1, v1, dt, f);
       if (!near_aabb(c, p0, p1, r + surface_tol(p1))) continue;
-      if (!column_test(c)) return 1;
+      if (!column_tested(c)) return 1;
       pending = 2;
     }
     if (pending != 0 && !defer) return columns_clear(i) ? 0 : 1;
@@ -620,26 +613,15 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       // The rejection test a chunk at a time, vectorised in start_of_step()'s plain case.
       constexpr std::size_t kChunk = 256;
       static_assert(kChunk == SweptBounds::kBlock);
-      std::uint8_t near[kChunk], near_c[kChunk], pend[kChunk], clear[kChunk];
+      std::uint8_t near[kChunk], pend[kChunk], clear[kChunk];
       thread_local SweptBounds bounds;
       const bool plain = !s.track_prev && f.drag == 0.0f && f.drag_quadratic == 0.0f;
       const double g[3] = {f.gravity[0], f.gravity[1], f.gravity[2]};
       for (std::size_t i0 = b; i0 < e; i0 += kChunk) {
         const std::size_t len = std::min(kChunk, e - i0);
         if (plain) {
-          std::fill(near, near + len, std::uint8_t{0});
-          std::fill(pend, pend + len, std::uint8_t{0});
-          swept_bounds_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0, len,
-                             h, g, bounds);
-          for (const Collider& c : colliders) {
-            if (c.shape == Collider::Shape::plane) {
-              near_planes(x + 3 * i0, s.radius.data() + i0, len, &c, 1, near_c);
-              for (std::size_t k = 0; k < len; ++k) near[k] |= near_c[k];
-            } else {
-              near_solid(bounds, len, c.aabb_center.data(), c.aabb_half.data(),
-                         column_test(c) ? pend : near);
-            }
-          }
+          near_block_plain(x + 3 * i0, vel + 3 * i0, s.age.data() + i0, s.radius.data() + i0, len,
+                           h, g, colliders, bounds, near, pend);
         } else {
           for (std::size_t k = 0; k < len; ++k) {
             const int v = is_near(i0 + k, true);
@@ -662,7 +644,7 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         std::fill(clear, clear + len, std::uint8_t{1});
         if (plain)
           for (const Collider& c : colliders)
-            if (column_test(c)) columns_clear_block(bounds, len, c, pend, clear);
+            if (column_tested(c)) columns_clear_block(bounds, len, c, pend, clear);
         for (std::size_t k = 0; k < len; ++k) {
           const std::size_t i = i0 + k;
           if (near[k] != 0 || (pend[k] != 0 && !(plain ? clear[k] != 0 : columns_clear(i))))
