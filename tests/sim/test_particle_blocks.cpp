@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -51,6 +52,9 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
       for (int a = 0; a < 3; ++a) v[3 * k + std::size_t(a)] = float(rng.uniform(-speed, speed));
       age[k] = k % 5 == 0 ? float(rng.uniform(0.0, h)) : 1.0f;
       r[k] = float(rng.uniform(0.002, 0.03));
+      // A few not finite (an exploding scene): the block must answer as the particle's test.
+      if (k % 61 == 5) x[3 * k + std::size_t(round % 3)] = std::numeric_limits<float>::quiet_NaN();
+      if (k % 67 == 6) v[3 * k + std::size_t(round % 3)] = (round % 2 != 0 ? 1.0f : -1.0f) * std::numeric_limits<float>::infinity();
       pend[k] = k % 7 != 3 ? 1 : 0;  // the rest are left alone
       clear[k] = 1;
     }
