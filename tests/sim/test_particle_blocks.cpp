@@ -55,7 +55,8 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
       // A few not finite (an exploding scene): the block must answer as the particle's test.
       if (k % 61 == 5) x[3 * k + std::size_t(round % 3)] = std::numeric_limits<float>::quiet_NaN();
       if (k % 67 == 6) v[3 * k + std::size_t(round % 3)] = (round % 2 != 0 ? 1.0f : -1.0f) * std::numeric_limits<float>::infinity();
-      pend[k] = k % 7 != 3 ? 1 : 0;  // the rest are left alone
+      // Most asked or a few (a block where the memo answered the rest); the others left alone.
+      pend[k] = (round % 2 == 0 ? k % 7 != 3 : k % 13 == 2) ? 1 : 0;
       clear[k] = 1;
     }
     detail::SweptBounds b;
@@ -84,8 +85,8 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
     }
   }
   // Both answers are given many times, not one of them always.
-  EXPECT_GT(cleared, 1500);
-  EXPECT_GT(kept, 1500);
+  EXPECT_GT(cleared, 600);
+  EXPECT_GT(kept, 600);
   EXPECT_LT(near_aabb_count, 40 * int(kN) - 500);  // and some particles are beside the AABB
 }
 
