@@ -14,6 +14,9 @@
 //   internal_world_after_first/N/T
 //                         the same cloud's steps 2-11: its first step (every array's pages
 //                         touched for the first time, no warm start) costs several later ones
+//   internal_world_steady/N/T
+//                         steps 3-32: past the first touch of the arrays and most of the random
+//                         cloud's relaxation, the per-step cost a long simulation sees
 //   internal_grid/N, internal_solve/N
 //                         the grid pair search (broad) and the sequential-impulse solve (narrow
 //                         and response) of the same particles
@@ -211,6 +214,7 @@ void internal(benchmark::State& state, int untimed) {
 }
 void internal_world(benchmark::State& state) { internal(state, 0); }
 void internal_world_after_first(benchmark::State& state) { internal(state, 1); }
+void internal_world_steady(benchmark::State& state) { internal(state, 2); }
 
 /// Five steps of internal_world/N/T, then a hash of the positions and velocities (its low 48 bits
 /// as a counter): old and new builds and thread counts compared bit for bit.
@@ -320,6 +324,7 @@ BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad, false)->Arg(100'000)->Unit(
 BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad_narrow, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(internal_world_after_first)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(internal_world_steady)->Args({100'000, 1})->Args({100'000, 2})->Iterations(30)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(internal_hash)->Args({30'000, 1})->Args({30'000, 2})->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_solve, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
