@@ -53,17 +53,22 @@ void swept_bounds_plain(const float* __restrict x, const float* __restrict v,
   }
 }
 
+namespace {
+/// Bounds k of b, grown by b.grow[k], overlap the AABB (center, half): near_aabb's arithmetic.
+inline bool overlaps(const SweptBounds& b, std::size_t k, const double* center, const double* half) {
+  const double grow = b.grow[k];
+  const double e0 = half[0] + grow, e1 = half[1] + grow, e2 = half[2] + grow;
+  return (b.lo[0][k] - center[0] <= e0) & (b.lo[1][k] - center[1] <= e1) &
+         (b.lo[2][k] - center[2] <= e2) & (b.hi[0][k] - center[0] >= -e0) &
+         (b.hi[1][k] - center[1] >= -e1) & (b.hi[2][k] - center[2] >= -e2);
+}
+}  // namespace
+
 /// near[k] |= 1 when bounds k overlap the solid's AABB: see particle_blocks.hpp.
 SIMREEL_VECTOR_CLONES
 void near_solid(const SweptBounds& b, std::size_t n, const double* __restrict center,
                 const double* __restrict half, std::uint8_t* __restrict near) {
-  for (std::size_t k = 0; k < n; ++k) {
-    const double grow = b.grow[k];
-    const double e0 = half[0] + grow, e1 = half[1] + grow, e2 = half[2] + grow;
-    near[k] |= std::uint8_t((b.lo[0][k] - center[0] <= e0) & (b.lo[1][k] - center[1] <= e1) &
-                            (b.lo[2][k] - center[2] <= e2) & (b.hi[0][k] - center[0] >= -e0) &
-                            (b.hi[1][k] - center[1] >= -e1) & (b.hi[2][k] - center[2] >= -e2));
-  }
+  for (std::size_t k = 0; k < n; ++k) near[k] |= std::uint8_t(overlaps(b, k, center, half));
 }
 
 void near_block_plain(const float* __restrict x, const float* __restrict v,
@@ -86,11 +91,12 @@ void near_block_plain(const float* __restrict x, const float* __restrict v,
 
 void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
-  std::uint8_t near[SweptBounds::kBlock] = {};
-  near_solid(b, n, c.aabb_center.data(), c.aabb_half.data(), near);
   const MeshGrid& grid = c.mesh->grid;
   for (std::size_t k = 0; k < n; ++k) {
-    if ((pend[k] & near[k]) == 0) continue;
+    if (pend[k] == 0) continue;
+    // This mesh's AABB test (near_solid()'s) for the particles asked only: pend may come from
+    // another column-tested mesh.
+    if (!overlaps(b, k, c.aabb_center.data(), c.aabb_half.data())) continue;
     const double grow = b.grow[k];
     const Vec3 lo(b.lo[0][k] - grow, b.lo[1][k] - grow, b.lo[2][k] - grow);
     const Vec3 hi(b.hi[0][k] + grow, b.hi[1][k] + grow, b.hi[2][k] + grow);
