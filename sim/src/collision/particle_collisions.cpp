@@ -20,19 +20,8 @@ namespace simreel::sim::detail {
 
 namespace {
 
-/// a[k] = a[order[k]] for every k, through `tmp`; `threads` > 1 splits k (each element is
+/// a[order[k]] = a[k] for every k, through `tmp`; `threads` > 1 splits k (each element is
 /// written once, so the result does not depend on it).
-template <class T>
-void permute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp,
-             int threads = 1) {
-  tmp.resize(a.size());
-  const std::ptrdiff_t n = std::ptrdiff_t(a.size());
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
-  for (std::ptrdiff_t k = 0; k < n; ++k) tmp[std::size_t(k)] = a[order[std::size_t(k)]];
-  a.swap(tmp);
-}
-
-/// a[order[k]] = a[k] for every k (the inverse of permute), through `tmp`.
 template <class T>
 void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& tmp,
                int threads = 1) {
@@ -61,50 +50,37 @@ void copy(std::vector<T>& dst, const std::vector<T>& src, int threads) {
 void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, double contact_speed,
                            double h, const std::vector<Collider>* colliders) {
   std::size_t n = 0;
-  for (const auto& m : members) n += m.store->count;
+  member_base_.clear();
+  for (const auto& m : members) {
+    member_base_.push_back(n);
+    n += m.store->count;
+  }
   x.resize(n);
-  v.resize(n);
-  inv_mass.resize(n);
   radius.resize(n);
-  restitution.resize(n);
-  friction.resize(n);
-  key.resize(n);
-  collides.resize(n);
-  half_dt_.resize(n);
-  asleep.resize(n);
-  inv_mass_awake_.resize(n);
+  key_flat_.resize(n);
   any_asleep_ = false;
   // Passes over particles or contacts that write each element once split over the threads for
   // a large system; the results do not depend on it.
   const int par = threads > 1 && n >= kParallelMin ? threads : 1;
-  std::size_t base = 0;
-  for (const auto& m : members) {
+  // In flat (member) order, what the grid needs (positions, radii) and the warm-start keys; the
+  // other working arrays are filled once the grid has chosen their order (fill_working()).
+  for (std::size_t mi = 0; mi < members.size(); ++mi) {
+    const ParticleGroupMember& m = members[mi];
     ParticleStore& s = *m.store;
     if (s.track_rest && !m.sleep)  // sleep not allowed now: wake them all
       for (std::size_t i = 0; i < s.count; ++i) s.rest[4 * i + 3] = 0.0f;
     bool slept = false;
+    const std::size_t base = member_base_[mi];
     const std::ptrdiff_t count = std::ptrdiff_t(s.count);
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1) reduction(|| : slept)
     for (std::ptrdiff_t ii = 0; ii < count; ++ii) {
       const std::size_t i = std::size_t(ii), k = base + i;
       x[k] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
-      v[k] = Vec3(s.velocity[3 * i], s.velocity[3 * i + 1], s.velocity[3 * i + 2]);
-      inv_mass[k] = 1.0 / double(s.mass[i]);
       radius[k] = s.radius[i];
-      restitution[k] = m.restitution;
-      friction[k] = m.friction;
-      key[k] = (std::uint64_t(m.system) << 40) | s.id[i];
-      collides[k] = m.collide ? 1 : 0;
-      half_dt_[k] = 0.5 * std::min(double(s.age[i]), h);
-      asleep[k] = m.sleep && s.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
-      inv_mass_awake_[k] = inv_mass[k];
-      if (asleep[k] != 0) {
-        inv_mass[k] = 0.0;
-        slept = true;
-      }
+      key_flat_[k] = (std::uint64_t(m.system) << 40) | s.id[i];
+      slept = slept || (m.sleep && s.rest[4 * i + 3] >= kSleepTime);
     }
     any_asleep_ = any_asleep_ || slept;
-    base += s.count;
   }
   x_before.clear();
   if (n < 2) return;
@@ -115,7 +91,6 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   double g = 0.0;
   for (const auto& m : members) g = std::max(g, m.gravity);
   const double pair_rest_speed = contact_speed + g * h;
-  copy(key_flat_, key, par);
   // The working arrays go into cell order, so that every later pass reads neighbours from
   // nearby memory; perm_ maps them back.
   contacts.clear();
@@ -124,19 +99,6 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   choose_cells(h);
   const bool reordered = levels == 1 && build_grid();
   if (reordered) {
-    permute(x, order_, tmp3_, par);
-    permute(v, order_, tmp3_, par);
-    permute(inv_mass, order_, tmp1_, par);
-    permute(radius, order_, tmp1_, par);
-    permute(restitution, order_, tmp1_, par);
-    permute(friction, order_, tmp1_, par);
-    permute(half_dt_, order_, tmp1_, par);
-    permute(key, order_, tmp_key_, par);
-    permute(collides, order_, tmp_byte_, par);
-    if (any_asleep_) {  // else all zero, in any order
-      permute(asleep, order_, tmp_byte_, par);
-      permute(inv_mass_awake_, order_, tmp1_, par);
-    }
     perm_.swap(order_);
     order_.resize(n);
     {
@@ -144,10 +106,12 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
       for (std::ptrdiff_t q = 0; q < np; ++q) order_[std::size_t(q)] = std::uint32_t(q);
     }
+    fill_working(members, h, par);
     find_pairs(pair_rest_speed, h);
   } else {
     perm_.resize(n);
     for (std::size_t q = 0; q < n; ++q) perm_[q] = std::uint32_t(q);
+    fill_working(members, h, par);
     record_sleeper_pairs_ = any_asleep_;
     find_contacts_hashed(pair_rest_speed, h);
     record_sleeper_pairs_ = false;
@@ -192,26 +156,82 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     }
   }
   project_positions();
-  // Back to flat order: x, v and x_before are indexed like the members' particles again.
-  unpermute(x, perm_, tmp3_, par);
-  unpermute(v, perm_, tmp3_, par);
-  unpermute(x_before, perm_, tmp3_, par);
-  if (any_asleep_) unpermute(asleep, perm_, tmp_byte_, par);
-  base = 0;
-  for (const auto& m : members) {
-    ParticleStore& s = *m.store;
-    const std::ptrdiff_t count = std::ptrdiff_t(s.count);
+  // Back to the members' particles, each working entry written to its own (x, v and x_before
+  // stay in working order).
+  {
+    const std::ptrdiff_t np = std::ptrdiff_t(n);
+    const bool one = members.size() == 1;
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
-    for (std::ptrdiff_t ii = 0; ii < count; ++ii) {
-      const std::size_t i = std::size_t(ii), k = base + i;
+    for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
+      const std::size_t q = std::size_t(qq);
+      const auto [mi, i] = one ? MemberParticle{0, perm_[q]} : member_particle(std::uint32_t(q));
+      ParticleStore& s = *members[mi].store;
       for (int a = 0; a < 3; ++a) {
-        s.position[3 * i + std::size_t(a)] = float(x[k][a]);
-        s.velocity[3 * i + std::size_t(a)] = float(v[k][a]);
+        s.position[3 * i + std::size_t(a)] = float(x[q][a]);
+        s.velocity[3 * i + std::size_t(a)] = float(v[q][a]);
       }
     }
-    base += s.count;
   }
+  if (any_asleep_) unpermute(asleep, perm_, tmp_byte_, par);
   update_rest(members, h);
+}
+
+ParticleCollider::MemberParticle ParticleCollider::member_particle(std::uint32_t q) const {
+  const std::size_t f = flat_index(q);
+  const std::size_t mi =
+      std::size_t(std::upper_bound(member_base_.begin(), member_base_.end(), f) - member_base_.begin()) - 1;
+  return {mi, f - member_base_[mi]};
+}
+
+void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& members, double h,
+                                    int par) {
+  const std::size_t n = perm_.size();
+  v.resize(n);
+  inv_mass.resize(n);
+  restitution.resize(n);
+  friction.resize(n);
+  key.resize(n);
+  collides.resize(n);
+  half_dt_.resize(n);
+  asleep.resize(n);
+  inv_mass_awake_.resize(n);
+  // Each working entry read straight from its particle (one pass, not a flat fill and then a
+  // permutation of every array); x and radius as the flat pass read them, in the new order.
+  const bool one = members.size() == 1;
+  constexpr std::size_t kAhead = 16;
+  const std::ptrdiff_t np = std::ptrdiff_t(n);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
+    const std::size_t q = std::size_t(qq);
+    // The particles come in no order of their own: their lines are asked for some entries
+    // ahead, so that the loads overlap instead of each missing in turn (a hint only).
+    if (one && q + kAhead < n) {
+      const std::size_t j = perm_[q + kAhead];
+      const ParticleStore& s = *members[0].store;
+      __builtin_prefetch(s.position.data() + 3 * j);
+      __builtin_prefetch(s.velocity.data() + 3 * j);
+      __builtin_prefetch(s.mass.data() + j);
+      __builtin_prefetch(s.radius.data() + j);
+      __builtin_prefetch(s.age.data() + j);
+      if (members[0].sleep) __builtin_prefetch(s.rest.data() + 4 * j);
+      __builtin_prefetch(key_flat_.data() + j);
+    }
+    const auto [mi, i] = one ? MemberParticle{0, perm_[q]} : member_particle(std::uint32_t(q));
+    const ParticleGroupMember& m = members[mi];
+    const ParticleStore& s = *m.store;
+    x[q] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
+    v[q] = Vec3(s.velocity[3 * i], s.velocity[3 * i + 1], s.velocity[3 * i + 2]);
+    inv_mass[q] = 1.0 / double(s.mass[i]);
+    radius[q] = s.radius[i];
+    restitution[q] = m.restitution;
+    friction[q] = m.friction;
+    key[q] = key_flat_[perm_[q]];
+    collides[q] = m.collide ? 1 : 0;
+    half_dt_[q] = 0.5 * std::min(double(s.age[i]), h);
+    asleep[q] = m.sleep && s.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
+    inv_mass_awake_[q] = inv_mass[q];
+    if (asleep[q] != 0) inv_mass[q] = 0.0;
+  }
 }
 
 void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& members, double h) {

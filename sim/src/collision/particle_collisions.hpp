@@ -77,15 +77,21 @@ class ParticleCollider {
   /// Finds and resolves the contacts among all members' particles and, for members that
   /// collide, with `colliders` (may be null) at their end-of-step pose; h (s) is the step.
   /// Updates velocities and positions in place. Scratch buffers are kept between calls (no
-  /// per-step allocation once they have grown). Afterwards x, v and x_before are indexed like
-  /// the members' particles (in member order); the other working arrays are in cell order.
+  /// per-step allocation once they have grown). Afterwards the working arrays (x, v, x_before,
+  /// contacts' indices and the rest) are in working order (cell order when the grid sorted the
+  /// particles): flat_index() and member_particle() map an entry to its particle.
   void run(const std::vector<ParticleGroupMember>& members, double contact_speed, double h,
            const std::vector<Collider>* colliders);
 
   /// The member (flat) index of working index q, the index `contacts` and the other working
-  /// arrays use after run() (cell order when the grid sorted the particles); x, v and x_before
-  /// are back in member order then.
+  /// arrays use after run() (cell order when the grid sorted the particles).
   [[nodiscard]] std::uint32_t flat_index(std::uint32_t q) const { return q < perm_.size() ? perm_[q] : q; }
+  /// A particle of run()'s members: members[member].store, index `index` there.
+  struct MemberParticle {
+    std::size_t member, index;
+  };
+  /// The particle of working index q after run().
+  [[nodiscard]] MemberParticle member_particle(std::uint32_t q) const;
 
   // Flat working arrays, public for the solver test (set x, v, inv_mass, radius, e, mu, then
   // find_contacts() and solve()).
@@ -270,9 +276,10 @@ class ParticleCollider {
   std::vector<std::uint64_t> key_flat_;
   std::vector<std::uint32_t> warm_first_;  ///< (flat particle) first cache entry with its key
   std::vector<double> half_dt_;            ///< (sorted) min(age, h) / 2
-  std::vector<Vec3> tmp3_;  ///< permute() scratch, kept so that a step allocates nothing
-  std::vector<double> tmp1_;
-  std::vector<std::uint64_t> tmp_key_;
+  std::vector<std::size_t> member_base_;  ///< run(): flat index of each member's first particle
+  /// run(): every working array in the order perm_ gives, each entry read from its member's
+  /// particle (x and radius again: the grid read them in flat order).
+  void fill_working(const std::vector<ParticleGroupMember>& members, double h, int par);
   std::vector<std::uint8_t> tmp_byte_;
   std::vector<double> inv_mass_awake_;  ///< 1 / mass, for a sleeping particle woken
   bool any_asleep_ = false;  ///< some particle of this run() sleeps

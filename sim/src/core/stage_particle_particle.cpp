@@ -34,21 +34,21 @@ void stage_particle_particle(WorldState& w, double t0, double t1) {
     pc.run(members, w.def.contact_speed, h, &colliders);
     // §3.7: the collider contacts' impulses (pn n + pt on the particle) push dynamic bodies back,
     // at the surface point under the particle's centre before the overlap correction. (The
-    // contacts and radii are in the collider's working order, x_before in the members'.)
+    // contacts, radii, x and x_before are all in the collider's working order.)
     if (BodyImpulses* log = coupling_log(w); log != nullptr && !pc.x_before.empty())
       for (const ParticleCollider::Contact& c : pc.contacts) {
         if (c.i != ParticleCollider::kCollider) continue;
-        const Vec3 p = pc.x_before[pc.flat_index(c.j)] - (pc.radius[c.j] - c.depth) * c.n;
+        const Vec3 p = pc.x_before[c.j] - (pc.radius[c.j] - c.depth) * c.n;
         log->add(colliders[c.collider], -(c.pn * c.n + c.pt), p);
       }
     if (colliders.empty() || pc.x_before.empty()) continue;
     // The overlap correction moved particles: sweep those moves against the colliders (§3.4).
-    std::size_t k = 0;
-    for (const ParticleGroupMember& m : members) {
-      for (std::size_t i = 0; i < m.store->count; ++i, ++k) {
-        const Vec3& from = pc.x_before[k];
-        if (m.collide && from != pc.x[k]) constrain_displacement(*m.store, i, from, colliders);
-      }
+    // Each sweep changes its own particle alone, so the working order changes no result.
+    for (std::size_t q = 0; q < pc.x.size(); ++q) {
+      const Vec3& from = pc.x_before[q];
+      if (from == pc.x[q]) continue;
+      const auto [mi, i] = pc.member_particle(std::uint32_t(q));
+      if (members[mi].collide) constrain_displacement(*members[mi].store, i, from, colliders);
     }
   }
 }
