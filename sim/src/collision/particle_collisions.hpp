@@ -197,7 +197,7 @@ class ParticleCollider {
   /// entries for gather_in_box()) and their squared distances within reach (0: out of reach);
   /// the same of its awake candidates (index into cand_s).
   struct PairSearch {
-    std::vector<std::uint32_t> cand_s;
+    std::vector<std::uint32_t> cand_s, hit_u;
     std::vector<double> cand_x, cand_y, cand_z, cand_r, cand_d2;
     std::vector<std::uint32_t> awake_s;
     std::vector<double> awake_x, awake_y, awake_z, awake_r, awake_d2;

@@ -119,6 +119,41 @@ std::size_t gather_in_box_avx512(std::uint32_t b, std::uint32_t e, const double*
   }
   return k;
 }
+
+/// The candidates [0, m) within reach of particle (xi, yi, zi, ri): within_reach()'s test with
+/// the same operations in each of eight lanes, so the same pairs. Their places and squared
+/// distances go to the front of `hit` and `hd2`, in order (up to 8 entries are written past the
+/// count: the callers' slack); returns the count. One pass instead of within_reach() and a scan
+/// of its output, most of whose candidates are out of reach.
+__attribute__((target("avx512f,avx512vl")))
+std::size_t in_reach_avx512(double xi, double yi, double zi, double ri, double margin,
+                            const double* __restrict cx, const double* __restrict cy,
+                            const double* __restrict cz, const double* __restrict cr,
+                            std::size_t m, std::uint32_t* __restrict hit, double* __restrict hd2) {
+  const __m512d x = _mm512_set1_pd(xi), y = _mm512_set1_pd(yi), z = _mm512_set1_pd(zi);
+  const __m512d r = _mm512_set1_pd(ri), mg = _mm512_set1_pd(margin), zero = _mm512_setzero_pd();
+  const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  std::size_t k = 0;
+  for (std::size_t b = 0; b < m; b += 8) {
+    const __mmask8 live = m - b >= 8 ? __mmask8(0xff) : __mmask8((1u << (m - b)) - 1u);
+    const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(live, cx + b), x);
+    const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(live, cy + b), y);
+    const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(live, cz + b), z);
+    const __m512d e = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
+                                    _mm512_mul_pd(dz, dz));
+    const __m512d rj = _mm512_maskz_loadu_pd(live, cr + b);
+    const __m512d smaller = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(rj, r, _CMP_LT_OQ), r, rj);  // rj < ri ? rj : ri
+    const __m512d reach = _mm512_add_pd(_mm512_add_pd(r, rj), _mm512_mul_pd(mg, smaller));
+    const __mmask8 keep = live & _mm512_cmp_pd_mask(e, _mm512_mul_pd(reach, reach), _CMP_LT_OQ) &
+                          _mm512_cmp_pd_mask(e, zero, _CMP_GT_OQ);
+    if (keep == 0) continue;
+    _mm512_storeu_pd(hd2 + k, _mm512_maskz_compress_pd(keep, e));
+    const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(b)), step);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(hit + k), _mm256_maskz_compress_epi32(keep, idx));
+    k += std::size_t(std::popcount(unsigned(keep)));
+  }
+  return k;
+}
 #endif
 
 using GatherInBox = std::size_t (*)(std::uint32_t, std::uint32_t, const double*, const double*,
@@ -388,6 +423,9 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
   // reach of each of them.
   const double reach_box = (max_radius_ + max_radius_) + margin * max_radius_;
   const GatherInBox gather = gather_in_box();
+#if SIMREEL_HAS_VECTOR_CLONES
+  static const bool wide = cpu_has_avx512vl();  // in_reach_avx512() for within_reach() and its scan
+#endif
   // Half stencil: the cell itself (later particles) and the cell above it (z + 1), then the
   // columns (dx, dy) = (0, 1), (1, -1), (1, 0), (1, 1), three cells each (z - 1 .. z + 1), all
   // later in key order. Cells are visited in key order, so each column's first occupied cell
@@ -421,6 +459,7 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
     for (int col = 0; col < 5; ++col) m += run_e[col] - run_b[col];
     if (ps.cand_s.size() < m + 8) {  // + 8: gather_in_box()'s slack
       ps.cand_s.resize(m + 8);
+      ps.hit_u.resize(m + 8);
       for (auto* a : {&ps.cand_x, &ps.cand_y, &ps.cand_z, &ps.cand_r, &ps.cand_d2}) a->resize(m + 8);
     }
     // Only the candidates within reach_box of the box around the cell's particles: one farther
@@ -471,6 +510,17 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
             try_pair(order_[si], order_[ps.cand_s[ps.awake_s[u]]], ps.awake_d2[u], contact_speed, h, out);
         continue;
       }
+#if SIMREEL_HAS_VECTOR_CLONES
+      if (wide) {
+        const std::size_t hits =
+            in_reach_avx512(px[si], py[si], pz[si], pr[si], margin, ps.cand_x.data() + from,
+                            ps.cand_y.data() + from, ps.cand_z.data() + from, ps.cand_r.data() + from,
+                            m - from, ps.hit_u.data(), ps.cand_d2.data());
+        for (std::size_t u = 0; u < hits; ++u)
+          try_pair(order_[si], order_[ps.cand_s[from + ps.hit_u[u]]], ps.cand_d2[u], contact_speed, h, out);
+        continue;
+      }
+#endif
       within_reach(px[si], py[si], pz[si], pr[si], margin, ps.cand_x.data() + from,
                    ps.cand_y.data() + from, ps.cand_z.data() + from, ps.cand_r.data() + from, m - from,
                    ps.cand_d2.data() + from);
