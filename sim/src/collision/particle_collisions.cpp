@@ -97,7 +97,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   wall_vc.clear();
   sleeper_pairs_.clear();
   choose_cells(h);
-  const bool reordered = levels == 1 && build_grid();
+  const bool reordered = levels == 1 && build_grid(false);
   if (reordered) {
     perm_.swap(order_);
     order_.resize(n);
@@ -106,12 +106,12 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
       for (std::ptrdiff_t q = 0; q < np; ++q) order_[std::size_t(q)] = std::uint32_t(q);
     }
-    fill_working(members, h, par);
+    fill_working(members, h, par, true);
     find_pairs(pair_rest_speed, h);
   } else {
     perm_.resize(n);
     for (std::size_t q = 0; q < n; ++q) perm_[q] = std::uint32_t(q);
-    fill_working(members, h, par);
+    fill_working(members, h, par, false);
     record_sleeper_pairs_ = any_asleep_;
     find_contacts_hashed(pair_rest_speed, h);
     record_sleeper_pairs_ = false;
@@ -184,7 +184,7 @@ ParticleCollider::MemberParticle ParticleCollider::member_particle(std::uint32_t
 }
 
 void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& members, double h,
-                                    int par) {
+                                    int par, bool grid) {
   const std::size_t n = perm_.size();
   v.resize(n);
   inv_mass.resize(n);
@@ -231,6 +231,12 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
     asleep[q] = m.sleep && s.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
     inv_mass_awake_[q] = inv_mass[q];
     if (asleep[q] != 0) inv_mass[q] = 0.0;
+    if (grid) {  // the pair search's sorted copies (build_grid(false) left them)
+      sx_[q] = x[q][0];
+      sy_[q] = x[q][1];
+      sz_[q] = x[q][2];
+      sr_[q] = radius[q];
+    }
   }
 }
 

@@ -183,7 +183,8 @@ class ParticleCollider {
   double max_radius_ = 0.0;  ///< (m) the largest radius at the last choose_cells()
   /// Sorts the particles into cells of cell_size (order_, cell_key_/cell_first_, sx_..sr_);
   /// false when the particles span more than 2^21 cells on an axis (the hashed grid then).
-  bool build_grid();
+  /// With `sorted_copies` false, sx_..sr_ are left to the caller (run(): fill_working()).
+  bool build_grid(bool sorted_copies = true);
   /// Pairs over the sorted grid, half stencil, in (cell, particle, neighbour cell, particle)
   /// order of the sorted positions; contacts name particles by index (order_).
   void find_pairs(double contact_speed, double h);
@@ -278,8 +279,9 @@ class ParticleCollider {
   std::vector<double> half_dt_;            ///< (sorted) min(age, h) / 2
   std::vector<std::size_t> member_base_;  ///< run(): flat index of each member's first particle
   /// run(): every working array in the order perm_ gives, each entry read from its member's
-  /// particle (x and radius again: the grid read them in flat order).
-  void fill_working(const std::vector<ParticleGroupMember>& members, double h, int par);
+  /// particle (x and radius again: the grid read them in flat order); with `grid`, also the
+  /// sorted grid's copies sx_..sr_ (build_grid(false) left them).
+  void fill_working(const std::vector<ParticleGroupMember>& members, double h, int par, bool grid);
   std::vector<std::uint8_t> tmp_byte_;
   std::vector<double> inv_mass_awake_;  ///< 1 / mass, for a sleeping particle woken
   bool any_asleep_ = false;  ///< some particle of this run() sleeps

@@ -208,7 +208,7 @@ void ParticleCollider::find_contacts(double contact_speed, double h) {
   }
 }
 
-bool ParticleCollider::build_grid() {
+bool ParticleCollider::build_grid(bool sorted_copies) {
   const std::size_t n = x.size();
   const double inv = 1.0 / cell_size;
   // The passes that write each particle's entry, the minima and maxima (exact in any order) and
@@ -276,8 +276,8 @@ bool ParticleCollider::build_grid() {
   sy_.resize(n);
   sz_.resize(n);
   sr_.resize(n);
-#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
-  for (std::ptrdiff_t ss = 0; ss < np; ++ss) {
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1 && sorted_copies)
+  for (std::ptrdiff_t ss = 0; ss < (sorted_copies ? np : 0); ++ss) {
     const std::size_t s = std::size_t(ss);
     const std::uint32_t i = order_[s];
     sx_[s] = x[i][0];
