@@ -73,6 +73,9 @@ class ParticleCollider {
   /// The sweeps visit the contacts in wavefront order (see schedule(); the same bits, faster);
   /// false: in contact order, the reference the tests compare it with.
   bool wavefront = true;
+  /// The wavefront sweeps solve four contacts of a wave at once where the CPU has AVX2 (the
+  /// same bits); false: two at most, as where it has not (the test compares them).
+  bool four_lanes = true;
 
   /// Finds and resolves the contacts among all members' particles and, for members that
   /// collide, with `colliders` (may be null) at their end-of-step pose; h (s) is the step.
@@ -268,7 +271,9 @@ class ParticleCollider {
     std::vector<std::uint32_t> last_wave, wave_count;
   };
   std::vector<WaveScratch> wave_scratch_;
-  /// (work_ position) 1: it and the next are one wave's, solved together in two SIMD lanes
+  /// (work_ position) 1: it and the next are one wave's, solved together in two SIMD lanes; 2:
+  /// it and the next three, in four lanes where the CPU has AVX2 (the one two on is marked 1:
+  /// two pairs where it has not)
   std::vector<std::uint8_t> pair_next_;
   /// Fills bands_ from the contacts of find_pairs() and find_collider_contacts() on sorted
   /// positions (pairs, then walls, each in ascending band order).

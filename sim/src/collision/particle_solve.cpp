@@ -17,6 +17,110 @@
 
 namespace simreel::sim::detail {
 
+namespace {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SIMREEL_SOLVE_QUADS 1
+/// Four contacts of one wave (they share no particle) in the four lanes of AVX registers: the
+/// update of solve() lane by lane, each lane performing the scalar update's operations in its
+/// order (no FMA: -ffp-contract=off), so the bits are the scalar update's. Four lanes share one
+/// square root and one division, whose latency bounds the two-lane update. C: SolverContact.
+/// a[0] b[0] + a[1] b[1] + a[2] b[2] lane by lane, in the scalar dot product's order.
+__attribute__((target("avx2"), always_inline)) inline __m256d dot4(const __m256d* a, const __m256d* b) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
+                       _mm256_mul_pd(a[2], b[2]));
+}
+
+// The four contacts' values of one expression E(l) of contact c[l], in lanes 0..3.
+#define SIMREEL_LANES(E) _mm256_setr_pd(E(0), E(1), E(2), E(3))
+
+template <bool wall, class C>
+__attribute__((target("avx2"))) void update4(C* c, const Vec3* vc, Vec3* v, const double* inv_mass) {
+  __m256d n[3], vi[3], vj[3], dv[3], pt[3];
+  for (int k = 0; k < 3; ++k) {
+#define N_(l) c[l].n[k]
+#define PT_(l) c[l].pt[k]
+#define VJ_(l) v[c[l].j][k]
+#define VI_(l) (wall ? vc[l][k] : v[c[l].i][k])
+    n[k] = SIMREEL_LANES(N_);
+    pt[k] = SIMREEL_LANES(PT_);
+    vj[k] = SIMREEL_LANES(VJ_);
+    vi[k] = SIMREEL_LANES(VI_);
+#undef N_
+#undef PT_
+#undef VJ_
+#undef VI_
+  }
+#define WJ_(l) inv_mass[c[l].j]
+#define WI_(l) (wall ? 0.0 : inv_mass[c[l].i])
+#define MEFF_(l) c[l].m_eff
+#define PN_(l) c[l].pn
+#define TARGET_(l) c[l].target
+#define MU_(l) c[l].mu
+  const __m256d wj = SIMREEL_LANES(WJ_), wi = SIMREEL_LANES(WI_);
+  const __m256d m_eff = SIMREEL_LANES(MEFF_), pn = SIMREEL_LANES(PN_);
+  const __m256d target = SIMREEL_LANES(TARGET_), mu = SIMREEL_LANES(MU_);
+#undef WJ_
+#undef WI_
+#undef MEFF_
+#undef PN_
+#undef TARGET_
+#undef MU_
+  for (int k = 0; k < 3; ++k) dv[k] = _mm256_sub_pd(vj[k], vi[k]);
+  const __m256d vn = dot4(dv, n);
+  const __m256d pn_new =
+      _mm256_max_pd(_mm256_add_pd(pn, _mm256_mul_pd(m_eff, _mm256_sub_pd(target, vn))), _mm256_setzero_pd());
+  const __m256d dpn = _mm256_sub_pd(pn_new, pn);
+  const __m256d si = _mm256_mul_pd(dpn, wi), sj = _mm256_mul_pd(dpn, wj);
+  for (int k = 0; k < 3; ++k) {
+    if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(si, n[k]));
+    vj[k] = _mm256_add_pd(vj[k], _mm256_mul_pd(sj, n[k]));
+  }
+  for (int k = 0; k < 3; ++k) dv[k] = _mm256_sub_pd(vj[k], vi[k]);
+  const __m256d dvn = dot4(dv, n);
+  __m256d pt_new[3];
+  for (int k = 0; k < 3; ++k) {
+    const __m256d vt = _mm256_sub_pd(dv[k], _mm256_mul_pd(dvn, n[k]));
+    pt_new[k] = _mm256_sub_pd(pt[k], _mm256_mul_pd(m_eff, vt));
+  }
+  const __m256d bound = _mm256_mul_pd(mu, pn_new);
+  const __m256d len = _mm256_sqrt_pd(dot4(pt_new, pt_new));
+  // minpd's rule (its second operand on NaN) is the scalar update's min.
+  const __m256d f = _mm256_min_pd(_mm256_div_pd(bound, len), _mm256_set1_pd(1.0));
+  alignas(32) double out_pn[4], out_pt[3][4], out_vi[3][4], out_vj[3][4];
+  _mm256_store_pd(out_pn, pn_new);
+  for (int k = 0; k < 3; ++k) {
+    pt_new[k] = _mm256_mul_pd(pt_new[k], f);
+    const __m256d dpt = _mm256_sub_pd(pt_new[k], pt[k]);
+    if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(wi, dpt));
+    vj[k] = _mm256_add_pd(vj[k], _mm256_mul_pd(wj, dpt));
+    _mm256_store_pd(out_pt[k], pt_new[k]);
+    _mm256_store_pd(out_vi[k], vi[k]);
+    _mm256_store_pd(out_vj[k], vj[k]);
+  }
+  for (int l = 0; l < 4; ++l) {
+    c[l].pn = out_pn[l];
+    for (int k = 0; k < 3; ++k) {
+      c[l].pt[k] = out_pt[k][l];
+      if (!wall) v[c[l].i][k] = out_vi[k][l];
+      v[c[l].j][k] = out_vj[k][l];
+    }
+  }
+}
+#undef SIMREEL_LANES
+
+/// The CPU runs update4() (checked once).
+bool cpu_has_avx2() {
+  __builtin_cpu_init();
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+#else
+#define SIMREEL_SOLVE_QUADS 0
+#endif
+
+}  // namespace
+
 template <class F>
 void ParticleCollider::sweep_bands(int sweeps, const F& over) {
   if (bands_.empty()) {
@@ -314,9 +418,23 @@ void ParticleCollider::solve() {
     store3(vj, v[c0.j], v[c1.j]);
   };
 #endif
+#if SIMREEL_SOLVE_QUADS
+  const bool quads = four_lanes && cpu_has_avx2();
+#endif
   const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
     for (std::size_t q = begin; q < end; ++q) {
       SolverContact& c = work_[q];
+#if SIMREEL_SOLVE_QUADS
+      if (pair_next_[q] == 2 && quads) {  // q .. q + 3: the same wave, so the same kind
+        if (c.i == kCollider) {
+          update4<true>(&c, &work_vc_[q], v.data(), inv_mass.data());
+        } else {
+          update4<false>(&c, &work_vc_[q], v.data(), inv_mass.data());
+        }
+        q += 3;
+        continue;
+      }
+#endif
 #if defined(__SSE2__)
       if (pair_next_[q] != 0) {  // q and q + 1: the same wave, so the same kind
         if (c.i == kCollider) {
@@ -390,9 +508,14 @@ void ParticleCollider::schedule() {
     for (std::size_t w = 0; w + 1 < wave_count.size(); ++w) wave_count[w + 1] += wave_count[w];
     for (std::size_t q = begin; q < end; ++q)
       sched_[begin + wave_count[wave_[q]]++] = std::uint32_t(q);
-    // Pairs of neighbours in one wave go to the two-lane update together.
+    // Fours of neighbours in one wave go to the four-lane update together (2; two pairs where it
+    // does not run: the next pair is marked too), pairs to the two-lane update (1).
     for (std::size_t k = begin; k < end;) {
-      if (k + 1 < end && wave_[sched_[k]] == wave_[sched_[k + 1]]) {
+      if (k + 3 < end && wave_[sched_[k]] == wave_[sched_[k + 3]]) {  // sorted: k .. k + 3 alike
+        pair_next_[k] = 2;
+        pair_next_[k + 2] = 1;
+        k += 4;
+      } else if (k + 1 < end && wave_[sched_[k]] == wave_[sched_[k + 1]]) {
         pair_next_[k] = 1;
         k += 2;
       } else {
