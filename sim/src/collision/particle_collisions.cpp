@@ -241,7 +241,7 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
 }
 
 void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& members, double h) {
-  // Flat order here (run() has put x, v and `asleep` back). A particle slower than the sleep
+  // Flat order here (run() has written the particles and put `asleep` back). A particle slower than the sleep
   // speed after the solve adds the step to its time at rest; reaching kSleepTime it falls
   // asleep where it is, its velocity zeroed.
   std::size_t k = 0;

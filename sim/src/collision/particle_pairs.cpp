@@ -276,14 +276,16 @@ bool ParticleCollider::build_grid(bool sorted_copies) {
   sy_.resize(n);
   sz_.resize(n);
   sr_.resize(n);
-#pragma omp parallel for schedule(static) num_threads(par) if (par > 1 && sorted_copies)
-  for (std::ptrdiff_t ss = 0; ss < (sorted_copies ? np : 0); ++ss) {
-    const std::size_t s = std::size_t(ss);
-    const std::uint32_t i = order_[s];
-    sx_[s] = x[i][0];
-    sy_[s] = x[i][1];
-    sz_[s] = x[i][2];
-    sr_[s] = radius[i];
+  if (sorted_copies) {
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t ss = 0; ss < np; ++ss) {
+      const std::size_t s = std::size_t(ss);
+      const std::uint32_t i = order_[s];
+      sx_[s] = x[i][0];
+      sy_[s] = x[i][1];
+      sz_[s] = x[i][2];
+      sr_[s] = radius[i];
+    }
   }
   // The occupied cells: each sorted position that starts a cell, in order (for a large system
   // through a count of them per stretch of positions, one stretch per thread).

@@ -21,10 +21,6 @@ namespace {
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define SIMREEL_SOLVE_QUADS 1
-/// Four contacts of one wave (they share no particle) in the four lanes of AVX registers: the
-/// update of solve() lane by lane, each lane performing the scalar update's operations in its
-/// order (no FMA: -ffp-contract=off), so the bits are the scalar update's. Four lanes share one
-/// square root and one division, whose latency bounds the two-lane update. C: SolverContact.
 /// a[0] b[0] + a[1] b[1] + a[2] b[2] lane by lane, in the scalar dot product's order.
 __attribute__((target("avx2"), always_inline)) inline __m256d dot4(const __m256d* a, const __m256d* b) {
   return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
@@ -34,6 +30,10 @@ __attribute__((target("avx2"), always_inline)) inline __m256d dot4(const __m256d
 // The four contacts' values of one expression E(l) of contact c[l], in lanes 0..3.
 #define SIMREEL_LANES(E) _mm256_setr_pd(E(0), E(1), E(2), E(3))
 
+/// Four contacts of one wave (they share no particle) in the four lanes of AVX registers: the
+/// update of solve() lane by lane, each lane performing the scalar update's operations in its
+/// order (no FMA: -ffp-contract=off), so the bits are the scalar update's. Four lanes share one
+/// square root and one division, whose latency bounds the two-lane update. C: SolverContact.
 template <bool wall, class C>
 __attribute__((target("avx2"))) void update4(C* c, const Vec3* vc, Vec3* v, const double* inv_mass) {
   __m256d n[3], vi[3], vj[3], dv[3], pt[3];
