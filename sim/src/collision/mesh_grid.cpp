@@ -130,7 +130,9 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   level_[0] = -std::numeric_limits<double>::infinity();
   level_[255] = std::numeric_limits<double>::infinity();
   for (int q = 1; q < 255; ++q) level_[q] = z0 + q * step;
-  column_.assign(2 * columns, 0);
+  // Two bytes past the last column: a 32-bit gather at a column's two bytes (ColumnTable) may
+  // read them.
+  column_.assign(2 * columns + 2, 0);
   for (std::size_t col = 0; col < columns; ++col) {
     if (!(zcol[2 * col] <= zcol[2 * col + 1])) {  // no triangle over it
       column_[2 * col] = 255;

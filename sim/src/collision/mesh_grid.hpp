@@ -109,6 +109,24 @@ class MeshGrid {
     return lo[2] > level_[qhi] || hi[2] < level_[qlo];
   }
 
+  /// clear_of()'s data, for a form of it that answers several boxes at once
+  /// (columns_clear_block()): the mesh's bounds (m), cells per metre, columns per row, the last
+  /// cell's index per axis, the column table (2 bytes per column, row order, then 2 bytes of
+  /// padding) and the levels (m). `empty`: no cells (clear_of() answers false).
+  struct ColumnTable {
+    const double* lo;
+    const double* hi;
+    double inv_cell;
+    std::int64_t dim_x;
+    const double* last;
+    const std::uint8_t* column;
+    const double* level;
+    bool empty;
+  };
+  [[nodiscard]] ColumnTable column_table() const {
+    return {lo_.data(), hi_.data(), inv_cell_, dim_[0], last_, column_.data(), level_, cell_.empty()};
+  }
+
   /// Calls f(triangle with its edge data, its index in the mesh) for every triangle whose own box overlaps [lo, hi]
   /// (local frame, m) — and
   /// perhaps a few more within float rounding of it, which a swept-sphere test rejects

@@ -2,9 +2,14 @@
 #include "collision/particle_blocks.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "core/vector_clones.hpp"
+
+#if SIMREEL_HAS_VECTOR_CLONES
+#include <immintrin.h>
+#endif
 
 namespace simreel::sim::detail {
 
@@ -89,8 +94,9 @@ void near_block_plain(const float* __restrict x, const float* __restrict v,
   }
 }
 
-void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
-                         const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
+namespace {
+void columns_clear_scalar(const SweptBounds& b, std::size_t n, const Collider& c,
+                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
   const MeshGrid& grid = c.mesh->grid;
   for (std::size_t k = 0; k < n; ++k) {
     if (pend[k] == 0) continue;
@@ -102,6 +108,120 @@ void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
     const Vec3 hi(b.hi[0][k] + grow, b.hi[1][k] + grow, b.hi[2][k] + grow);
     if (!grid.clear_of(lo, hi)) clear[k] = 0;
   }
+}
+
+#if SIMREEL_HAS_VECTOR_CLONES
+/// MeshGrid::clear_of()'s cell of coordinate v on one axis, in lanes: ((v - origin) inv) clamped
+/// as std::max(., 0.0) then std::min(., last) clamp (comparison and pick), truncated to int.
+__attribute__((target("avx512f,avx512vl"), always_inline)) inline __m256i column_cell(
+    __m512d v, __m512d origin, __m512d inv, __m512d last) {
+  const __m512d zero = _mm512_setzero_pd();
+  v = _mm512_mul_pd(_mm512_sub_pd(v, origin), inv);
+  v = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(v, zero, _CMP_LT_OQ), v, zero);
+  v = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(last, v, _CMP_LT_OQ), v, last);
+  return _mm512_maskz_cvttpd_epi32(0xff, v);
+}
+
+/// columns_clear_scalar() for eight particles at a time in AVX-512 lanes: overlaps() and
+/// MeshGrid::clear_of() with the same double operations in each lane (the clamps as the
+/// comparisons std::max / std::min make, truncation to int), the 2 x 2 columns always read (a
+/// column read twice changes no minimum or maximum), and the early returns of clear_of() as lane
+/// masks in its order: outside the bounds (clear), not ordered (NaN: not clear), more than two
+/// columns on an axis (not clear), then the levels. The scalar loop's branches on each
+/// particle's answers cost the rain benchmark's first second about a fifth of its time.
+__attribute__((target("avx512f,avx512vl")))
+void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c,
+                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
+  const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
+  const double* center = c.aabb_center.data();
+  const double* half = c.aabb_half.data();
+  const __m512d zero = _mm512_setzero_pd();
+  const __m512i sign = _mm512_set1_epi64(std::int64_t(0x8000000000000000ull));
+  const __m256i dim_x = _mm256_set1_epi32(int(t.dim_x)), one = _mm256_set1_epi32(1);
+  const __m256i byte = _mm256_set1_epi32(0xff);
+  for (std::size_t k0 = 0; k0 < n; k0 += 8) {
+    const std::size_t lanes = std::min<std::size_t>(8, n - k0);
+    unsigned asked = 0;
+    for (std::size_t j = 0; j < lanes; ++j) asked |= unsigned(pend[k0 + j] != 0) << j;
+    if (asked == 0) continue;
+    const __mmask8 m = __mmask8(asked);
+    const __m512d g = _mm512_maskz_loadu_pd(m, b.grow + k0);
+    __m512d lo[3], hi[3];
+    __mmask8 in_aabb = m;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = _mm512_maskz_loadu_pd(m, b.lo[a] + k0);
+      hi[a] = _mm512_maskz_loadu_pd(m, b.hi[a] + k0);
+      const __m512d e = _mm512_add_pd(_mm512_set1_pd(half[a]), g);
+      const __m512d neg_e = _mm512_castsi512_pd(_mm512_xor_epi64(_mm512_castpd_si512(e), sign));
+      const __m512d ca = _mm512_set1_pd(center[a]);
+      in_aabb &= _mm512_cmp_pd_mask(_mm512_sub_pd(lo[a], ca), e, _CMP_LE_OQ) &
+                 _mm512_cmp_pd_mask(_mm512_sub_pd(hi[a], ca), neg_e, _CMP_GE_OQ);
+    }
+    if (in_aabb == 0) continue;
+    __mmask8 kept = in_aabb;  // lanes whose columns do not clear them (so far: all)
+    if (!t.empty) {
+      __mmask8 outside = 0, ordered = 0xff;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = _mm512_sub_pd(lo[a], g);
+        hi[a] = _mm512_add_pd(hi[a], g);
+        outside |= _mm512_cmp_pd_mask(lo[a], _mm512_set1_pd(t.hi[a]), _CMP_GT_OQ) |
+                   _mm512_cmp_pd_mask(hi[a], _mm512_set1_pd(t.lo[a]), _CMP_LT_OQ);
+        ordered &= _mm512_cmp_pd_mask(lo[a], hi[a], _CMP_LE_OQ);
+      }
+      __mmask8 ask = in_aabb & __mmask8(~outside) & ordered;
+      __m256i c0[2], c1[2];
+      for (int a = 0; a < 2; ++a) {
+        const __m512d origin = _mm512_set1_pd(t.lo[a]), inv = _mm512_set1_pd(t.inv_cell);
+        const __m512d last = _mm512_set1_pd(t.last[a]);
+        c0[a] = column_cell(lo[a], origin, inv, last);
+        c1[a] = column_cell(hi[a], origin, inv, last);
+        ask &= _mm256_mask_cmp_epi32_mask(ask, _mm256_sub_epi32(c1[a], c0[a]), one, _MM_CMPINT_LE);
+      }
+      __mmask8 clear_lanes = outside;
+      if (ask != 0) {
+        const __m256i row0 = _mm256_mullo_epi32(c0[1], dim_x), row1 = _mm256_mullo_epi32(c1[1], dim_x);
+        const __m256i none = _mm256_setzero_si256();
+        const __m256i w00 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row0, c0[0]), t.column, 2);
+        const __m256i w10 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row0, c1[0]), t.column, 2);
+        const __m256i w01 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c0[0]), t.column, 2);
+        const __m256i w11 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c1[0]), t.column, 2);
+        // Each word holds a column's two bytes (low, high level) and the next column's two.
+#define SIMREEL_LOW(w) _mm256_and_si256(w, byte)
+#define SIMREEL_HIGH(w) _mm256_and_si256(_mm256_srli_epi32(w, 8), byte)
+        const __m256i qlo = _mm256_min_epu32(_mm256_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
+                                             _mm256_min_epu32(SIMREEL_LOW(w01), SIMREEL_LOW(w11)));
+        const __m256i qhi = _mm256_max_epu32(_mm256_max_epu32(SIMREEL_HIGH(w00), SIMREEL_HIGH(w10)),
+                                             _mm256_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
+#undef SIMREEL_LOW
+#undef SIMREEL_HIGH
+        const __m512d level_hi = _mm512_mask_i32gather_pd(zero, ask, qhi, t.level, 8);
+        const __m512d level_lo = _mm512_mask_i32gather_pd(zero, ask, qlo, t.level, 8);
+        clear_lanes |= ask & (_mm512_cmp_pd_mask(lo[2], level_hi, _CMP_GT_OQ) |
+                              _mm512_cmp_pd_mask(hi[2], level_lo, _CMP_LT_OQ));
+      }
+      kept &= __mmask8(~clear_lanes);
+    }
+    for (unsigned r = kept; r != 0; r &= r - 1) clear[k0 + std::size_t(std::countr_zero(r))] = 0;
+  }
+}
+#endif
+}  // namespace
+
+void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
+                         const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
+                         bool wide) {
+#if SIMREEL_HAS_VECTOR_CLONES
+  static const bool avx512 = cpu_has_avx512vl();
+  const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
+  // The lanes' column index is a 32-bit integer.
+  if (wide && avx512 && (t.last[0] + 1.0) * (t.last[1] + 1.0) < 0x1p30) {
+    columns_clear_avx512(b, n, c, pend, clear);
+    return;
+  }
+#else
+  (void)wide;
+#endif
+  columns_clear_scalar(b, n, c, pend, clear);
 }
 
 /// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
