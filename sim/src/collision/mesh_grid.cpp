@@ -9,6 +9,44 @@
 
 namespace simreel::sim::detail {
 
+namespace {
+/// The z extent of the part of triangle t over the rectangle [x0, x1] x [y0, y1] (m; bounds may
+/// be infinite): t clipped to it (Sutherland–Hodgman against the four half-spaces, z interpolated
+/// along the edges, exact up to rounding since z is linear over the triangle's plane, so its
+/// extremes lie at the clipped polygon's corners). False when nothing of t lies over it.
+bool clipped_z_range(const Triangle& t, double x0, double x1, double y0, double y1, double& lo_z,
+                     double& hi_z) {
+  Vec3 a[9], b[9];  // a triangle clipped by four lines has at most seven corners
+  int na = 3;
+  a[0] = t.a;
+  a[1] = t.b;
+  a[2] = t.c;
+  const auto clip = [&](int axis, double bound, double sign) {
+    int nb = 0;
+    for (int k = 0; k < na; ++k) {
+      const Vec3& p = a[k];
+      const Vec3& q = a[(k + 1) % na];
+      const double dp = sign * (p[axis] - bound), dq = sign * (q[axis] - bound);  // >= 0: inside
+      if (dp >= 0.0) b[nb++] = p;
+      if ((dp >= 0.0) != (dq >= 0.0)) b[nb++] = p + (dp / (dp - dq)) * (q - p);
+    }
+    na = nb;
+    for (int k = 0; k < na; ++k) a[k] = b[k];
+  };
+  if (x0 > -std::numeric_limits<double>::infinity()) clip(0, x0, 1.0);
+  if (na > 0 && x1 < std::numeric_limits<double>::infinity()) clip(0, x1, -1.0);
+  if (na > 0 && y0 > -std::numeric_limits<double>::infinity()) clip(1, y0, 1.0);
+  if (na > 0 && y1 < std::numeric_limits<double>::infinity()) clip(1, y1, -1.0);
+  if (na == 0) return false;
+  lo_z = hi_z = a[0].z();
+  for (int k = 1; k < na; ++k) {
+    lo_z = std::min(lo_z, a[k].z());
+    hi_z = std::max(hi_z, a[k].z());
+  }
+  return true;
+}
+}  // namespace
+
 MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uint32_t>& visit) {
   const std::size_t n = tris.size();
   if (n == 0 || visit.size() != n) return;
@@ -101,9 +139,15 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
       }
       b.rank[l] = std::uint32_t(r);
     });
-  // The columns' z extents: each triangle's box, rounded outward to floats and one ulp further
-  // (what the blocks' float tests see), over the columns its box spans; then to levels, one
-  // more level outward (the rounding of the level arithmetic is far below a level).
+  // The columns' z extents: over each column its box spans, the part of each triangle that lies
+  // over the column (the triangle clipped to the column's rectangle, widened by far more than
+  // the rounding of the cell arithmetic, so that every point of the triangle whose cell indices
+  // are the column's lies in it; the first and last columns reach to infinity, as the clamped
+  // indices do), its lowest and highest z; rounded outward to floats and one ulp further, then
+  // to levels, one more level outward (the rounding of the clip and the level arithmetic is far
+  // below a level and an ulp). A triangle's box would give the z extent of the whole triangle:
+  // on a bumpy terrain several times the height that the surface spans over one column, and
+  // each drop in that slab is swept against the triangles for nothing.
   constexpr float kInf = std::numeric_limits<float>::infinity();
   const std::size_t columns = std::size_t(dim_[0] * dim_[1]);
   std::vector<float> zcol(2 * columns);
@@ -111,16 +155,28 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
     zcol[2 * col] = kInf;
     zcol[2 * col + 1] = -kInf;
   }
+  const double widen = 1e-7 * cell + 1e-12 * (lo_.cwiseAbs().maxCoeff() + hi_.cwiseAbs().maxCoeff());
+  const auto edge = [&](int k, std::int64_t c) {  // (m) where column c's span on axis k begins
+    return c <= 0 ? -std::numeric_limits<double>::infinity() : lo_[k] + double(c) * cell - widen;
+  };
+  const auto edge_end = [&](int k, std::int64_t c) {
+    return c >= dim_[k] - 1 ? std::numeric_limits<double>::infinity()
+                            : lo_[k] + double(c + 1) * cell + widen;
+  };
   for (std::size_t r = 0; r < n; ++r) {
-    float zlo = float(box[6 * r + 2]), zhi = float(box[6 * r + 5]);
-    if (double(zlo) > box[6 * r + 2]) zlo = std::nextafter(zlo, -kInf);
-    if (double(zhi) < box[6 * r + 5]) zhi = std::nextafter(zhi, kInf);
-    zlo = std::nextafter(zlo, -kInf);
-    zhi = std::nextafter(zhi, kInf);
+    const Triangle& t = tris[visit[r]];
     std::int64_t c0[2], c1[2];
     for (int k = 0; k < 2; ++k) cell_range(r, k, c0[k], c1[k]);
     for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
       for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
+        double lo_z, hi_z;
+        if (!clipped_z_range(t, edge(0, x), edge_end(0, x), edge(1, y), edge_end(1, y), lo_z, hi_z))
+          continue;  // the triangle's box spans the column; the triangle does not enter it
+        float zlo = float(lo_z), zhi = float(hi_z);
+        if (double(zlo) > lo_z) zlo = std::nextafter(zlo, -kInf);
+        if (double(zhi) < hi_z) zhi = std::nextafter(zhi, kInf);
+        zlo = std::nextafter(zlo, -kInf);
+        zhi = std::nextafter(zhi, kInf);
         const std::size_t col = std::size_t(y * dim_[0] + x);
         zcol[2 * col] = std::min(zcol[2 * col], zlo);
         zcol[2 * col + 1] = std::max(zcol[2 * col + 1], zhi);

@@ -80,14 +80,16 @@ class MeshGrid {
     }
   }
 
-  /// True when no triangle's box overlaps [lo, hi] (local frame, m), shown cheaply: the box lies
-  /// outside the mesh's bounds, or above or below the boxes of every triangle over the (at most
-  /// 2 x 2) columns of cells it spans in x and y. So query() would hand out nothing, not even a
-  /// triangle within float rounding (the columns' bounds are floats rounded outward by one more
-  /// ulp, then to a step of 1/254 of the bounds' height and one step further). False where it
-  /// cannot tell. Two bytes per column, so the table stays in cache while particles visit it in
-  /// no order: rain above a terrain is told from the columns alone, without reading its cells
-  /// (collide()'s rejection test, §2.3.1).
+  /// True when no point of any triangle lies in [lo, hi] (local frame, m), shown cheaply: the box
+  /// lies outside the mesh's bounds, or above or below the part of every triangle that lies over
+  /// the (at most 2 x 2) columns of cells it spans in x and y. So no sweep whose segment grown by
+  /// its radius lies in the box can meet a triangle (sweep_mesh() may still be handed triangles
+  /// whose boxes reach into it, and would find no hit). The columns' bounds are the triangles
+  /// clipped to each column, rounded outward to floats by one more ulp, then to a step of 1/254
+  /// of the bounds' height and one step further. False where it cannot tell. Two bytes per
+  /// column, so the table stays in cache while particles visit it in no order: rain above a
+  /// terrain is told from the columns alone, without reading its cells (collide()'s rejection
+  /// test, §2.3.1).
   [[nodiscard]] bool clear_of(const Vec3& lo, const Vec3& hi) const {
     if (cell_.empty()) return false;
     for (int k = 0; k < 3; ++k)
@@ -255,7 +257,7 @@ class MeshGrid {
   std::int64_t dim_[3] = {0, 0, 0};             ///< cells per axis
   double last_[3] = {0.0, 0.0, 0.0};            ///< dim - 1, the last cell's index
   std::vector<Cell> cell_;                      ///< (cells) row order (x fastest)
-  /// (2 x columns) per (x, y) column of cells, row order: the z extent of the boxes of the
+  /// (2 x columns) per (x, y) column of cells, row order: the z extent of the parts of the
   /// triangles over it as levels (below), rounded outward (empty: 255, 0). For clear_of().
   std::vector<std::uint8_t> column_;
   /// (m) level q's height: -inf for 0, lo_z + q (hi_z - lo_z) / 254 for 1..254, +inf for 255.

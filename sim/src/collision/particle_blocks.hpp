@@ -46,9 +46,9 @@ void near_solid(const SweptBounds& b, std::size_t n, const double* __restrict ce
                 const double* __restrict half, std::uint8_t* __restrict near);
 
 /// An open mesh that does not move: a particle whose swept bounds (grown by its radius and
-/// surface_tol) clear every triangle's box meets nothing there (sweep_mesh() would be handed no
-/// triangle, and an open mesh has no inside to remove it from), so the mesh's own columns
-/// (MeshGrid::clear_of) can reject it after its AABB: rain above a terrain.
+/// surface_tol) hold no point of any triangle meets nothing there (its sweep finds no hit, and an
+/// open mesh has no inside to remove it from), so the mesh's own columns (MeshGrid::clear_of) can
+/// reject it after its AABB: rain above a terrain.
 inline bool column_tested(const Collider& c) {
   return c.shape == Collider::Shape::mesh && c.unposed && !c.mesh->closed;
 }
