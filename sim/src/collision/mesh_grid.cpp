@@ -141,7 +141,7 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
     });
   // The columns' z extents: over each column its box spans, the part of each triangle that lies
   // over the column (the triangle clipped to the column's rectangle, widened by far more than
-  // the rounding of the cell arithmetic, so that every point of the triangle whose cell indices
+  // the rounding of the column arithmetic, so that every point of the triangle whose column indices
   // are the column's lies in it; the first and last columns reach to infinity, as the clamped
   // indices do), its lowest and highest z; rounded outward to floats and one ulp further, then
   // to levels, one more level outward (the rounding of the clip and the level arithmetic is far
@@ -149,24 +149,35 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   // on a bumpy terrain several times the height that the surface spans over one column, and
   // each drop in that slab is swept against the triangles for nothing.
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  const std::size_t columns = std::size_t(dim_[0] * dim_[1]);
+  const double column = cell / kColumnsPerCell;
+  inv_column_ = 1.0 / column;
+  for (int k = 0; k < 2; ++k) {
+    column_dim_[k] = std::int64_t(std::floor(size[k] * inv_column_)) + 1;
+    column_last_[k] = double(column_dim_[k] - 1);
+  }
+  const std::size_t columns = std::size_t(column_dim_[0] * column_dim_[1]);
   std::vector<float> zcol(2 * columns);
   for (std::size_t col = 0; col < columns; ++col) {
     zcol[2 * col] = kInf;
     zcol[2 * col + 1] = -kInf;
   }
-  const double widen = 1e-7 * cell + 1e-12 * (lo_.cwiseAbs().maxCoeff() + hi_.cwiseAbs().maxCoeff());
+  const double widen = 1e-7 * column + 1e-12 * (lo_.cwiseAbs().maxCoeff() + hi_.cwiseAbs().maxCoeff());
   const auto edge = [&](int k, std::int64_t c) {  // (m) where column c's span on axis k begins
-    return c <= 0 ? -std::numeric_limits<double>::infinity() : lo_[k] + double(c) * cell - widen;
+    return c <= 0 ? -std::numeric_limits<double>::infinity() : lo_[k] + double(c) * column - widen;
   };
   const auto edge_end = [&](int k, std::int64_t c) {
-    return c >= dim_[k] - 1 ? std::numeric_limits<double>::infinity()
-                            : lo_[k] + double(c + 1) * cell + widen;
+    return c >= column_dim_[k] - 1 ? std::numeric_limits<double>::infinity()
+                                   : lo_[k] + double(c + 1) * column + widen;
   };
   for (std::size_t r = 0; r < n; ++r) {
     const Triangle& t = tris[visit[r]];
     std::int64_t c0[2], c1[2];
-    for (int k = 0; k < 2; ++k) cell_range(r, k, c0[k], c1[k]);
+    for (int k = 0; k < 2; ++k) {
+      const double a = (box[6 * r + std::size_t(k)] - lo_[k]) * inv_column_;
+      const double b = (box[6 * r + 3 + std::size_t(k)] - lo_[k]) * inv_column_;
+      c0[k] = std::clamp(std::int64_t(a), std::int64_t(0), column_dim_[k] - 1);
+      c1[k] = std::clamp(std::int64_t(b), std::int64_t(0), column_dim_[k] - 1);
+    }
     for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
       for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
         double lo_z, hi_z;
@@ -177,7 +188,7 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
         if (double(zhi) < hi_z) zhi = std::nextafter(zhi, kInf);
         zlo = std::nextafter(zlo, -kInf);
         zhi = std::nextafter(zhi, kInf);
-        const std::size_t col = std::size_t(y * dim_[0] + x);
+        const std::size_t col = std::size_t(y * column_dim_[0] + x);
         zcol[2 * col] = std::min(zcol[2 * col], zlo);
         zcol[2 * col + 1] = std::max(zcol[2 * col + 1], zhi);
       }
