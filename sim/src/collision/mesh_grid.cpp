@@ -10,40 +10,40 @@
 namespace simreel::sim::detail {
 
 namespace {
-/// The z extent of the part of triangle t over the rectangle [x0, x1] x [y0, y1] (m; bounds may
-/// be infinite): t clipped to it (Sutherland–Hodgman against the four half-spaces, z interpolated
-/// along the edges, exact up to rounding since z is linear over the triangle's plane, so its
-/// extremes lie at the clipped polygon's corners). False when nothing of t lies over it.
-bool clipped_z_range(const Triangle& t, double x0, double x1, double y0, double y1, double& lo_z,
-                     double& hi_z) {
-  Vec3 a[9], b[9];  // a triangle clipped by four lines has at most seven corners
-  int na = 3;
-  a[0] = t.a;
-  a[1] = t.b;
-  a[2] = t.c;
-  const auto clip = [&](int axis, double bound, double sign) {
-    int nb = 0;
-    for (int k = 0; k < na; ++k) {
-      const Vec3& p = a[k];
-      const Vec3& q = a[(k + 1) % na];
-      const double dp = sign * (p[axis] - bound), dq = sign * (q[axis] - bound);  // >= 0: inside
-      if (dp >= 0.0) b[nb++] = p;
-      if ((dp >= 0.0) != (dq >= 0.0)) b[nb++] = p + (dp / (dp - dq)) * (q - p);
-    }
-    na = nb;
-    for (int k = 0; k < na; ++k) a[k] = b[k];
-  };
-  if (x0 > -std::numeric_limits<double>::infinity()) clip(0, x0, 1.0);
-  if (na > 0 && x1 < std::numeric_limits<double>::infinity()) clip(0, x1, -1.0);
-  if (na > 0 && y0 > -std::numeric_limits<double>::infinity()) clip(1, y0, 1.0);
-  if (na > 0 && y1 < std::numeric_limits<double>::infinity()) clip(1, y1, -1.0);
-  if (na == 0) return false;
-  lo_z = hi_z = a[0].z();
-  for (int k = 1; k < na; ++k) {
-    lo_z = std::min(lo_z, a[k].z());
-    hi_z = std::max(hi_z, a[k].z());
+/// A convex polygon of at most 9 corners (a triangle clipped by four lines has at most seven).
+struct Polygon {
+  Vec3 p[9];
+  int n = 0;
+};
+
+/// out = the part of polygon a on the inner side of coordinate `axis` = bound (sign 1: above,
+/// -1: below), by Sutherland–Hodgman: the other coordinates interpolated along the edges (exact
+/// up to rounding, as they are linear over a triangle's plane).
+void clip_side(const Polygon& a, int axis, double bound, double sign, Polygon& out) {
+  out.n = 0;
+  for (int k = 0; k < a.n; ++k) {
+    const Vec3& p = a.p[k];
+    const Vec3& q = a.p[k + 1 < a.n ? k + 1 : 0];
+    const double dp = sign * (p[axis] - bound), dq = sign * (q[axis] - bound);  // >= 0: inside
+    if (dp >= 0.0) out.p[out.n++] = p;
+    if ((dp >= 0.0) != (dq >= 0.0)) out.p[out.n++] = p + (dp / (dp - dq)) * (q - p);
   }
-  return true;
+}
+
+/// out = the part of polygon a with lo <= coordinate `axis` <= hi (m; either may be infinite);
+/// tmp: scratch.
+void clip_slab(const Polygon& a, int axis, double lo, double hi, Polygon& tmp, Polygon& out) {
+  const Polygon* from = &a;
+  if (!std::isinf(lo)) {
+    clip_side(a, axis, lo, 1.0, tmp);
+    from = &tmp;
+  }
+  if (!std::isinf(hi)) {
+    clip_side(*from, axis, hi, -1.0, out);
+    return;
+  }
+  out.n = from->n;
+  for (int k = 0; k < out.n; ++k) out.p[k] = from->p[k];
 }
 }  // namespace
 
@@ -178,11 +178,23 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
       c0[k] = std::clamp(std::int64_t(a), std::int64_t(0), column_dim_[k] - 1);
       c1[k] = std::clamp(std::int64_t(b), std::int64_t(0), column_dim_[k] - 1);
     }
-    for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
-      for (std::int64_t x = c0[0]; x <= c1[0]; ++x) {
-        double lo_z, hi_z;
-        if (!clipped_z_range(t, edge(0, x), edge_end(0, x), edge(1, y), edge_end(1, y), lo_z, hi_z))
-          continue;  // the triangle's box spans the column; the triangle does not enter it
+    Polygon tri;
+    tri.p[0] = t.a;
+    tri.p[1] = t.b;
+    tri.p[2] = t.c;
+    tri.n = 3;
+    Polygon row, part, tmp;
+    for (std::int64_t y = c0[1]; y <= c1[1]; ++y) {
+      clip_slab(tri, 1, edge(1, y), edge_end(1, y), tmp, row);
+      for (std::int64_t x = c0[0]; x <= c1[0] && row.n > 0; ++x) {
+        // The part over column (x, y); none where only the triangle's box spans it.
+        clip_slab(row, 0, edge(0, x), edge_end(0, x), tmp, part);
+        if (part.n == 0) continue;
+        double lo_z = part.p[0].z(), hi_z = lo_z;  // (z is linear: its extremes are corners)
+        for (int k = 1; k < part.n; ++k) {
+          lo_z = std::min(lo_z, part.p[k].z());
+          hi_z = std::max(hi_z, part.p[k].z());
+        }
         float zlo = float(lo_z), zhi = float(hi_z);
         if (double(zlo) > lo_z) zlo = std::nextafter(zlo, -kInf);
         if (double(zhi) < hi_z) zhi = std::nextafter(zhi, kInf);
@@ -192,6 +204,7 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
         zcol[2 * col] = std::min(zcol[2 * col], zlo);
         zcol[2 * col + 1] = std::max(zcol[2 * col + 1], zhi);
       }
+    }
   }
   const double z0 = lo_[2], step = std::max(hi_[2] - lo_[2], 1e-9) / 254.0;
   level_[0] = -std::numeric_limits<double>::infinity();
