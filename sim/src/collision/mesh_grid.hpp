@@ -259,7 +259,7 @@ class MeshGrid {
   std::vector<Cell> cell_;                      ///< (cells) row order (x fastest)
   /// Columns per cell side: a column spans less of a sloping surface than a cell. (The rain
   /// benchmark, 1 / 2 / 4: 6.2 / 5.4–5.6 / 5.3 ms a step; the grid of its 100k-triangle terrain
-  /// built in 48 / 141 / 220 ms, its column table 100 / 400 / 1600 KB.)
+  /// built in about 50 / 120 / 220 ms, its column table 100 / 400 / 1600 KB.)
   static constexpr int kColumnsPerCell = 2;
   double inv_column_ = 0.0;                     ///< (1/m) columns per metre in x and y
   std::int64_t column_dim_[2] = {0, 0};         ///< columns per axis (x, y)
