@@ -161,7 +161,8 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
     zcol[2 * col] = kInf;
     zcol[2 * col + 1] = -kInf;
   }
-  const double widen = 1e-7 * column + 1e-12 * (lo_.cwiseAbs().maxCoeff() + hi_.cwiseAbs().maxCoeff());
+  const double widen =
+      1e-7 * column + 1e-12 * (lo_.cwiseAbs().maxCoeff() + hi_.cwiseAbs().maxCoeff());
   const auto edge = [&](int k, std::int64_t c) {  // (m) where column c's span on axis k begins
     return c <= 0 ? -std::numeric_limits<double>::infinity() : lo_[k] + double(c) * column - widen;
   };

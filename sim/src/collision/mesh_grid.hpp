@@ -82,14 +82,14 @@ class MeshGrid {
 
   /// True when no point of any triangle lies in [lo, hi] (local frame, m), shown cheaply: the box
   /// lies outside the mesh's bounds, or above or below the part of every triangle that lies over
-  /// the (at most 2 x 2) columns it spans in x and y (kColumnsPerCell to a cell's side). So no sweep whose segment grown by
-  /// its radius lies in the box can meet a triangle (sweep_mesh() may still be handed triangles
-  /// whose boxes reach into it, and would find no hit). The columns' bounds are the triangles
-  /// clipped to each column, rounded outward to floats by one more ulp, then to a step of 1/254
-  /// of the bounds' height and one step further. False where it cannot tell. Two bytes per
-  /// column, so the table stays in cache while particles visit it in no order: rain above a
-  /// terrain is told from the columns alone, without reading its cells (collide()'s rejection
-  /// test, §2.3.1).
+  /// the (at most 2 x 2) columns it spans in x and y (kColumnsPerCell to a cell's side). So no
+  /// sweep whose segment grown by its radius lies in the box can meet a triangle (sweep_mesh()
+  /// may still be handed triangles whose boxes reach into it, and would find no hit). The
+  /// columns' bounds are the triangles clipped to each column, rounded outward to floats by one
+  /// more ulp, then to a step of 1/254 of the bounds' height and one step further. False where it
+  /// cannot tell. Two bytes per column, so the table stays in cache while particles visit it in
+  /// no order: rain above a terrain is told from the columns alone, without reading its cells
+  /// (collide()'s rejection test, §2.3.1).
   [[nodiscard]] bool clear_of(const Vec3& lo, const Vec3& hi) const {
     if (cell_.empty()) return false;
     for (int k = 0; k < 3; ++k)
@@ -112,13 +112,13 @@ class MeshGrid {
   }
 
   /// clear_of()'s data, for a form of it that answers several boxes at once
-  /// (columns_clear_block()): the mesh's bounds (m), columns per metre, columns per row, the last
-  /// column's index per axis (x, y), the column table (2 bytes per column, row order, then 2 bytes of
-  /// padding) and the levels (m). `empty`: no cells (clear_of() answers false).
+  /// (columns_clear_block()): the mesh's bounds (m), columns per metre, columns per row, the
+  /// last column's index on x and y, the column table (2 bytes per column, row order, then 2
+  /// bytes of padding) and the levels (m). `empty`: no cells (clear_of() answers false).
   struct ColumnTable {
     const double* lo;
     const double* hi;
-    double inv_cell;
+    double inv_column;
     std::int64_t dim_x;
     const double* last;
     const std::uint8_t* column;
@@ -126,7 +126,8 @@ class MeshGrid {
     bool empty;
   };
   [[nodiscard]] ColumnTable column_table() const {
-    return {lo_.data(), hi_.data(), inv_column_, column_dim_[0], column_last_, column_.data(), level_, cell_.empty()};
+    return {lo_.data(), hi_.data(), inv_column_, column_dim_[0],
+            column_last_, column_.data(), level_, cell_.empty()};
   }
 
   /// Calls f(triangle with its edge data, its index in the mesh) for every triangle whose own box overlaps [lo, hi]

@@ -111,8 +111,8 @@ void columns_clear_scalar(const SweptBounds& b, std::size_t n, const Collider& c
 }
 
 #if SIMREEL_HAS_VECTOR_CLONES
-/// MeshGrid::clear_of()'s cell of coordinate v on one axis, in lanes: ((v - origin) inv) clamped
-/// as std::max(., 0.0) then std::min(., last) clamp (comparison and pick), truncated to int.
+/// MeshGrid::clear_of()'s column of coordinate v on one axis, in lanes: (v - origin) inv, then
+/// std::max(., 0.0) and std::min(., last) as their comparisons and picks, truncated to int.
 __attribute__((target("avx512f,avx512vl"), always_inline)) inline __m256i column_cell(
     __m512d v, __m512d origin, __m512d inv, __m512d last) {
   const __m512d zero = _mm512_setzero_pd();
@@ -171,7 +171,7 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
       __mmask8 ask = in_aabb & __mmask8(~outside) & ordered;
       __m256i c0[2], c1[2];
       for (int a = 0; a < 2; ++a) {
-        const __m512d origin = _mm512_set1_pd(t.lo[a]), inv = _mm512_set1_pd(t.inv_cell);
+        const __m512d origin = _mm512_set1_pd(t.lo[a]), inv = _mm512_set1_pd(t.inv_column);
         const __m512d last = _mm512_set1_pd(t.last[a]);
         c0[a] = column_cell(lo[a], origin, inv, last);
         c1[a] = column_cell(hi[a], origin, inv, last);
@@ -186,6 +186,7 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
         const __m256i w01 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c0[0]), t.column, 2);
         const __m256i w11 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c1[0]), t.column, 2);
         // Each word holds a column's two bytes (low, high level) and the next column's two.
+        // (Macros: a lambda here would not take this function's target.)
 #define SIMREEL_LOW(w) _mm256_and_si256(w, byte)
 #define SIMREEL_HIGH(w) _mm256_and_si256(_mm256_srli_epi32(w, 8), byte)
         const __m256i qlo = _mm256_min_epu32(_mm256_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
