@@ -466,26 +466,26 @@ TEST(SimParticleCollision, WavefrontSweepsGiveTheBitsOfTheContactOrder) {
   }
   detail::ParticleCollider b = a;
   b.wavefront = false;
-  detail::ParticleCollider d = a;  // wavefront with two lanes at most: where AVX2 is missing
-  d.four_lanes = false;
+  // The wavefront sweep with four lanes at most (AVX2), two (where AVX2 is missing) and one.
+  std::vector<detail::ParticleCollider> lanes(3, a);
+  lanes[1].max_lanes = 2;
+  lanes[2].max_lanes = 1;
   const std::vector<Vec3> v0 = a.v;
-  a.solve();
   b.solve();
-  d.solve();
+  for (auto& l : lanes) l.solve();
   int changed = 0;
   for (std::size_t p = 0; p < a.v.size(); ++p) {
-    ASSERT_EQ(a.v[p], b.v[p]) << "particle " << p;
-    ASSERT_EQ(d.v[p], b.v[p]) << "particle " << p << " (two lanes)";
-    changed += a.v[p] != v0[p];
+    for (const auto& l : lanes) ASSERT_EQ(l.v[p], b.v[p]) << "particle " << p << ", lanes " << l.max_lanes;
+    changed += lanes[0].v[p] != v0[p];
   }
   EXPECT_GT(changed, 3000);
   int sliding = 0;
   for (std::size_t q = 0; q < a.contacts.size(); ++q) {
-    ASSERT_EQ(a.contacts[q].pn, b.contacts[q].pn) << "contact " << q;
-    ASSERT_EQ(a.contacts[q].pt, b.contacts[q].pt) << "contact " << q;
-    ASSERT_EQ(d.contacts[q].pn, b.contacts[q].pn) << "contact " << q << " (two lanes)";
-    ASSERT_EQ(d.contacts[q].pt, b.contacts[q].pt) << "contact " << q << " (two lanes)";
-    const auto& c = a.contacts[q];
+    for (const auto& l : lanes) {
+      ASSERT_EQ(l.contacts[q].pn, b.contacts[q].pn) << "contact " << q << ", lanes " << l.max_lanes;
+      ASSERT_EQ(l.contacts[q].pt, b.contacts[q].pt) << "contact " << q << ", lanes " << l.max_lanes;
+    }
+    const auto& c = b.contacts[q];
     sliding += c.mu > 0.0 && c.pn > 0.0 && c.pt.norm() >= c.mu * c.pn * (1 - 1e-12);
   }
   EXPECT_GT(sliding, 100) << "the case must have contacts at the friction bound";

@@ -73,9 +73,10 @@ class ParticleCollider {
   /// The sweeps visit the contacts in wavefront order (see schedule(); the same bits, faster);
   /// false: in contact order, the reference the tests compare it with.
   bool wavefront = true;
-  /// The wavefront sweeps solve four contacts of a wave at once where the CPU has AVX2 (the
-  /// same bits); false: two at most, as where it has not (the test compares them).
-  bool four_lanes = true;
+  /// The most contacts of one wave the wavefront sweeps solve at once: 4 where the CPU has AVX2,
+  /// 2 (SSE2) otherwise; fewer where this is less. The bits are the same at every width (the
+  /// solver test compares 4, 2 and 1). Eight AVX-512 lanes were slower than four on a Xeon.
+  int max_lanes = 4;
 
   /// Finds and resolves the contacts among all members' particles and, for members that
   /// collide, with `colliders` (may be null) at their end-of-step pose; h (s) is the step.
@@ -254,15 +255,19 @@ class ParticleCollider {
   /// split over the threads for a large system (the same order at any thread count).
   template <class F>
   void sweep_bands(int sweeps, const F& over);
-  /// What a sweep reads of a contact (88 bytes against Contact's 128: the large solves are
-  /// bound by memory); a collider contact's surface velocity is in work_vc_.
-  struct SolverContact {
-    std::uint32_t i, j;
-    Vec3 n;
-    double m_eff, target, mu, pn;
-    Vec3 pt;
+  /// What a sweep reads of the contacts, one column per field in wavefront order (88 bytes a
+  /// contact against Contact's 128: the large solves are bound by memory). A run of one wave's
+  /// contacts is then a run of each column, so the SIMD updates load and store a field for all
+  /// their lanes at once instead of assembling it lane by lane. A collider contact's surface
+  /// velocity is in work_vc_.
+  struct SolverColumns {
+    std::vector<std::uint32_t> i, j;
+    std::vector<double> n[3];
+    std::vector<double> m_eff, target, mu, pn;
+    std::vector<double> pt[3];
+    void resize(std::size_t m);
   };
-  std::vector<SolverContact> work_;
+  SolverColumns work_;
   std::vector<Vec3> work_vc_;
   std::vector<std::uint32_t> sched_, wave_;
   /// schedule(): per thread, each particle's latest wave in the current window, and a window's
@@ -271,9 +276,9 @@ class ParticleCollider {
     std::vector<std::uint32_t> last_wave, wave_count;
   };
   std::vector<WaveScratch> wave_scratch_;
-  /// (work_ position) 1: it and the next are one wave's, solved together in two SIMD lanes; 2:
-  /// it and the next three, in four lanes where the CPU has AVX2 (the one two on is marked 1:
-  /// two pairs where it has not)
+  /// (work_ position) the run of one wave's contacts that starts there, solved together in SIMD
+  /// lanes: 2: four (AVX2), 1: two (SSE2), 0: this one alone. schedule() marks only runs that
+  /// the CPU and max_lanes allow.
   std::vector<std::uint8_t> pair_next_;
   /// Fills bands_ from the contacts of find_pairs() and find_collider_contacts() on sorted
   /// positions (pairs, then walls, each in ascending band order).

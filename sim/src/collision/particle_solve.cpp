@@ -19,58 +19,150 @@ namespace simreel::sim::detail {
 
 namespace {
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define SIMREEL_SOLVE_QUADS 1
+/// One contact's update (Coutinho §3.6.1–3.6.2): the normal impulse accumulated and clamped to
+/// push only, then the friction impulse that cancels the relative sliding, within the Coulomb
+/// bound mu P_n. W: ParticleCollider::SolverColumns; q: the contact's work_ position; vc: its
+/// surface velocity where it is a collider contact (`wall`).
+template <bool wall, class W>
+__attribute__((always_inline)) inline void update1(W& w, std::size_t q, const Vec3& vc, Vec3* v,
+                                                   const double* inv_mass) {
+  const std::uint32_t i = w.i[q], j = w.j[q];
+  const Vec3 n(w.n[0][q], w.n[1][q], w.n[2][q]);
+  const double m_eff = w.m_eff[q], pn = w.pn[q];
+  const Vec3 pt(w.pt[0][q], w.pt[1][q], w.pt[2][q]);
+  const double wi = wall ? 0.0 : inv_mass[i], wj = inv_mass[j];
+  Vec3 dv = v[j] - (wall ? vc : v[i]);
+  const double vn = dv.dot(n);
+  const double pn_new = std::max(0.0, pn + m_eff * (w.target[q] - vn));
+  const double dpn = pn_new - pn;
+  w.pn[q] = pn_new;
+  if (!wall) v[i] -= (dpn * wi) * n;
+  v[j] += (dpn * wj) * n;
+  dv = v[j] - (wall ? vc : v[i]);
+  const Vec3 vt = dv - dv.dot(n) * n;
+  Vec3 pt_new = pt - m_eff * vt;
+  const double bound = w.mu[q] * pn_new;
+  const double len = pt_new.norm();
+  // A minimum, not a branch: whether a contact slides is data, and a mispredicted branch
+  // stops the overlap of independent contacts. bound / len < 1 exactly when the branch
+  // "len > bound" would scale (a quotient rounded up to 1 scales by 1.0 either way; 0 / 0 and
+  // b / 0 leave it at 1), and x * 1.0 == x: the bits are those of the branch.
+  const double ratio = bound / len;
+#if defined(__SSE2__)
+  // gcc turns the ternary below into a branch; minsd returns its second operand on NaN.
+  pt_new *= _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(ratio), _mm_set_sd(1.0)));
+#else
+  pt_new *= ratio < 1.0 ? ratio : 1.0;
+#endif
+  const Vec3 dpt = pt_new - pt;
+  for (int k = 0; k < 3; ++k) w.pt[k][q] = pt_new[k];
+  if (!wall) v[i] -= wi * dpt;
+  v[j] += wj * dpt;
+}
+
+#if defined(__SSE2__)
 /// a[0] b[0] + a[1] b[1] + a[2] b[2] lane by lane, in the scalar dot product's order.
+__attribute__((always_inline)) inline __m128d dot2(const __m128d* a, const __m128d* b) {
+  return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a[0], b[0]), _mm_mul_pd(a[1], b[1])), _mm_mul_pd(a[2], b[2]));
+}
+
+/// update1() of contacts q and q + 1 of one wave (they share no particle), one in each lane of
+/// the SSE2 registers, each lane performing the scalar update's operations in its order (no
+/// FMA: -ffp-contract=off), so the bits are the scalar update's. vc: their surface velocities.
+template <bool wall, class W>
+__attribute__((always_inline)) inline void update2(W& w, std::size_t q, const Vec3* vc, Vec3* v,
+                                                   const double* inv_mass) {
+  const std::uint32_t i0 = w.i[q], i1 = w.i[q + 1], j0 = w.j[q], j1 = w.j[q + 1];
+  const auto pack = [](double a, double b) { return _mm_set_pd(b, a); };
+  __m128d n[3], vi[3], vj[3], dv[3], pt[3];
+  for (int k = 0; k < 3; ++k) {
+    n[k] = _mm_loadu_pd(&w.n[k][q]);
+    pt[k] = _mm_loadu_pd(&w.pt[k][q]);
+    vi[k] = wall ? pack(vc[0][k], vc[1][k]) : _mm_loadh_pd(_mm_load_sd(&v[i0][k]), &v[i1][k]);
+    vj[k] = _mm_loadh_pd(_mm_load_sd(&v[j0][k]), &v[j1][k]);
+  }
+  const __m128d wj = pack(inv_mass[j0], inv_mass[j1]);
+  const __m128d wi = wall ? _mm_setzero_pd() : pack(inv_mass[i0], inv_mass[i1]);
+  const __m128d m_eff = _mm_loadu_pd(&w.m_eff[q]), pn = _mm_loadu_pd(&w.pn[q]);
+  for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
+  const __m128d vn = dot2(dv, n);
+  const __m128d pn_new = _mm_max_pd(
+      _mm_add_pd(pn, _mm_mul_pd(m_eff, _mm_sub_pd(_mm_loadu_pd(&w.target[q]), vn))), _mm_setzero_pd());
+  const __m128d dpn = _mm_sub_pd(pn_new, pn);
+  _mm_storeu_pd(&w.pn[q], pn_new);
+  const __m128d si = _mm_mul_pd(dpn, wi), sj = _mm_mul_pd(dpn, wj);
+  for (int k = 0; k < 3; ++k) {
+    if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(si, n[k]));
+    vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(sj, n[k]));
+  }
+  for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
+  const __m128d dvn = dot2(dv, n);
+  __m128d pt_new[3];
+  for (int k = 0; k < 3; ++k) {
+    const __m128d vt = _mm_sub_pd(dv[k], _mm_mul_pd(dvn, n[k]));
+    pt_new[k] = _mm_sub_pd(pt[k], _mm_mul_pd(m_eff, vt));
+  }
+  const __m128d bound = _mm_mul_pd(_mm_loadu_pd(&w.mu[q]), pn_new);
+  const __m128d len = _mm_sqrt_pd(dot2(pt_new, pt_new));
+  // minpd's rule (its second operand on NaN) is the scalar update's min.
+  const __m128d f = _mm_min_pd(_mm_div_pd(bound, len), _mm_set1_pd(1.0));
+  for (int k = 0; k < 3; ++k) {
+    pt_new[k] = _mm_mul_pd(pt_new[k], f);
+    const __m128d dpt = _mm_sub_pd(pt_new[k], pt[k]);
+    _mm_storeu_pd(&w.pt[k][q], pt_new[k]);
+    if (!wall) {
+      vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(wi, dpt));
+      _mm_storel_pd(&v[i0][k], vi[k]);
+      _mm_storeh_pd(&v[i1][k], vi[k]);
+    }
+    vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(wj, dpt));
+    _mm_storel_pd(&v[j0][k], vj[k]);
+    _mm_storeh_pd(&v[j1][k], vj[k]);
+  }
+}
+#endif
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SIMREEL_SOLVE_WIDE 1
+/// dot2() in four lanes.
 __attribute__((target("avx2"), always_inline)) inline __m256d dot4(const __m256d* a, const __m256d* b) {
   return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
                        _mm256_mul_pd(a[2], b[2]));
 }
 
-// The four contacts' values of one expression E(l) of contact c[l], in lanes 0..3.
+// The four contacts' values of one expression E(l) of contact lane l, in lanes 0..3.
 #define SIMREEL_LANES(E) _mm256_setr_pd(E(0), E(1), E(2), E(3))
 
-/// Four contacts of one wave (they share no particle) in the four lanes of AVX registers: the
-/// update of solve() lane by lane, each lane performing the scalar update's operations in its
-/// order (no FMA: -ffp-contract=off), so the bits are the scalar update's. Four lanes share one
-/// square root and one division, whose latency bounds the two-lane update. C: SolverContact.
-template <bool wall, class C>
-__attribute__((target("avx2"))) void update4(C* c, const Vec3* vc, Vec3* v, const double* inv_mass) {
+/// update2() for contacts q .. q + 3 of one wave, in the four lanes of AVX registers. The
+/// contacts' fields are loaded whole from their columns; the particles' velocities lane by lane.
+template <bool wall, class W>
+__attribute__((target("avx2"))) void update4(W& w, std::size_t q, const Vec3* vc, Vec3* v, const double* inv_mass) {
+  const std::uint32_t* ci = &w.i[q];
+  const std::uint32_t* cj = &w.j[q];
   __m256d n[3], vi[3], vj[3], dv[3], pt[3];
   for (int k = 0; k < 3; ++k) {
-#define N_(l) c[l].n[k]
-#define PT_(l) c[l].pt[k]
-#define VJ_(l) v[c[l].j][k]
-#define VI_(l) (wall ? vc[l][k] : v[c[l].i][k])
-    n[k] = SIMREEL_LANES(N_);
-    pt[k] = SIMREEL_LANES(PT_);
+#define VJ_(l) v[cj[l]][k]
+#define VI_(l) (wall ? vc[l][k] : v[ci[l]][k])
+    n[k] = _mm256_loadu_pd(&w.n[k][q]);
+    pt[k] = _mm256_loadu_pd(&w.pt[k][q]);
     vj[k] = SIMREEL_LANES(VJ_);
     vi[k] = SIMREEL_LANES(VI_);
-#undef N_
-#undef PT_
 #undef VJ_
 #undef VI_
   }
-#define WJ_(l) inv_mass[c[l].j]
-#define WI_(l) (wall ? 0.0 : inv_mass[c[l].i])
-#define MEFF_(l) c[l].m_eff
-#define PN_(l) c[l].pn
-#define TARGET_(l) c[l].target
-#define MU_(l) c[l].mu
+#define WJ_(l) inv_mass[cj[l]]
+#define WI_(l) (wall ? 0.0 : inv_mass[ci[l]])
   const __m256d wj = SIMREEL_LANES(WJ_), wi = SIMREEL_LANES(WI_);
-  const __m256d m_eff = SIMREEL_LANES(MEFF_), pn = SIMREEL_LANES(PN_);
-  const __m256d target = SIMREEL_LANES(TARGET_), mu = SIMREEL_LANES(MU_);
 #undef WJ_
 #undef WI_
-#undef MEFF_
-#undef PN_
-#undef TARGET_
-#undef MU_
+  const __m256d m_eff = _mm256_loadu_pd(&w.m_eff[q]), pn = _mm256_loadu_pd(&w.pn[q]);
   for (int k = 0; k < 3; ++k) dv[k] = _mm256_sub_pd(vj[k], vi[k]);
   const __m256d vn = dot4(dv, n);
-  const __m256d pn_new =
-      _mm256_max_pd(_mm256_add_pd(pn, _mm256_mul_pd(m_eff, _mm256_sub_pd(target, vn))), _mm256_setzero_pd());
+  const __m256d pn_new = _mm256_max_pd(
+      _mm256_add_pd(pn, _mm256_mul_pd(m_eff, _mm256_sub_pd(_mm256_loadu_pd(&w.target[q]), vn))),
+      _mm256_setzero_pd());
   const __m256d dpn = _mm256_sub_pd(pn_new, pn);
+  _mm256_storeu_pd(&w.pn[q], pn_new);
   const __m256d si = _mm256_mul_pd(dpn, wi), sj = _mm256_mul_pd(dpn, wj);
   for (int k = 0; k < 3; ++k) {
     if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(si, n[k]));
@@ -83,40 +175,43 @@ __attribute__((target("avx2"))) void update4(C* c, const Vec3* vc, Vec3* v, cons
     const __m256d vt = _mm256_sub_pd(dv[k], _mm256_mul_pd(dvn, n[k]));
     pt_new[k] = _mm256_sub_pd(pt[k], _mm256_mul_pd(m_eff, vt));
   }
-  const __m256d bound = _mm256_mul_pd(mu, pn_new);
+  const __m256d bound = _mm256_mul_pd(_mm256_loadu_pd(&w.mu[q]), pn_new);
   const __m256d len = _mm256_sqrt_pd(dot4(pt_new, pt_new));
-  // minpd's rule (its second operand on NaN) is the scalar update's min.
   const __m256d f = _mm256_min_pd(_mm256_div_pd(bound, len), _mm256_set1_pd(1.0));
-  alignas(32) double out_pn[4], out_pt[3][4], out_vi[3][4], out_vj[3][4];
-  _mm256_store_pd(out_pn, pn_new);
+  alignas(32) double out_vi[3][4], out_vj[3][4];
   for (int k = 0; k < 3; ++k) {
     pt_new[k] = _mm256_mul_pd(pt_new[k], f);
     const __m256d dpt = _mm256_sub_pd(pt_new[k], pt[k]);
+    _mm256_storeu_pd(&w.pt[k][q], pt_new[k]);
     if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(wi, dpt));
     vj[k] = _mm256_add_pd(vj[k], _mm256_mul_pd(wj, dpt));
-    _mm256_store_pd(out_pt[k], pt_new[k]);
     _mm256_store_pd(out_vi[k], vi[k]);
     _mm256_store_pd(out_vj[k], vj[k]);
   }
-  for (int l = 0; l < 4; ++l) {
-    c[l].pn = out_pn[l];
+  for (int l = 0; l < 4; ++l)
     for (int k = 0; k < 3; ++k) {
-      c[l].pt[k] = out_pt[k][l];
-      if (!wall) v[c[l].i][k] = out_vi[k][l];
-      v[c[l].j][k] = out_vj[k][l];
+      if (!wall) v[ci[l]][k] = out_vi[k][l];
+      v[cj[l]][k] = out_vj[k][l];
     }
-  }
 }
 #undef SIMREEL_LANES
 
-/// The CPU runs update4() (checked once).
-bool cpu_has_avx2() {
+/// The widest update the CPU runs, up to `max_lanes` (checked once per CPU feature).
+int solve_lanes(int max_lanes) {
   __builtin_cpu_init();
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (max_lanes >= 4 && avx2) return 4;
+  return std::min(max_lanes, 2);
 }
 #else
-#define SIMREEL_SOLVE_QUADS 0
+#define SIMREEL_SOLVE_WIDE 0
+int solve_lanes(int max_lanes) {
+#if defined(__SSE2__)
+  return std::min(max_lanes, 2);
+#else
+  return 1;
+#endif
+}
 #endif
 
 }  // namespace
@@ -308,160 +403,50 @@ void ParticleCollider::apply_impulses(int parts) {
   }
 }
 
+void ParticleCollider::SolverColumns::resize(std::size_t m) {
+  i.resize(m);
+  j.resize(m);
+  for (auto* col : {&n[0], &n[1], &n[2], &m_eff, &target, &mu, &pn, &pt[0], &pt[1], &pt[2]}) col->resize(m);
+}
+
 void ParticleCollider::solve() {
   apply_impulses(threads > 1 && x.size() >= kParallelMin ? threads : 1);
-  // One contact's update; `wall` as a template parameter keeps the branches out of the loop.
-  const auto update = [&](SolverContact& c, const Vec3& vc, auto wall_tag)
-                          __attribute__((always_inline)) {
-    constexpr bool wall = decltype(wall_tag)::value;
-    const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
-    Vec3 dv = v[c.j] - (wall ? vc : v[c.i]);
-    // Normal: accumulated impulse clamped to push only.
-    const double vn = dv.dot(c.n);
-    const double pn_new = std::max(0.0, c.pn + c.m_eff * (c.target - vn));
-    const double dpn = pn_new - c.pn;
-    c.pn = pn_new;
-    if (!wall) v[c.i] -= (dpn * wi) * c.n;
-    v[c.j] += (dpn * wj) * c.n;
-    // Friction: cancel the relative sliding, within the Coulomb bound mu P_n.
-    dv = v[c.j] - (wall ? vc : v[c.i]);
-    const Vec3 vt = dv - dv.dot(c.n) * c.n;
-    Vec3 pt_new = c.pt - c.m_eff * vt;
-    const double bound = c.mu * c.pn;
-    const double len = pt_new.norm();
-    // A minimum, not a branch: whether a contact slides is data, and a mispredicted branch
-    // stops the overlap of independent contacts. bound / len < 1 exactly when the branch
-    // "len > bound" would scale (a quotient rounded up to 1 scales by 1.0 either way; 0 / 0 and
-    // b / 0 leave it at 1), and x * 1.0 == x: the bits are those of the branch.
-    const double ratio = bound / len;
-#if defined(__SSE2__)
-    // gcc turns the ternary below into a branch; minsd returns its second operand on NaN.
-    pt_new *= _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(ratio), _mm_set_sd(1.0)));
-#else
-    pt_new *= ratio < 1.0 ? ratio : 1.0;
-#endif
-    const Vec3 dpt = pt_new - c.pt;
-    c.pt = pt_new;
-    if (!wall) v[c.i] -= wi * dpt;
-    v[c.j] += wj * dpt;
-  };
-  // The sweeps run over a copy of the contacts in wavefront order (schedule()), which is the
-  // same Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end.
+  // The sweeps run over the contacts in wavefront order (schedule()), which is the same
+  // Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end. Each run of a
+  // wave's contacts that schedule() marked goes to the SIMD update of its width.
   schedule();
-#if defined(__SSE2__)
-  // Two contacts of one wave at once, one in each lane of the SSE2 registers: they share no
-  // particle, and each lane performs the scalar update's operations in its order (no FMA,
-  // -ffp-contract=off), so the result is the same to the bit (the solver test compares them).
-  const auto update2 = [&](SolverContact& c0, SolverContact& c1, const Vec3& vc0, const Vec3& vc1,
-                           auto wall_tag) __attribute__((always_inline)) {
-    constexpr bool wall = decltype(wall_tag)::value;
-    const auto pack = [](double a, double b) { return _mm_set_pd(b, a); };
-    const auto load3 = [](const Vec3& a, const Vec3& b, __m128d* out) {
-      for (int k = 0; k < 3; ++k) out[k] = _mm_loadh_pd(_mm_load_sd(&a[k]), &b[k]);
-    };
-    const auto store3 = [](const __m128d* in, Vec3& a, Vec3& b) {
-      for (int k = 0; k < 3; ++k) {
-        _mm_storel_pd(&a[k], in[k]);
-        _mm_storeh_pd(&b[k], in[k]);
-      }
-    };
-    const auto dot = [](const __m128d* a, const __m128d* b) {
-      return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a[0], b[0]), _mm_mul_pd(a[1], b[1])),
-                        _mm_mul_pd(a[2], b[2]));
-    };
-    __m128d n[3], vi[3], vj[3], dv[3], pt[3];
-    for (int k = 0; k < 3; ++k) {
-      n[k] = pack(c0.n[k], c1.n[k]);
-      pt[k] = pack(c0.pt[k], c1.pt[k]);
-    }
-    const __m128d wj = pack(inv_mass[c0.j], inv_mass[c1.j]);
-    const __m128d wi = wall ? _mm_setzero_pd() : pack(inv_mass[c0.i], inv_mass[c1.i]);
-    if (wall) {
-      load3(vc0, vc1, vi);
-    } else {
-      load3(v[c0.i], v[c1.i], vi);
-    }
-    load3(v[c0.j], v[c1.j], vj);
-    const __m128d m_eff = pack(c0.m_eff, c1.m_eff), pn = pack(c0.pn, c1.pn);
-    for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
-    const __m128d vn = dot(dv, n);
-    const __m128d pn_new = _mm_max_pd(
-        _mm_add_pd(pn, _mm_mul_pd(m_eff, _mm_sub_pd(pack(c0.target, c1.target), vn))),
-        _mm_setzero_pd());
-    const __m128d dpn = _mm_sub_pd(pn_new, pn);
-    _mm_storel_pd(&c0.pn, pn_new);
-    _mm_storeh_pd(&c1.pn, pn_new);
-    const __m128d si = _mm_mul_pd(dpn, wi), sj = _mm_mul_pd(dpn, wj);
-    for (int k = 0; k < 3; ++k) {
-      if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(si, n[k]));
-      vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(sj, n[k]));
-    }
-    for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
-    const __m128d dvn = dot(dv, n);
-    __m128d pt_new[3];
-    for (int k = 0; k < 3; ++k) {
-      const __m128d vt = _mm_sub_pd(dv[k], _mm_mul_pd(dvn, n[k]));
-      pt_new[k] = _mm_sub_pd(pt[k], _mm_mul_pd(m_eff, vt));
-    }
-    const __m128d bound = _mm_mul_pd(pack(c0.mu, c1.mu), pn_new);
-    const __m128d len = _mm_sqrt_pd(dot(pt_new, pt_new));
-    const __m128d f = _mm_min_pd(_mm_div_pd(bound, len), _mm_set1_pd(1.0));
-    for (int k = 0; k < 3; ++k) {
-      pt_new[k] = _mm_mul_pd(pt_new[k], f);
-      const __m128d dpt = _mm_sub_pd(pt_new[k], pt[k]);
-      _mm_storel_pd(&c0.pt[k], pt_new[k]);
-      _mm_storeh_pd(&c1.pt[k], pt_new[k]);
-      if (!wall) vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(wi, dpt));
-      vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(wj, dpt));
-    }
-    if (!wall) store3(vi, v[c0.i], v[c1.i]);
-    store3(vj, v[c0.j], v[c1.j]);
-  };
-#endif
-#if SIMREEL_SOLVE_QUADS
-  const bool quads = four_lanes && cpu_has_avx2();
-#endif
+  Vec3* vp = v.data();
+  const double* wp = inv_mass.data();
   const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
     for (std::size_t q = begin; q < end; ++q) {
-      SolverContact& c = work_[q];
-#if SIMREEL_SOLVE_QUADS
-      if (pair_next_[q] == 2 && quads) {  // q .. q + 3: the same wave, so the same kind
-        if (c.i == kCollider) {
-          update4<true>(&c, &work_vc_[q], v.data(), inv_mass.data());
-        } else {
-          update4<false>(&c, &work_vc_[q], v.data(), inv_mass.data());
-        }
-        q += 3;
-        continue;
-      }
+      const bool wall = work_.i[q] == kCollider;  // a run is one wave's, so of one kind
+      switch (pair_next_[q]) {
+#if SIMREEL_SOLVE_WIDE
+        case 2:
+          wall ? update4<true>(work_, q, &work_vc_[q], vp, wp) : update4<false>(work_, q, &work_vc_[q], vp, wp);
+          q += 3;
+          break;
 #endif
 #if defined(__SSE2__)
-      if (pair_next_[q] != 0) {  // q and q + 1: the same wave, so the same kind
-        if (c.i == kCollider) {
-          update2(c, work_[q + 1], work_vc_[q], work_vc_[q + 1], std::true_type{});
-        } else {
-          update2(c, work_[q + 1], work_vc_[q], work_vc_[q + 1], std::false_type{});
-        }
-        ++q;
-        continue;
-      }
+        case 1:
+          wall ? update2<true>(work_, q, &work_vc_[q], vp, wp) : update2<false>(work_, q, &work_vc_[q], vp, wp);
+          ++q;
+          break;
 #endif
-      if (c.i == kCollider) {
-        update(c, work_vc_[q], std::true_type{});
-      } else {
-        update(c, work_vc_[q], std::false_type{});
+        default:
+          wall ? update1<true>(work_, q, work_vc_[q], vp, wp) : update1<false>(work_, q, work_vc_[q], vp, wp);
       }
     }
   };
   const auto give_back = [&] {
-    const std::ptrdiff_t m = std::ptrdiff_t(work_.size());
+    const std::ptrdiff_t m = std::ptrdiff_t(sched_.size());
     const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (std::ptrdiff_t kk = 0; kk < m; ++kk) {
       const std::size_t k = std::size_t(kk);
       Contact& c = contacts[sched_[k]];
-      c.pn = work_[k].pn;
-      c.pt = work_[k].pt;
+      c.pn = work_.pn[k];
+      c.pt = Vec3(work_.pt[0][k], work_.pt[1][k], work_.pt[2][k]);
     }
   };
   sweep_bands(iterations, sweep);
@@ -472,6 +457,7 @@ void ParticleCollider::schedule() {
   const std::size_t m = contacts.size();
   sched_.resize(m);
   work_.resize(m);
+  const int lanes = wavefront ? solve_lanes(max_lanes) : 1;
   work_vc_.resize(m);
   wave_.resize(m);
   pair_next_.assign(m, 0);
@@ -508,14 +494,13 @@ void ParticleCollider::schedule() {
     for (std::size_t w = 0; w + 1 < wave_count.size(); ++w) wave_count[w + 1] += wave_count[w];
     for (std::size_t q = begin; q < end; ++q)
       sched_[begin + wave_count[wave_[q]]++] = std::uint32_t(q);
-    // Fours of neighbours in one wave go to the four-lane update together (2; two pairs where it
-    // does not run: the next pair is marked too), pairs to the two-lane update (1).
+    // Runs of neighbours in one wave go to the widest update the CPU runs together (pair_next_).
     for (std::size_t k = begin; k < end;) {
-      if (k + 3 < end && wave_[sched_[k]] == wave_[sched_[k + 3]]) {  // sorted: k .. k + 3 alike
+      const std::uint32_t wk = wave_[sched_[k]];  // sorted: k .. k + r - 1 alike where the last is
+      if (lanes >= 4 && k + 3 < end && wave_[sched_[k + 3]] == wk) {
         pair_next_[k] = 2;
-        pair_next_[k + 2] = 1;
         k += 4;
-      } else if (k + 1 < end && wave_[sched_[k]] == wave_[sched_[k + 1]]) {
+      } else if (lanes >= 2 && k + 1 < end && wave_[sched_[k + 1]] == wk) {
         pair_next_[k] = 1;
         k += 2;
       } else {
@@ -550,7 +535,16 @@ void ParticleCollider::schedule() {
   for (std::ptrdiff_t kk = 0; kk < mm; ++kk) {
     const std::size_t k = std::size_t(kk);
     const Contact& c = contacts[sched_[k]];
-    work_[k] = SolverContact{c.i, c.j, c.n, c.m_eff, c.target, c.mu, c.pn, c.pt};
+    work_.i[k] = c.i;
+    work_.j[k] = c.j;
+    for (int a = 0; a < 3; ++a) {
+      work_.n[a][k] = c.n[a];
+      work_.pt[a][k] = c.pt[a];
+    }
+    work_.m_eff[k] = c.m_eff;
+    work_.target[k] = c.target;
+    work_.mu[k] = c.mu;
+    work_.pn[k] = c.pn;
     if (c.i == kCollider) work_vc_[k] = wall_vc[sched_[k] - (m - wall_vc.size())];
   }
 }
