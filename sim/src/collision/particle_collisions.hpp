@@ -73,9 +73,10 @@ class ParticleCollider {
   /// The sweeps visit the contacts in wavefront order (see schedule(); the same bits, faster);
   /// false: in contact order, the reference the tests compare it with.
   bool wavefront = true;
-  /// The most contacts of one wave the wavefront sweeps solve at once: 4 where the CPU has AVX2,
-  /// 2 (SSE2) otherwise; fewer where this is less. The bits are the same at every width (the
-  /// solver test compares 4, 2 and 1). Eight AVX-512 lanes were slower than four on a Xeon.
+  /// The most contacts of one wave the wavefront sweeps solve at once (4, 2 or 1): the sweeps
+  /// use four lanes where the CPU has AVX2 and two (SSE2) otherwise, never more than this. The
+  /// bits are the same at every width (the solver test compares 4, 2 and 1). Eight AVX-512
+  /// lanes were slower than four on a Xeon.
   int max_lanes = 4;
 
   /// Finds and resolves the contacts among all members' particles and, for members that
