@@ -609,13 +609,16 @@ TEST(SimForces, SemiImplicitStepWithPairForcesIsTheScalarStepPerParticle) {
 // even, then those whose cell's x is odd, each meets the particles after it in that order within
 // its 27 cells, and the pair's force F = coef (x_i - x_j) is added to i and subtracted from j. A
 // brute-force loop over all particles in that order gives the same bits, at 1, 2, 3 and 4
-// threads (3,000 particles: above the split threshold; cells of both signs, so both parities).
+// threads, with the neighbour runs read in place (AVX-512 CPUs) or copied first (3,000
+// particles: above the split threshold; cells of both signs, so both parities; plus a clump of
+// 200 in a few cells, whose runs are longer than a block of eight).
 TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
-  const std::size_t n = 3000;
+  const std::size_t n = 3200;
   Rng rng(5);
   std::vector<double> x(3 * n), mass(n), charge(n);
   for (std::size_t i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) x[3 * i + std::size_t(d)] = rng.uniform(-2.3, 2.9);
+    for (int d = 0; d < 3; ++d)
+      x[3 * i + std::size_t(d)] = i < 3000 ? rng.uniform(-2.3, 2.9) : rng.uniform(0.1, 0.6);
     mass[i] = rng.uniform(0.5, 2.0);
     charge[i] = rng.uniform(-1.0, 1.0);
   }
@@ -658,17 +661,20 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
     }
   std::vector<double> want(3 * n, 0.25);  // the pair forces add to what is there
   for (std::size_t k = 0; k < 3 * n; ++k) want[k] += f[k] / mass[k / 3];
-  for (int threads : {1, 2, 3, 4}) {
-    detail::Dynamics dyn;
-    dyn.n = n;
-    dyn.mass = mass.data();
-    dyn.charge = charge.data();
-    dyn.pair = pf;
-    dyn.threads = threads;
-    std::vector<double> got(3 * n, 0.25);
-    dyn.add_pair_forces(x.data(), got.data());
-    ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0) << threads;
-  }
+  for (const bool in_place : {true, false})
+    for (int threads : {1, 2, 3, 4}) {
+      detail::Dynamics dyn;
+      dyn.n = n;
+      dyn.mass = mass.data();
+      dyn.charge = charge.data();
+      dyn.pair = pf;
+      dyn.threads = threads;
+      dyn.pair_runs_in_place = in_place;
+      std::vector<double> got(3 * n, 0.25);
+      dyn.add_pair_forces(x.data(), got.data());
+      ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0)
+          << threads << " threads, runs in place " << in_place;
+    }
 }
 
 // The same bits at 1, 2, 3 and 4 threads for a system well above the split threshold: 60,000

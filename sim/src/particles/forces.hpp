@@ -56,6 +56,10 @@ struct Dynamics {
   std::vector<Spring> springs;
   std::vector<Pull> pulls;
   int threads = 1;
+  /// Dense pair-force grids: read each cell's neighbour runs in place with AVX-512 where the CPU
+  /// runs it (false: copy them into one candidate list first, as other CPUs do). The same pairs
+  /// in the same order either way, so the same bits; the tests compare the two.
+  bool pair_runs_in_place = true;
 
   /// a (n x 3) = accelerations at time t for positions x and velocities v (n x 3 each). The drag
   /// -(k_d + c_2 |v|) v / m is included only when `with_drag` (semi-implicit Euler takes it
