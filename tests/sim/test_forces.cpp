@@ -604,6 +604,19 @@ TEST(SimForces, SemiImplicitStepWithPairForcesIsTheScalarStepPerParticle) {
   }
 }
 
+/// A particle system's dynamics with pair forces alone, over the caller's mass and charge
+/// arrays (n each), for add_pair_forces().
+detail::Dynamics pair_dynamics(const std::vector<double>& mass, const std::vector<double>& charge,
+                               const PairForceDef& pf, int threads = 1) {
+  detail::Dynamics dyn;
+  dyn.n = mass.size();
+  dyn.mass = mass.data();
+  dyn.charge = charge.data();
+  dyn.pair = pf;
+  dyn.threads = threads;
+  return dyn;
+}
+
 // Dense grids take each pair once, in one defined order: the particles ordered by (cell, index)
 // over cells of side = cut-off (x-major keys); in a first pass the particles whose cell's x is
 // even, then those whose cell's x is odd, each meets the particles after it in that order within
@@ -663,12 +676,7 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
   for (std::size_t k = 0; k < 3 * n; ++k) want[k] += f[k] / mass[k / 3];
   for (const bool in_place : {true, false})
     for (int threads : {1, 2, 3, 4}) {
-      detail::Dynamics dyn;
-      dyn.n = n;
-      dyn.mass = mass.data();
-      dyn.charge = charge.data();
-      dyn.pair = pf;
-      dyn.threads = threads;
+      detail::Dynamics dyn = pair_dynamics(mass, charge, pf, threads);
       dyn.pair_runs_in_place = in_place;
       std::vector<double> got(3 * n, 0.25);
       dyn.add_pair_forces(x.data(), got.data());
@@ -695,12 +703,7 @@ TEST(SimForces, PairForcesBitIdenticalAtOneToFourThreads) {
   const PairForceDef pf{0.3, 1.1, 0.5, 1e-3};
   std::vector<double> one;
   for (int threads : {1, 2, 3, 4}) {
-    detail::Dynamics dyn;
-    dyn.n = n;
-    dyn.mass = mass.data();
-    dyn.charge = charge.data();
-    dyn.pair = pf;
-    dyn.threads = threads;
+    detail::Dynamics dyn = pair_dynamics(mass, charge, pf, threads);
     std::vector<double> got(3 * n, 0.5);
     dyn.add_pair_forces(x.data(), got.data());
     dyn.add_pair_forces(x.data(), got.data());  // scratch reused: the same again
@@ -731,11 +734,7 @@ TEST(SimForces, PairForcesMatchBruteForce) {
       mass[i] = rng.uniform(0.5, 2.0);
       charge[i] = rng.uniform(-1.0, 1.0);
     }
-    detail::Dynamics dyn;
-    dyn.n = n;
-    dyn.mass = mass.data();
-    dyn.charge = charge.data();
-    dyn.pair = pf;
+    detail::Dynamics dyn = pair_dynamics(mass, charge, pf);
     std::vector<double> got(3 * n, 0.0);
     dyn.add_pair_forces(x.data(), got.data());
     const double cut2 = pf.cutoff * pf.cutoff, eps2 = pf.softening * pf.softening;
