@@ -60,6 +60,10 @@ struct Dynamics {
   /// runs it (false: copy them into one candidate list first, as other CPUs do). The same pairs
   /// in the same order either way, so the same bits; the tests compare the two.
   bool pair_runs_in_place = true;
+  /// Semi-implicit Euler with pair forces as the only forces between particles takes them block
+  /// by block with the integration (false: the general path, with (n x 3) velocity and
+  /// acceleration arrays). The same bits either way; the tests compare the two.
+  bool pair_blocks = true;
 
   /// a (n x 3) = accelerations at time t for positions x and velocities v (n x 3 each). The drag
   /// -(k_d + c_2 |v|) v / m is included only when `with_drag` (semi-implicit Euler takes it
@@ -86,8 +90,16 @@ struct Dynamics {
     return drag + drag_quadratic * std::sqrt(v3[0] * v3[0] + v3[1] * v3[1] + v3[2] * v3[2]);
   }
 
-  /// Pair-force accelerations only, added to a (for tests through eval).
+  /// Pair-force accelerations only, added to a (n x 3) for positions x (n x 3): a_i += F_i / m_i
+  /// (Coutinho §3.3.4). compute_pair_forces() then pair_acceleration() for each row, one
+  /// addition a row, so the same bits wherever the rows are added.
   void add_pair_forces(const double* x, double* a);
+  /// The pair forces for positions x (n x 3) into the grid scratch, over the mass, not added
+  /// anywhere: pair_acceleration(i) reads particle i's (3 values, m/s²) until the next call.
+  void compute_pair_forces(const double* x);
+  [[nodiscard]] const double* pair_acceleration(std::size_t i) const {
+    return accel_.data() + 3 * std::size_t(rank_[i]);
+  }
 
   // grid scratch (reused; no allocation once grown)
   std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle (sparse grids)

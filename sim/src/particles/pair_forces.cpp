@@ -260,6 +260,21 @@ std::uint64_t inside_mask(const double* r2, std::size_t len, double cut2) {
 }  // namespace
 
 void Dynamics::add_pair_forces(const double* x, double* a) {
+  compute_pair_forces(x);
+  // Back to the particles' order, each row reading its rank's: independent loads, where a
+  // scatter to the rows in cell order was a read-modify-write of a random line (~7 % of a step).
+  // One addition per row, so any split over threads gives the same bits.
+  const int parts = n >= kParallelMin / 8 && threads > 1 ? threads : 1;
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* o = pair_acceleration(i);
+    a[3 * i] += o[0];
+    a[3 * i + 1] += o[1];
+    a[3 * i + 2] += o[2];
+  }
+}
+
+void Dynamics::compute_pair_forces(const double* x) {
   const double cut = pair.cutoff, cut2 = cut * cut, eps2 = pair.softening * pair.softening;
   const double inv = 1.0 / cut;
   // Build: each particle's cell, the particles sorted by (cell key, index) (a total order, so the
@@ -646,19 +661,8 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
       }
     }
   }
-  // Force over mass in cell order (sm[rank i] = mass[i]; dense grids did it plane by plane),
-  // then back to the particles' order, each row reading its rank's: independent loads, where a
-  // scatter to the rows in cell order was a read-modify-write of a random line (~7 % of a step).
-  // One addition per row, so any split over threads gives the same bits.
+  // Force over mass in cell order (sm[rank i] = mass[i]; dense grids did it plane by plane).
   if (!dense) divide_rows(sacc, sm, n);
-  const std::uint32_t* rank = rank_.data();
-#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* o = sacc + 3 * std::size_t(rank[i]);
-    a[3 * i] += o[0];
-    a[3 * i + 1] += o[1];
-    a[3 * i + 2] += o[2];
-  }
 }
 
 }  // namespace simreel::sim::detail
