@@ -97,9 +97,15 @@ struct Dynamics {
   /// The pair forces for positions x (n x 3) into the grid scratch, over the mass, not added
   /// anywhere: pair_acceleration(i) reads particle i's (3 values, m/s²) until the next call.
   void compute_pair_forces(const double* x);
+  /// The same for float positions (the particle store's; each taken to double exactly, so the
+  /// same bits as from their double copies).
+  void compute_pair_forces(const float* x);
   [[nodiscard]] const double* pair_acceleration(std::size_t i) const {
     return accel_.data() + 3 * std::size_t(rank_[i]);
   }
+
+  template <typename T>
+  void pair_forces_over_grid(const T* x);  // (both compute_pair_forces)
 
   // grid scratch (reused; no allocation once grown)
   std::vector<std::uint64_t> cell_key_;     // (n) cell key of each particle (sparse grids)

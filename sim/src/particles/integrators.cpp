@@ -262,10 +262,11 @@ void bind_mass_charge(const ParticleStore& s, std::size_t begin, std::size_t n, 
 }
 
 /// Semi-implicit Euler over [begin, end) of s when pair forces are the only forces between
-/// particles (no springs or attractor springs): the positions to double for the pair-force grid
-/// (Dynamics::compute_pair_forces), then blocks of Dynamics::kBlock particles through
-/// eval_block(), plus each row's pair acceleration, semi_implicit_particle() and back to the
-/// float store, so the velocities and accelerations are never written as (n x 3) arrays (the
+/// particles (no springs or attractor springs): the pair-force grid from the float store's
+/// positions (Dynamics::compute_pair_forces), then blocks of Dynamics::kBlock particles from
+/// the store to double, through eval_block(), plus each row's pair acceleration,
+/// semi_implicit_particle() and back to the store, so positions, velocities and accelerations
+/// are never written as (n x 3) double arrays (the
 /// 100k-particle pair-force step took ~12 % less time without those passes, at 1 and 2
 /// threads). Bit for bit integrate_system()'s
 /// general path, where eval() adds each row's pair acceleration to the same local sum once.
@@ -273,31 +274,22 @@ void bind_mass_charge(const ParticleStore& s, std::size_t begin, std::size_t n, 
 bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t end, double t0,
                                double h, Dynamics& dyn, IntegratorWorkspace& w, bool par) {
   constexpr std::size_t B = Dynamics::kBlock;
-  const std::size_t n = end - begin, m = 3 * n, blocks = (n + B - 1) / B;
-  const int th = dyn.threads;
-  if (w.x.size() < m) w.x.resize(m);
-  double* __restrict wx = w.x.data();
-  {
-    const float* __restrict px = s.position.data() + 3 * begin;
-#pragma omp parallel for schedule(static) num_threads(th) if (par)
-    for (std::size_t k = 0; k < m; ++k) wx[k] = px[k];
-  }
+  const std::size_t n = end - begin, blocks = (n + B - 1) / B;
   bind_mass_charge(s, begin, n, dyn, w);
   if (s.track_prev)
-    std::memcpy(&s.prev_position[3 * begin], &s.position[3 * begin], m * sizeof(float));
+    std::memcpy(&s.prev_position[3 * begin], &s.position[3 * begin], 3 * n * sizeof(float));
   dyn.pose_fields(t0);
-  dyn.compute_pair_forces(wx);
+  dyn.compute_pair_forces(s.position.data() + 3 * begin);
   const bool linear = dyn.drag_quadratic == 0.0;
   const double* mass = w.m.data();
   unsigned bad = 0;
-#pragma omp parallel for schedule(static) num_threads(th) reduction(| : bad) if (par)
+#pragma omp parallel for schedule(static) num_threads(dyn.threads) reduction(| : bad) if (par)
   for (std::size_t blk = 0; blk < blocks; ++blk) {
     const std::size_t b = blk * B, len = std::min(n, b + B) - b;
-    alignas(64) double v[3 * B], a[3 * B];
-    double* x = wx + 3 * b;
+    alignas(64) double x[3 * B], v[3 * B], a[3 * B];
     float* px = s.position.data() + 3 * (begin + b);
     float* pv = s.velocity.data() + 3 * (begin + b);
-    for (std::size_t k = 0; k < 3 * len; ++k) v[k] = pv[k];
+    widen_lanes(3 * len, px, pv, x, v);
     dyn.eval_block(t0, len, x, v, mass + b, a, false);
     for (std::size_t i = 0; i < len; ++i) {
       const double* o = dyn.pair_acceleration(b + i);

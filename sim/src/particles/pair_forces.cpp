@@ -115,6 +115,25 @@ bool floor_cells(const double* __restrict x, std::size_t len, double inv,
   return ok != 0;
 }
 
+bool floor_cells_of(const double* x, std::size_t len, double inv, std::int32_t* c,
+                    std::int32_t* lo, std::int32_t* hi) {
+  return floor_cells(x, len, inv, c, lo, hi);
+}
+
+/// floor_cells() of float positions, taken to double (exactly) a piece at a time.
+bool floor_cells_of(const float* x, std::size_t len, double inv, std::int32_t* c,
+                    std::int32_t* lo, std::int32_t* hi) {
+  constexpr std::size_t kPiece = 256;
+  double wide[3 * kPiece];
+  bool ok = true;
+  for (std::size_t b = 0; b < len; b += kPiece) {
+    const std::size_t m = std::min(len - b, kPiece);
+    for (std::size_t k = 0; k < 3 * m; ++k) wide[k] = x[3 * b + k];
+    ok = floor_cells(wide, m, inv, c + 3 * b, lo, hi) && ok;
+  }
+  return ok;
+}
+
 /// f[3u + k] /= m[u] for u < len, k < 3: each particle's pair force over its mass, in place.
 /// Element-wise (one IEEE divide each, as the scalar form), so every clone gives the same bits;
 /// the divides, one a component, were most of the write-back's time when taken one by one.
@@ -274,7 +293,11 @@ void Dynamics::add_pair_forces(const double* x, double* a) {
   }
 }
 
-void Dynamics::compute_pair_forces(const double* x) {
+void Dynamics::compute_pair_forces(const double* x) { pair_forces_over_grid(x); }
+void Dynamics::compute_pair_forces(const float* x) { pair_forces_over_grid(x); }
+
+template <typename T>
+void Dynamics::pair_forces_over_grid(const T* x) {
   const double cut = pair.cutoff, cut2 = cut * cut, eps2 = pair.softening * pair.softening;
   const double inv = 1.0 / cut;
   // Build: each particle's cell, the particles sorted by (cell key, index) (a total order, so the
@@ -301,7 +324,7 @@ void Dynamics::compute_pair_forces(const double* x) {
       l[d] = std::numeric_limits<std::int32_t>::max();
       u[d] = std::numeric_limits<std::int32_t>::min();
     }
-    finite = floor_cells(x + 3 * b, len, inv, cell32_.data() + 3 * b, l, u) && finite;
+    finite = floor_cells_of(x + 3 * b, len, inv, cell32_.data() + 3 * b, l, u) && finite;
     for (int d = 0; d < 3; ++d) {
       lo32[d] = std::min(lo32[d], l[d]);
       hi32[d] = std::max(hi32[d], u[d]);
@@ -315,7 +338,7 @@ void Dynamics::compute_pair_forces(const double* x) {
       hi[d] = std::numeric_limits<std::int64_t>::min();
     }
     for (std::size_t k = 0; k < 3 * n; ++k) {
-      const double f = std::floor(x[k] * inv);
+      const double f = std::floor(double(x[k]) * inv);
       // (a cast of a value beyond +-2^40 would gain nothing: cell_key() clamps it anyway)
       constexpr double kFar = double(std::int64_t{1} << 40);
       cell_xyz_[k] = f >= kFar ? std::int64_t{1} << 40 : f <= -kFar ? -(std::int64_t{1} << 40)
@@ -392,9 +415,9 @@ void Dynamics::compute_pair_forces(const double* x) {
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
   for (std::size_t s = 0; s < n; ++s) {
     const std::size_t i = order[s];
-    sx[s] = x[3 * i];
-    sy[s] = x[3 * i + 1];
-    sz[s] = x[3 * i + 2];
+    sx[s] = double(x[3 * i]);
+    sy[s] = double(x[3 * i + 1]);
+    sz[s] = double(x[3 * i + 2]);
     sq[s] = charge ? charge[i] : 0.0;
     sm[s] = mass[i];
   }
@@ -664,5 +687,8 @@ void Dynamics::compute_pair_forces(const double* x) {
   // Force over mass in cell order (sm[rank i] = mass[i]; dense grids did it plane by plane).
   if (!dense) divide_rows(sacc, sm, n);
 }
+
+template void Dynamics::pair_forces_over_grid(const double*);
+template void Dynamics::pair_forces_over_grid(const float*);
 
 }  // namespace simreel::sim::detail
