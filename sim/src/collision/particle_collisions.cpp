@@ -183,6 +183,66 @@ ParticleCollider::MemberParticle ParticleCollider::member_particle(std::uint32_t
   return {mi, f - member_base_[mi]};
 }
 
+namespace {
+
+/// fill_working()'s destinations, as plain pointers in a local value: the compiler keeps them
+/// in registers instead of reloading each vector's data pointer after every store (a store
+/// through a double* might, for all it knows, change the vectors themselves).
+struct WorkingColumns {
+  Vec3 *x, *v;
+  double *inv_mass, *radius, *restitution, *friction, *half_dt, *inv_mass_awake;
+  std::uint64_t* key;
+  std::uint8_t *collides, *asleep;
+  double *sx, *sy, *sz, *sr;  ///< null: no sorted grid copies
+};
+
+/// One member's particle columns and surface parameters, likewise hoisted.
+struct MemberColumns {
+  const float *position, *velocity, *mass, *radius, *age, *rest;
+  double restitution, friction;
+  std::uint8_t collides;
+  bool sleep;
+  explicit MemberColumns(const ParticleGroupMember& m)
+      : position(m.store->position.data()),
+        velocity(m.store->velocity.data()),
+        mass(m.store->mass.data()),
+        radius(m.store->radius.data()),
+        age(m.store->age.data()),
+        rest(m.store->rest.data()),
+        restitution(m.restitution),
+        friction(m.friction),
+        collides(m.collide ? 1 : 0),
+        sleep(m.sleep) {}
+};
+
+/// Working entry q from particle i of member m (its warm-start key `key`), h (s) the step.
+__attribute__((always_inline)) inline void fill_entry(const WorkingColumns& o, const MemberColumns& m,
+                                                      std::size_t q, std::size_t i, std::uint64_t key,
+                                                      double h) {
+  const Vec3 x(m.position[3 * i], m.position[3 * i + 1], m.position[3 * i + 2]);
+  const double inv_mass = 1.0 / double(m.mass[i]), radius = m.radius[i];
+  const std::uint8_t asleep = m.sleep && m.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
+  o.x[q] = x;
+  o.v[q] = Vec3(m.velocity[3 * i], m.velocity[3 * i + 1], m.velocity[3 * i + 2]);
+  o.inv_mass[q] = asleep != 0 ? 0.0 : inv_mass;
+  o.radius[q] = radius;
+  o.restitution[q] = m.restitution;
+  o.friction[q] = m.friction;
+  o.key[q] = key;
+  o.collides[q] = m.collides;
+  o.half_dt[q] = 0.5 * std::min(double(m.age[i]), h);
+  o.asleep[q] = asleep;
+  o.inv_mass_awake[q] = inv_mass;
+  if (o.sx != nullptr) {  // the pair search's sorted copies (build_grid(false) left them)
+    o.sx[q] = x[0];
+    o.sy[q] = x[1];
+    o.sz[q] = x[2];
+    o.sr[q] = radius;
+  }
+}
+
+}  // namespace
+
 void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& members, double h,
                                     int par, bool grid) {
   const std::size_t n = perm_.size();
@@ -195,48 +255,44 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
   half_dt_.resize(n);
   asleep.resize(n);
   inv_mass_awake_.resize(n);
+  const WorkingColumns o{x.data(),           v.data(),        inv_mass.data(),
+                         radius.data(),      restitution.data(), friction.data(),
+                         half_dt_.data(),    inv_mass_awake_.data(), key.data(),
+                         collides.data(),    asleep.data(),
+                         grid ? sx_.data() : nullptr, grid ? sy_.data() : nullptr,
+                         grid ? sz_.data() : nullptr, grid ? sr_.data() : nullptr};
+  const std::uint32_t* perm = perm_.data();
+  const std::uint64_t* key_flat = key_flat_.data();
   // Each working entry read straight from its particle (one pass, not a flat fill and then a
   // permutation of every array); x and radius as the flat pass read them, in the new order.
-  const bool one = members.size() == 1;
-  constexpr std::size_t kAhead = 16;
   const std::ptrdiff_t np = std::ptrdiff_t(n);
+  if (members.size() == 1) {
+    const MemberColumns m(members[0]);
+    constexpr std::size_t kAhead = 16;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
+      const std::size_t q = std::size_t(qq);
+      // The particles come in no order of their own: their lines are asked for some entries
+      // ahead, so that the loads overlap instead of each missing in turn (a hint only).
+      if (q + kAhead < n) {
+        const std::size_t j = perm[q + kAhead];
+        __builtin_prefetch(m.position + 3 * j);
+        __builtin_prefetch(m.velocity + 3 * j);
+        __builtin_prefetch(m.mass + j);
+        __builtin_prefetch(m.radius + j);
+        __builtin_prefetch(m.age + j);
+        if (m.sleep) __builtin_prefetch(m.rest + 4 * j);
+        __builtin_prefetch(key_flat + j);
+      }
+      fill_entry(o, m, q, perm[q], key_flat[perm[q]], h);
+    }
+    return;
+  }
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
   for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
     const std::size_t q = std::size_t(qq);
-    // The particles come in no order of their own: their lines are asked for some entries
-    // ahead, so that the loads overlap instead of each missing in turn (a hint only).
-    if (one && q + kAhead < n) {
-      const std::size_t j = perm_[q + kAhead];
-      const ParticleStore& s = *members[0].store;
-      __builtin_prefetch(s.position.data() + 3 * j);
-      __builtin_prefetch(s.velocity.data() + 3 * j);
-      __builtin_prefetch(s.mass.data() + j);
-      __builtin_prefetch(s.radius.data() + j);
-      __builtin_prefetch(s.age.data() + j);
-      if (members[0].sleep) __builtin_prefetch(s.rest.data() + 4 * j);
-      __builtin_prefetch(key_flat_.data() + j);
-    }
-    const auto [mi, i] = one ? MemberParticle{0, perm_[q]} : member_particle(std::uint32_t(q));
-    const ParticleGroupMember& m = members[mi];
-    const ParticleStore& s = *m.store;
-    x[q] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
-    v[q] = Vec3(s.velocity[3 * i], s.velocity[3 * i + 1], s.velocity[3 * i + 2]);
-    inv_mass[q] = 1.0 / double(s.mass[i]);
-    radius[q] = s.radius[i];
-    restitution[q] = m.restitution;
-    friction[q] = m.friction;
-    key[q] = key_flat_[perm_[q]];
-    collides[q] = m.collide ? 1 : 0;
-    half_dt_[q] = 0.5 * std::min(double(s.age[i]), h);
-    asleep[q] = m.sleep && s.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
-    inv_mass_awake_[q] = inv_mass[q];
-    if (asleep[q] != 0) inv_mass[q] = 0.0;
-    if (grid) {  // the pair search's sorted copies (build_grid(false) left them)
-      sx_[q] = x[q][0];
-      sy_[q] = x[q][1];
-      sz_[q] = x[q][2];
-      sr_[q] = radius[q];
-    }
+    const auto [mi, i] = member_particle(std::uint32_t(q));
+    fill_entry(o, MemberColumns(members[mi]), q, i, key_flat[perm[q]], h);
   }
 }
 
