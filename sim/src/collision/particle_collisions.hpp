@@ -44,6 +44,14 @@ namespace simreel::sim::detail {
 class StateWriter;
 class StateReader;
 
+/// A particle as the contact sweeps read it: its velocity (m/s, world) and inverse mass (1/kg,
+/// 0 asleep) in one aligned row of four doubles, so that four of them transpose into the
+/// sweep's four lanes (x, y, z, 1/m) with whole-row loads and stores.
+struct alignas(32) SolveBody {
+  double v[3];
+  double inv_mass;
+};
+
 /// One participating particle set (a system) and its surface parameters.
 struct ParticleGroupMember {
   ParticleStore* store = nullptr;
@@ -270,6 +278,7 @@ class ParticleCollider {
   };
   SolverColumns work_;
   std::vector<Vec3> work_vc_;
+  std::vector<SolveBody> body_;  ///< solve(): v and inv_mass of each particle during the sweeps
   std::vector<std::uint32_t> sched_, wave_;
   /// schedule(): per thread, each particle's latest wave in the current window, and a window's
   /// contacts per wave

@@ -22,23 +22,25 @@ namespace {
 /// One contact's update (Coutinho §3.6.1–3.6.2): the normal impulse accumulated and clamped to
 /// push only, then the friction impulse that cancels the relative sliding, within the Coulomb
 /// bound mu P_n. W: ParticleCollider::SolverColumns; q: the contact's work_ position; vc: its
-/// surface velocity where it is a collider contact (`wall`).
+/// surface velocity where it is a collider contact (`wall`); b: the particles' velocities and
+/// inverse masses.
 template <bool wall, class W>
-__attribute__((always_inline)) inline void update1(W& w, std::size_t q, const Vec3& vc, Vec3* v,
-                                                   const double* inv_mass) {
+__attribute__((always_inline)) inline void update1(W& w, std::size_t q, const Vec3& vc, SolveBody* b) {
   const std::uint32_t i = w.i[q], j = w.j[q];
   const Vec3 n(w.n[0][q], w.n[1][q], w.n[2][q]);
   const double m_eff = w.m_eff[q], pn = w.pn[q];
   const Vec3 pt(w.pt[0][q], w.pt[1][q], w.pt[2][q]);
-  const double wi = wall ? 0.0 : inv_mass[i], wj = inv_mass[j];
-  Vec3 dv = v[j] - (wall ? vc : v[i]);
+  const double wi = wall ? 0.0 : b[i].inv_mass, wj = b[j].inv_mass;
+  Vec3 vi = wall ? vc : Vec3(b[i].v[0], b[i].v[1], b[i].v[2]);
+  Vec3 vj(b[j].v[0], b[j].v[1], b[j].v[2]);
+  Vec3 dv = vj - vi;
   const double vn = dv.dot(n);
   const double pn_new = std::max(0.0, pn + m_eff * (w.target[q] - vn));
   const double dpn = pn_new - pn;
   w.pn[q] = pn_new;
-  if (!wall) v[i] -= (dpn * wi) * n;
-  v[j] += (dpn * wj) * n;
-  dv = v[j] - (wall ? vc : v[i]);
+  if (!wall) vi -= (dpn * wi) * n;
+  vj += (dpn * wj) * n;
+  dv = vj - vi;
   const Vec3 vt = dv - dv.dot(n) * n;
   Vec3 pt_new = pt - m_eff * vt;
   const double bound = w.mu[q] * pn_new;
@@ -56,8 +58,12 @@ __attribute__((always_inline)) inline void update1(W& w, std::size_t q, const Ve
 #endif
   const Vec3 dpt = pt_new - pt;
   for (int k = 0; k < 3; ++k) w.pt[k][q] = pt_new[k];
-  if (!wall) v[i] -= wi * dpt;
-  v[j] += wj * dpt;
+  if (!wall) {
+    vi -= wi * dpt;
+    for (int k = 0; k < 3; ++k) b[i].v[k] = vi[k];
+  }
+  vj += wj * dpt;
+  for (int k = 0; k < 3; ++k) b[j].v[k] = vj[k];
 }
 
 #if defined(__SSE2__)
@@ -70,19 +76,18 @@ __attribute__((always_inline)) inline __m128d dot2(const __m128d* a, const __m12
 /// the SSE2 registers, each lane performing the scalar update's operations in its order (no
 /// FMA: -ffp-contract=off), so the bits are the scalar update's. vc: their surface velocities.
 template <bool wall, class W>
-__attribute__((always_inline)) inline void update2(W& w, std::size_t q, const Vec3* vc, Vec3* v,
-                                                   const double* inv_mass) {
+__attribute__((always_inline)) inline void update2(W& w, std::size_t q, const Vec3* vc, SolveBody* b) {
   const std::uint32_t i0 = w.i[q], i1 = w.i[q + 1], j0 = w.j[q], j1 = w.j[q + 1];
-  const auto pack = [](double a, double b) { return _mm_set_pd(b, a); };
+  const auto pack = [](double a, double c) { return _mm_set_pd(c, a); };
   __m128d n[3], vi[3], vj[3], dv[3], pt[3];
   for (int k = 0; k < 3; ++k) {
     n[k] = _mm_loadu_pd(&w.n[k][q]);
     pt[k] = _mm_loadu_pd(&w.pt[k][q]);
-    vi[k] = wall ? pack(vc[0][k], vc[1][k]) : _mm_loadh_pd(_mm_load_sd(&v[i0][k]), &v[i1][k]);
-    vj[k] = _mm_loadh_pd(_mm_load_sd(&v[j0][k]), &v[j1][k]);
+    vi[k] = wall ? pack(vc[0][k], vc[1][k]) : _mm_loadh_pd(_mm_load_sd(&b[i0].v[k]), &b[i1].v[k]);
+    vj[k] = _mm_loadh_pd(_mm_load_sd(&b[j0].v[k]), &b[j1].v[k]);
   }
-  const __m128d wj = pack(inv_mass[j0], inv_mass[j1]);
-  const __m128d wi = wall ? _mm_setzero_pd() : pack(inv_mass[i0], inv_mass[i1]);
+  const __m128d wj = pack(b[j0].inv_mass, b[j1].inv_mass);
+  const __m128d wi = wall ? _mm_setzero_pd() : pack(b[i0].inv_mass, b[i1].inv_mass);
   const __m128d m_eff = _mm_loadu_pd(&w.m_eff[q]), pn = _mm_loadu_pd(&w.pn[q]);
   for (int k = 0; k < 3; ++k) dv[k] = _mm_sub_pd(vj[k], vi[k]);
   const __m128d vn = dot2(dv, n);
@@ -112,12 +117,12 @@ __attribute__((always_inline)) inline void update2(W& w, std::size_t q, const Ve
     _mm_storeu_pd(&w.pt[k][q], pt_new[k]);
     if (!wall) {
       vi[k] = _mm_sub_pd(vi[k], _mm_mul_pd(wi, dpt));
-      _mm_storel_pd(&v[i0][k], vi[k]);
-      _mm_storeh_pd(&v[i1][k], vi[k]);
+      _mm_storel_pd(&b[i0].v[k], vi[k]);
+      _mm_storeh_pd(&b[i1].v[k], vi[k]);
     }
     vj[k] = _mm_add_pd(vj[k], _mm_mul_pd(wj, dpt));
-    _mm_storel_pd(&v[j0][k], vj[k]);
-    _mm_storeh_pd(&v[j1][k], vj[k]);
+    _mm_storel_pd(&b[j0].v[k], vj[k]);
+    _mm_storeh_pd(&b[j1].v[k], vj[k]);
   }
 }
 #endif
@@ -130,31 +135,53 @@ __attribute__((target("avx2"), always_inline)) inline __m256d dot4(const __m256d
                        _mm256_mul_pd(a[2], b[2]));
 }
 
-// The four contacts' values of one expression E(l) of contact lane l, in lanes 0..3.
-#define SIMREEL_LANES(E) _mm256_setr_pd(E(0), E(1), E(2), E(3))
+/// The four particles' velocities (out[0..2]: x, y, z, one particle a lane) and inverse masses
+/// (out[3]): four aligned rows of SolveBody transposed.
+__attribute__((target("avx2"), always_inline)) inline void load_bodies(const SolveBody* b, const std::uint32_t* p,
+                                                                      __m256d* out) {
+  const __m256d r0 = _mm256_load_pd(b[p[0]].v), r1 = _mm256_load_pd(b[p[1]].v);
+  const __m256d r2 = _mm256_load_pd(b[p[2]].v), r3 = _mm256_load_pd(b[p[3]].v);
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+  out[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  out[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+  out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+/// load_bodies() in reverse: velocities v[0..2] and inverse masses w, one particle a lane, back
+/// to their four rows (each row written whole, so a later load of it is forwarded whole).
+__attribute__((target("avx2"), always_inline)) inline void store_bodies(SolveBody* b, const std::uint32_t* p,
+                                                                       const __m256d* v, __m256d w) {
+  const __m256d a = _mm256_unpacklo_pd(v[0], v[1]), c = _mm256_unpackhi_pd(v[0], v[1]);
+  const __m256d d = _mm256_unpacklo_pd(v[2], w), e = _mm256_unpackhi_pd(v[2], w);
+  _mm256_store_pd(b[p[0]].v, _mm256_permute2f128_pd(a, d, 0x20));
+  _mm256_store_pd(b[p[1]].v, _mm256_permute2f128_pd(c, e, 0x20));
+  _mm256_store_pd(b[p[2]].v, _mm256_permute2f128_pd(a, d, 0x31));
+  _mm256_store_pd(b[p[3]].v, _mm256_permute2f128_pd(c, e, 0x31));
+}
 
 /// update2() for contacts q .. q + 3 of one wave, in the four lanes of AVX registers. The
-/// contacts' fields are loaded whole from their columns; the particles' velocities lane by lane.
+/// contacts' fields are loaded whole from their columns; the particles' velocities and inverse
+/// masses by transposing their rows.
 template <bool wall, class W>
-__attribute__((target("avx2"))) void update4(W& w, std::size_t q, const Vec3* vc, Vec3* v, const double* inv_mass) {
+__attribute__((target("avx2"), always_inline)) inline void update4(W& w, std::size_t q, const Vec3* vc,
+                                                                   SolveBody* b) {
   const std::uint32_t* ci = &w.i[q];
   const std::uint32_t* cj = &w.j[q];
-  __m256d n[3], vi[3], vj[3], dv[3], pt[3];
+  __m256d n[3], vi[4], vj[4], dv[3], pt[3];
+  load_bodies(b, cj, vj);
+  if (wall) {
+    for (int k = 0; k < 3; ++k) vi[k] = _mm256_setr_pd(vc[0][k], vc[1][k], vc[2][k], vc[3][k]);
+    vi[3] = _mm256_setzero_pd();
+  } else {
+    load_bodies(b, ci, vi);
+  }
   for (int k = 0; k < 3; ++k) {
-#define VJ_(l) v[cj[l]][k]
-#define VI_(l) (wall ? vc[l][k] : v[ci[l]][k])
     n[k] = _mm256_loadu_pd(&w.n[k][q]);
     pt[k] = _mm256_loadu_pd(&w.pt[k][q]);
-    vj[k] = SIMREEL_LANES(VJ_);
-    vi[k] = SIMREEL_LANES(VI_);
-#undef VJ_
-#undef VI_
   }
-#define WJ_(l) inv_mass[cj[l]]
-#define WI_(l) (wall ? 0.0 : inv_mass[ci[l]])
-  const __m256d wj = SIMREEL_LANES(WJ_), wi = SIMREEL_LANES(WI_);
-#undef WJ_
-#undef WI_
+  const __m256d wj = vj[3], wi = vi[3];
   const __m256d m_eff = _mm256_loadu_pd(&w.m_eff[q]), pn = _mm256_loadu_pd(&w.pn[q]);
   for (int k = 0; k < 3; ++k) dv[k] = _mm256_sub_pd(vj[k], vi[k]);
   const __m256d vn = dot4(dv, n);
@@ -178,23 +205,16 @@ __attribute__((target("avx2"))) void update4(W& w, std::size_t q, const Vec3* vc
   const __m256d bound = _mm256_mul_pd(_mm256_loadu_pd(&w.mu[q]), pn_new);
   const __m256d len = _mm256_sqrt_pd(dot4(pt_new, pt_new));
   const __m256d f = _mm256_min_pd(_mm256_div_pd(bound, len), _mm256_set1_pd(1.0));
-  alignas(32) double out_vi[3][4], out_vj[3][4];
   for (int k = 0; k < 3; ++k) {
     pt_new[k] = _mm256_mul_pd(pt_new[k], f);
     const __m256d dpt = _mm256_sub_pd(pt_new[k], pt[k]);
     _mm256_storeu_pd(&w.pt[k][q], pt_new[k]);
     if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(wi, dpt));
     vj[k] = _mm256_add_pd(vj[k], _mm256_mul_pd(wj, dpt));
-    _mm256_store_pd(out_vi[k], vi[k]);
-    _mm256_store_pd(out_vj[k], vj[k]);
   }
-  for (int l = 0; l < 4; ++l)
-    for (int k = 0; k < 3; ++k) {
-      if (!wall) v[ci[l]][k] = out_vi[k][l];
-      v[cj[l]][k] = out_vj[k][l];
-    }
+  if (!wall) store_bodies(b, ci, vi, wi);
+  store_bodies(b, cj, vj, wj);
 }
-#undef SIMREEL_LANES
 
 /// The widest update the CPU runs, up to `max_lanes` (checked once per CPU feature).
 int solve_lanes(int max_lanes) {
@@ -211,6 +231,46 @@ int solve_lanes(int max_lanes) {
 #else
   return 1;
 #endif
+}
+#endif
+
+/// The update of the run that starts at work position q, where schedule() marked it for two
+/// lanes (next[q] == 1), else of contact q alone; returns the contacts it took.
+template <class W>
+__attribute__((always_inline)) inline std::size_t update_narrow(W& w, const std::uint8_t* next, const Vec3* vc,
+                                                                SolveBody* b, std::size_t q) {
+  const bool wall = w.i[q] == ParticleCollider::kCollider;  // a run is one wave's, so of one kind
+#if defined(__SSE2__)
+  if (next[q] == 1) {
+    wall ? update2<true>(w, q, vc + q, b) : update2<false>(w, q, vc + q, b);
+    return 2;
+  }
+#endif
+  wall ? update1<true>(w, q, vc[q], b) : update1<false>(w, q, vc[q], b);
+  return 1;
+}
+
+/// One sweep over work positions [begin, end), each marked run in SIMD lanes (at most two).
+template <class W>
+void sweep_narrow(W& w, const std::uint8_t* next, const Vec3* vc, SolveBody* b, std::size_t begin,
+                  std::size_t end) {
+  for (std::size_t q = begin; q < end;) q += update_narrow(w, next, vc, b, q);
+}
+
+#if SIMREEL_SOLVE_WIDE
+/// sweep_narrow() with the runs marked for four lanes in AVX registers (AVX2 CPUs only), the
+/// updates inlined into the loop.
+template <class W>
+__attribute__((target("avx2"))) void sweep_wide(W& w, const std::uint8_t* next, const Vec3* vc, SolveBody* b,
+                                                std::size_t begin, std::size_t end) {
+  for (std::size_t q = begin; q < end;) {
+    if (next[q] == 2) {
+      w.i[q] == ParticleCollider::kCollider ? update4<true>(w, q, vc + q, b) : update4<false>(w, q, vc + q, b);
+      q += 4;
+    } else {
+      q += update_narrow(w, next, vc, b, q);
+    }
+  }
 }
 #endif
 
@@ -415,32 +475,33 @@ void ParticleCollider::solve() {
   // Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end. Each run of a
   // wave's contacts that schedule() marked goes to the SIMD update of its width.
   schedule();
-  Vec3* vp = v.data();
-  const double* wp = inv_mass.data();
-  const auto sweep = [&](std::size_t begin, std::size_t end) __attribute__((always_inline)) {
-    for (std::size_t q = begin; q < end; ++q) {
-      const bool wall = work_.i[q] == kCollider;  // a run is one wave's, so of one kind
-      switch (pair_next_[q]) {
+  // The sweeps read each particle's velocity and inverse mass as one aligned row (body_), which
+  // the four-lane update loads and stores whole.
+  const std::ptrdiff_t np = std::ptrdiff_t(x.size());
+  const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+  body_.resize(x.size());
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t pp = 0; pp < np; ++pp) {
+    const std::size_t p = std::size_t(pp);
+    body_[p] = SolveBody{{v[p][0], v[p][1], v[p][2]}, inv_mass[p]};
+  }
+  SolveBody* bp = body_.data();
+  const std::uint8_t* next = pair_next_.data();
+  const Vec3* vc = work_vc_.data();
 #if SIMREEL_SOLVE_WIDE
-        case 2:
-          wall ? update4<true>(work_, q, &work_vc_[q], vp, wp) : update4<false>(work_, q, &work_vc_[q], vp, wp);
-          q += 3;
-          break;
+  const bool wide = wavefront && solve_lanes(max_lanes) >= 4;  // runs of four marked
 #endif
-#if defined(__SSE2__)
-        case 1:
-          wall ? update2<true>(work_, q, &work_vc_[q], vp, wp) : update2<false>(work_, q, &work_vc_[q], vp, wp);
-          ++q;
-          break;
-#endif
-        default:
-          wall ? update1<true>(work_, q, work_vc_[q], vp, wp) : update1<false>(work_, q, work_vc_[q], vp, wp);
-      }
+  const auto sweep = [&](std::size_t begin, std::size_t end) {
+#if SIMREEL_SOLVE_WIDE
+    if (wide) {
+      sweep_wide(work_, next, vc, bp, begin, end);
+      return;
     }
+#endif
+    sweep_narrow(work_, next, vc, bp, begin, end);
   };
   const auto give_back = [&] {
     const std::ptrdiff_t m = std::ptrdiff_t(sched_.size());
-    const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (std::ptrdiff_t kk = 0; kk < m; ++kk) {
       const std::size_t k = std::size_t(kk);
@@ -451,6 +512,11 @@ void ParticleCollider::solve() {
   };
   sweep_bands(iterations, sweep);
   give_back();
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t pp = 0; pp < np; ++pp) {
+    const std::size_t p = std::size_t(pp);
+    v[p] = Vec3(body_[p].v[0], body_[p].v[1], body_[p].v[2]);
+  }
 }
 
 void ParticleCollider::schedule() {
