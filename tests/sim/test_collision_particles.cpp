@@ -681,5 +681,73 @@ TEST(SimParticleCollision, RunWritesEachWorkingEntryBackToItsOwnParticle) {
   EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(seen.size()));
 }
 
+TEST(SimParticleCollision, AlikeMembersGiveTheBitsOfThePerParticleSurfaceArrays) {
+  // With members alike in restitution, friction and colliding, run() takes those values from the
+  // members and does not fill the per-particle arrays: the steps of a heap of two such members
+  // on the ground against a moving box (impacts, resting and sliding contacts, colliders, warm
+  // starts over several steps) must be those of the arrays, to the bit.
+  const double h = 1.0 / 240;
+  const std::vector<detail::Collider> cols = ground_and_moving_box();
+  Rng rng(23);
+  const std::size_t sizes[2] = {900, 1600};
+  detail::ParticleStore stores[2][2];  // [path][member]
+  for (int mi = 0; mi < 2; ++mi) {
+    detail::ParticleStore& s = stores[0][mi];
+    s.append(sizes[mi]);
+    for (std::size_t i = 0; i < sizes[mi]; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        s.position[3 * i + std::size_t(a)] = float(a == 2 ? rng.uniform(0.004, 0.12) : rng.uniform(-0.15, 0.15));
+        s.velocity[3 * i + std::size_t(a)] = float(rng.uniform(-0.4, 0.4));
+      }
+      s.radius[i] = float(rng.uniform(0.006, 0.011));
+      s.mass[i] = float(rng.uniform(1e-3, 3e-3));
+      s.age[i] = float(i % 7 == 0 ? 0.5 * h : 1.0);
+      s.id[i] = std::uint32_t(i);
+    }
+    stores[1][mi] = s;
+  }
+  detail::ParticleCollider pc[2];
+  pc[1].uniform_surface = false;
+  for (int path = 0; path < 2; ++path) {
+    const std::vector<detail::ParticleGroupMember> members{{&stores[path][0], 0.3, 0.4, true, 0, false, 9.81},
+                                                           {&stores[path][1], 0.3, 0.4, true, 1, false, 9.81}};
+    for (int step = 0; step < 4; ++step) pc[path].run(members, 0.05, h, &cols);
+  }
+  ASSERT_GT(pc[0].contacts.size(), 3000u);
+  ASSERT_EQ(pc[0].restitution.size(), 0u) << "the alike members' run filled the arrays";
+  ASSERT_EQ(pc[1].restitution.size(), sizes[0] + sizes[1]);
+  for (int mi = 0; mi < 2; ++mi)
+    for (std::size_t k = 0; k < 3 * sizes[mi]; ++k) {
+      ASSERT_EQ(stores[0][mi].position[k], stores[1][mi].position[k]) << "member " << mi << " entry " << k;
+      ASSERT_EQ(stores[0][mi].velocity[k], stores[1][mi].velocity[k]) << "member " << mi << " entry " << k;
+    }
+}
+
+TEST(SimParticleCollision, PairOfTwoSystemsTakesTheirMeanRestitution) {
+  // Two particles of systems with restitution 0.9 and 0.1 meet head on: the pair's coefficient
+  // is the mean, 0.5, so equal masses closing at 2 m/s part at 1 m/s (§3.6.1, v_n' = -e v_n).
+  const double r = 0.01, h = 1.0 / 240;
+  detail::ParticleStore stores[2];
+  for (int mi = 0; mi < 2; ++mi) {
+    detail::ParticleStore& s = stores[mi];
+    s.append(1);
+    s.position[0] = float(mi == 0 ? -0.009 : 0.009);  // overlapping by 2 mm at the end of the step
+    s.position[1] = s.position[2] = 0.0f;
+    s.velocity[0] = float(mi == 0 ? 1.0 : -1.0);
+    s.velocity[1] = s.velocity[2] = 0.0f;
+    s.radius[0] = float(r);
+    s.mass[0] = 1e-3f;
+    s.age[0] = 1.0f;
+    s.id[0] = 0;
+  }
+  const std::vector<detail::ParticleGroupMember> members{{&stores[0], 0.9, 0.2, true, 0},
+                                                         {&stores[1], 0.1, 0.2, true, 1}};
+  detail::ParticleCollider pc;
+  pc.run(members, 0.05, h, nullptr);
+  ASSERT_EQ(pc.contacts.size(), 1u);
+  EXPECT_NEAR(stores[1].velocity[0] - stores[0].velocity[0], 1.0, 1e-6);
+  EXPECT_NEAR(stores[0].velocity[0] + stores[1].velocity[0], 0.0, 1e-6);  // momentum
+}
+
 }  // namespace
 }  // namespace simreel::sim

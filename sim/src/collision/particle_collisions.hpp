@@ -86,6 +86,10 @@ class ParticleCollider {
   /// bits are the same at every width (the solver test compares 4, 2 and 1). Eight AVX-512
   /// lanes were slower than four on a Xeon.
   int max_lanes = 4;
+  /// run() takes restitution, friction and `collide` from the members when they are alike
+  /// instead of filling the per-particle arrays (the same bits, a cheaper fill); false: always
+  /// the arrays, the reference the tests compare it with.
+  bool uniform_surface = true;
 
   /// Finds and resolves the contacts among all members' particles and, for members that
   /// collide, with `colliders` (may be null) at their end-of-step pose; h (s) is the step.
@@ -229,6 +233,20 @@ class ParticleCollider {
   std::vector<std::uint32_t> cell_first_;  ///< occupied cell -> first sorted position, + n
   std::vector<std::uint64_t> occupied_;    ///< occupied cells' keys, increasing
   std::vector<double> sx_, sy_, sz_, sr_;  ///< x, y, z, radius in sorted order
+  /// run() (fill_working() with the grid's order): the working arrays are in sorted order, so
+  /// the sorted radii are `radius` and sr_ is not filled.
+  bool sorted_radius_is_radius_ = false;
+  [[nodiscard]] const double* sorted_radius() const {
+    return sorted_radius_is_radius_ ? radius.data() : sr_.data();
+  }
+  /// run(): its members' restitution, friction and `collide`, when they are alike (uniform);
+  /// the per-particle arrays are then not filled. Reset when run() returns.
+  struct UniformSurface {
+    bool uniform = false;
+    double restitution = 0.0, friction = 0.0;
+    bool collide = true;
+  };
+  UniformSurface surface_;
   std::uint64_t stride_y_ = 0, stride_x_ = 0;  ///< linear key = cx stride_x + cy stride_y + cz
   std::uint64_t cells_x_ = 0;              ///< cells along x (the key's major axis)
   /// Contacts of run() in slabs of grid columns along x: band b holds the pairs whose first

@@ -275,8 +275,8 @@ bool ParticleCollider::build_grid(bool sorted_copies) {
   sx_.resize(n);
   sy_.resize(n);
   sz_.resize(n);
-  sr_.resize(n);
   if (sorted_copies) {
+    sr_.resize(n);
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (std::ptrdiff_t ss = 0; ss < np; ++ss) {
       const std::size_t s = std::size_t(ss);
@@ -350,9 +350,10 @@ void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
   c.n = d / dist;
   c.m_eff = 1.0 / (inv_mass[i] + inv_mass[j]);
   c.depth = rr - dist;
-  const double e = 0.5 * (restitution[i] + restitution[j]);
+  // Alike for all (surface_): the mean of two equal values is that value to the bit.
+  const double e = surface_.uniform ? surface_.restitution : 0.5 * (restitution[i] + restitution[j]);
   c.target = dist >= rr ? -(dist - rr) / h : -vn > contact_speed ? -e * vn : 0.0;
-  c.mu = 0.5 * (friction[i] + friction[j]);
+  c.mu = surface_.uniform ? surface_.friction : 0.5 * (friction[i] + friction[j]);
   out.push_back(c);
 }
 
@@ -417,7 +418,7 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
   const std::size_t cells = occupied_.size();
   const std::uint64_t* key_of = occupied_.data();
   const std::uint32_t* first = cell_first_.data();
-  const double *px = sx_.data(), *py = sy_.data(), *pz = sz_.data(), *pr = sr_.data();
+  const double *px = sx_.data(), *py = sy_.data(), *pz = sz_.data(), *pr = sorted_radius();
   // No pair reaches further than two of the largest spheres: reach_box is within_reach()'s reach
   // on the largest radius by the same rounded operations, so no pair's reach exceeds it. A
   // candidate farther than it along an axis from every particle of a cell (fl(c - x_i) >
@@ -566,8 +567,8 @@ void ParticleCollider::find_sleeping_neighbours(const std::vector<std::uint32_t>
             if (u == w || (asleep[u] == 0 && !(u > w && was_woken(u)))) continue;
             double d2 = 0.0;
             const std::uint32_t i = std::min(w, u), j = std::max(w, u);
-            within_reach(sx_[i], sy_[i], sz_[i], sr_[i], margin, &sx_[j], &sy_[j], &sz_[j],
-                         &sr_[j], 1, &d2);
+            const double* sr = sorted_radius();
+            within_reach(sx_[i], sy_[i], sz_[i], sr[i], margin, &sx_[j], &sy_[j], &sz_[j], &sr[j], 1, &d2);
             if (!(d2 > 0.0)) continue;
             // find_pairs() lists contacts by their first particle: the pair goes after those of i.
             const auto at = std::upper_bound(contacts.begin(), contacts.end(), i,
