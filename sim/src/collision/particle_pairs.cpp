@@ -106,9 +106,10 @@ std::size_t gather_in_box_avx512(std::uint32_t b, std::uint32_t e, const double*
     keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(ly, y), reach, _CMP_LE_OQ);
     keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(z, hz), reach, _CMP_LE_OQ);
     keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lz, z), reach, _CMP_LE_OQ);
-    if (keep == 0) continue;
     // Compress in registers, then a full store (a compressing store to memory is microcoded
-    // and slow on some cores).
+    // and slow on some cores). Also when none is kept: whether a block keeps any is data, and
+    // the mispredicted branch that skipped it cost more than the stores (the 100k cloud's step
+    // ~3 % faster without it and in_reach_avx512()'s).
     _mm512_storeu_pd(cx + k, _mm512_maskz_compress_pd(keep, x));
     _mm512_storeu_pd(cy + k, _mm512_maskz_compress_pd(keep, y));
     _mm512_storeu_pd(cz + k, _mm512_maskz_compress_pd(keep, z));
@@ -146,7 +147,7 @@ std::size_t in_reach_avx512(double xi, double yi, double zi, double ri, double m
     const __m512d reach = _mm512_add_pd(_mm512_add_pd(r, rj), _mm512_mul_pd(mg, smaller));
     const __mmask8 keep = live & _mm512_cmp_pd_mask(e, _mm512_mul_pd(reach, reach), _CMP_LT_OQ) &
                           _mm512_cmp_pd_mask(e, zero, _CMP_GT_OQ);
-    if (keep == 0) continue;
+    // Stored also when none is in reach (two in three blocks, unpredictably): see gather_in_box_avx512().
     _mm512_storeu_pd(hd2 + k, _mm512_maskz_compress_pd(keep, e));
     const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(b)), step);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(hit + k), _mm256_maskz_compress_epi32(keep, idx));
