@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 
 #include "collision/bvh.hpp"
@@ -1101,6 +1102,55 @@ TEST(SimCollisionMesh, SurfaceContactsGiveTheClosestFeatureOfEachShape) {
   EXPECT_LT((out[0].normal - Vec3::UnitZ()).norm(), 1e-12);
   EXPECT_NEAR(out[1].gap, 0.001, 1e-12);
   EXPECT_LT((out[1].normal - Vec3::UnitY()).norm(), 1e-12);
+}
+
+TEST(SimCollisionMesh, SurfaceContactsFromTheMeshGridAreTheTreesToTheBit) {
+  // surface_contacts() asks a mesh's grid first (§2.3.1) and its AABB tree where the grid
+  // declines. Both must give the same features in the same order, to the bit. Reference: the
+  // same collider with an empty grid (the tree alone). Points on both sides of the bowl's shell,
+  // near its vertices (where several triangles tie) and in its hollow; radii whose boxes span
+  // one cell, several, and too many (the grid declines).
+  const double R = 0.3;
+  const MeshDef b = bowl(R, 16, 48, mat(0.3, 0.5));
+  ShapeDef md;
+  md.type = ShapeType::mesh;
+  md.vertices = b.vertices;
+  md.triangles = b.triangles;
+  detail::Collider grid = detail::make_collider(md, "bowl");
+  grid.follow(Transform{Vec3(0.1, -0.2, 0.05), Quat::Identity()}, Vec3::Zero(), Vec3::Zero());
+  ASSERT_GT(grid.mesh->grid.cell_count(), 0u);
+  detail::Collider tree = grid;
+  auto alone = std::make_shared<detail::MeshShape>(*grid.mesh);
+  alone->grid = detail::MeshGrid();
+  tree.mesh = alone;
+  Rng rng(29, 4);
+  int found = 0, several = 0;
+  for (int k = 0; k < 30000; ++k) {
+    const double r = k % 3 == 0 ? 0.002 : k % 3 == 1 ? 0.008 : 0.06;
+    Vec3 p;
+    if (k % 4 == 0) {  // near a vertex
+      p = b.vertices[std::size_t(rng.uniform(0.0, double(b.vertices.size()) - 1e-9))] +
+          Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * (1.2 * r);
+    } else {  // at a distance from the centre across the shell
+      const double ph = rng.uniform(0.0, 2 * kPi), th = rng.uniform(0.0, 0.5 * kPi);
+      const Vec3 dir(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), -std::cos(th));
+      p = (R + rng.uniform(-2.0 * r, 0.5 * r)) * dir;
+    }
+    p += Vec3(0.1, -0.2, 0.05);
+    const double margin = 0.25 * r;
+    detail::SurfaceContact a[3], c[3];
+    const int na = detail::surface_contacts(grid, p, r, margin, a, 3);
+    const int nc = detail::surface_contacts(tree, p, r, margin, c, 3);
+    ASSERT_EQ(na, nc) << p.transpose() << " r " << r;
+    for (int q = 0; q < na; ++q) {
+      ASSERT_EQ(a[q].gap, c[q].gap) << p.transpose() << " r " << r;
+      ASSERT_EQ(a[q].normal, c[q].normal) << p.transpose() << " r " << r;
+    }
+    found += na;
+    several += na > 1 ? 1 : 0;
+  }
+  EXPECT_GT(found, 10000);
+  EXPECT_GT(several, 1000);
 }
 
 // ---------------------------------------------------------------------------------------------

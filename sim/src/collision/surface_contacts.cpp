@@ -127,12 +127,19 @@ int surface_contacts(const Collider& c, const Vec3& p, double r, double margin,
     case Collider::Shape::mesh: {
       const MeshShape& m = *c.mesh;
       int count = 0;
-      m.bvh.query(l - Vec3::Constant(reach), l + Vec3::Constant(reach), [&](std::uint32_t t) {
+      const auto near = [&](std::uint32_t t) {
         const Vec3 off = l - closest_on_triangle(m.triangles[t], l);
         const double d = off.norm();
         if (!(d > 0.0) || !(d - r < margin)) return;
         add_surface_contact(Vec3(c.R * (off / d)), d - r, out, count, max_out);
-      });
+      };
+      // The grid first (§2.3.1): a particle inside a bowl or above a floor lies in empty cells,
+      // where the tree would descend through the large boxes that hold it. Both hand out the
+      // triangles in the tree's order; the tree adds leaf-mates whose boxes miss the query box,
+      // which lie farther than `reach` and add nothing.
+      const Vec3 lo = l - Vec3::Constant(reach), hi = l + Vec3::Constant(reach);
+      if (!m.grid.query(lo, hi, [&](const SweepTriangle&, std::uint32_t t) { near(t); }))
+        m.bvh.query(lo, hi, near);
       return count;
     }
     default: return 0;
