@@ -32,19 +32,6 @@ void unpermute(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::
   a.swap(tmp);
 }
 
-/// dst = src, `threads` > 1 splitting the elements.
-template <class T>
-void copy(std::vector<T>& dst, const std::vector<T>& src, int threads) {
-  if (threads <= 1) {
-    dst = src;
-    return;
-  }
-  dst.resize(src.size());
-  const std::ptrdiff_t n = std::ptrdiff_t(src.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (std::ptrdiff_t k = 0; k < n; ++k) dst[std::size_t(k)] = src[std::size_t(k)];
-}
-
 }  // namespace
 
 void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, double contact_speed,
@@ -153,10 +140,9 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     }
     load_warm_start(*cache);
   }
-  copy(v_before_, v, par);
-  solve();
+  solve_rows();  // v: before the solve; body_: after it
   if (cache != nullptr) store_warm_start(*cache);
-  if (contacts.empty()) {
+  if (contacts.empty()) {  // nothing changed v
     if (any_asleep_) unpermute(asleep, perm_, tmp_byte_);
     update_rest(members, h);
     return;
@@ -165,13 +151,16 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   // constant force over the step (x1 = x0 + dt v0 + dt² a / 2 in every integrator for a constant
   // acceleration): dt Δv / 2. A stack whose weight the solve cancels stays where it was instead
   // of sinking g h² / 2 per step into overlaps the projection must undo.
-  copy(x_before, x, par);
   {
+    x_before.resize(n);
     const std::ptrdiff_t np = std::ptrdiff_t(n);
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (std::ptrdiff_t q = 0; q < np; ++q) {
       const std::size_t u = std::size_t(q);
-      x[u] += half_dt_[u] * (v[u] - v_before_[u]);
+      const Vec3 after(body_[u].v[0], body_[u].v[1], body_[u].v[2]);
+      x_before[u] = x[u];
+      x[u] += half_dt_[u] * (after - v[u]);
+      v[u] = after;
     }
   }
   project_positions();

@@ -186,7 +186,6 @@ class ParticleCollider {
     std::vector<double> pn;
   };
   std::vector<WarmCache> caches_;
-  std::vector<Vec3> v_before_;
   void load_warm_start(const WarmCache& c);
   void store_warm_start(WarmCache& c);
 
@@ -265,10 +264,14 @@ class ParticleCollider {
   void cut_bands(int parts, std::vector<std::size_t>& cut) const;
   std::vector<std::size_t> band_cut_;
   std::vector<ClaimRun> run_;  ///< sweep_bands(): each thread's run of bands per sweep and phase
-  /// Applies each contact's impulse (pn n + pt) to its particles in contact order, as one pass
-  /// in contact order would to the bit: with bands over `parts` threads, each thread owning the
-  /// particles of its bands (the pairs of the band before its first reach into it).
+  /// Applies each contact's impulse (pn n + pt) to its particles' rows of body_ in contact
+  /// order, as one pass in contact order would to the bit: with bands over `parts` threads, each
+  /// thread owning the particles of its bands (the pairs of the band before its first reach into
+  /// it).
   void apply_impulses(int parts);
+  /// solve() without its last pass: the velocities after the sweeps are left in body_, and v
+  /// keeps the velocities before the solve (run() takes both in one pass).
+  void solve_rows();
   CountingSortScratch sort_scratch_;  ///< store_warm_start()'s and build_grid()'s
   /// Fills work_ with the contacts in wavefront order (sched_: work_ position -> contact):
   /// within each band's pairs and walls (the whole list without bands), windows of contacts

@@ -426,11 +426,17 @@ void ParticleCollider::cut_bands(int parts, std::vector<std::size_t>& cut) const
 void ParticleCollider::apply_impulses(int parts) {
   // The impulse on the second particle, p = pn n + pt (the first takes -p), once per contact.
   const auto impulse = [](const Contact& c) { return Vec3(c.pn * c.n + c.pt); };
+  SolveBody* b = body_.data();
+  // b.v - m p and b.v + m p, componentwise: what v -= m p and v += m p give.
+  const auto take = [&](std::uint32_t q, const Vec3& p, double sign) {
+    const double m = inv_mass[q];
+    for (int k = 0; k < 3; ++k) b[q].v[k] = sign > 0.0 ? b[q].v[k] + m * p[k] : b[q].v[k] - m * p[k];
+  };
   if (parts <= 1 || bands_.size() < 2) {
     for (const Contact& c : contacts) {
       const Vec3 p = impulse(c);
-      if (c.i != kCollider) v[c.i] -= inv_mass[c.i] * p;
-      v[c.j] += inv_mass[c.j] * p;
+      if (c.i != kCollider) take(c.i, p, -1.0);
+      take(c.j, p, 1.0);
     }
     return;
   }
@@ -447,17 +453,17 @@ void ParticleCollider::apply_impulses(int parts) {
       if (b0 > 0)
         for (std::uint32_t q = bands_[b0 - 1].pair_begin; q < bands_[b0 - 1].pair_end; ++q) {
           const Contact& c = contacts[q];
-          if (c.j >= band_first_[b0]) v[c.j] += inv_mass[c.j] * impulse(c);
+          if (c.j >= band_first_[b0]) take(c.j, impulse(c), 1.0);
         }
       for (std::uint32_t q = bands_[b0].pair_begin; q < bands_[b1 - 1].pair_end; ++q) {
         const Contact& c = contacts[q];
         const Vec3 p = impulse(c);
-        v[c.i] -= inv_mass[c.i] * p;
-        if (c.j < p1) v[c.j] += inv_mass[c.j] * p;
+        take(c.i, p, -1.0);
+        if (c.j < p1) take(c.j, p, 1.0);
       }
       for (std::uint32_t q = bands_[b0].wall_begin; q < bands_[b1 - 1].wall_end; ++q) {
         const Contact& c = contacts[q];
-        v[c.j] += inv_mass[c.j] * impulse(c);
+        take(c.j, impulse(c), 1.0);
       }
     }
   }
@@ -470,7 +476,17 @@ void ParticleCollider::SolverColumns::resize(std::size_t m) {
 }
 
 void ParticleCollider::solve() {
-  apply_impulses(threads > 1 && x.size() >= kParallelMin ? threads : 1);
+  solve_rows();
+  const std::ptrdiff_t np = std::ptrdiff_t(x.size());
+  const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+  for (std::ptrdiff_t pp = 0; pp < np; ++pp) {
+    const std::size_t p = std::size_t(pp);
+    v[p] = Vec3(body_[p].v[0], body_[p].v[1], body_[p].v[2]);
+  }
+}
+
+void ParticleCollider::solve_rows() {
   // The sweeps run over the contacts in wavefront order (schedule()), which is the same
   // Gauss-Seidel sweep to the bit; the impulses go back to `contacts` at the end. Each run of a
   // wave's contacts that schedule() marked goes to the SIMD update of its width.
@@ -485,6 +501,7 @@ void ParticleCollider::solve() {
     const std::size_t p = std::size_t(pp);
     body_[p] = SolveBody{{v[p][0], v[p][1], v[p][2]}, inv_mass[p]};
   }
+  apply_impulses(par);
   SolveBody* bp = body_.data();
   const std::uint8_t* next = pair_next_.data();
   const Vec3* vc = work_vc_.data();
@@ -512,11 +529,6 @@ void ParticleCollider::solve() {
   };
   sweep_bands(iterations, sweep);
   give_back();
-#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
-  for (std::ptrdiff_t pp = 0; pp < np; ++pp) {
-    const std::size_t p = std::size_t(pp);
-    v[p] = Vec3(body_[p].v[0], body_[p].v[1], body_[p].v[2]);
-  }
 }
 
 void ParticleCollider::schedule() {
