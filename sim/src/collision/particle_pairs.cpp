@@ -17,6 +17,7 @@
 #include "core/counting_sort.hpp"
 #include "core/run_claims.hpp"
 #include "core/vector_clones.hpp"
+#include "core/key_runs.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
 #if SIMREEL_HAS_VECTOR_CLONES
@@ -448,27 +449,8 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
     run_e[0] = c + 1 < cells && key_of[c + 1] == kc + 1 ? first[c + 2] : first[c + 1];
     for (int col = 0; col < 4; ++col) {
       const std::uint64_t lo = kc + off[col] - 1, hi = kc + off[col] + 1;
-      std::size_t cur = cursor[col], end;
-      if (cur + 4 <= cells) {
-        // The keys are sorted and distinct: those below lo are a prefix, and at most three lie
-        // in [lo, hi]. Counted by compares instead of loops whose exits (after 0, 1, 2 ...
-        // steps, as the cells fall) the branch predictor misses.
-        std::size_t step = std::size_t(key_of[cur] < lo) + std::size_t(key_of[cur + 1] < lo) +
-                           std::size_t(key_of[cur + 2] < lo) + std::size_t(key_of[cur + 3] < lo);
-        cur += step;
-        if (step == 4)  // rare: four or more cells passed
-          while (cur < cells && key_of[cur] < lo) ++cur;
-      } else {
-        while (cur < cells && key_of[cur] < lo) ++cur;
-      }
-      if (cur + 3 <= cells) {
-        end = cur + std::size_t(key_of[cur] <= hi) + std::size_t(key_of[cur + 1] <= hi) +
-              std::size_t(key_of[cur + 2] <= hi);
-      } else {
-        end = cur;
-        while (end < cells && key_of[end] <= hi) ++end;
-      }
-      cursor[col] = cur;
+      const std::size_t end = key_run(key_of, cells, cursor[col], lo, hi);
+      const std::size_t cur = cursor[col];
       run_b[col + 1] = first[cur];
       run_e[col + 1] = first[end];
     }

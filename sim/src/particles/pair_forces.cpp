@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/key_runs.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"
 
@@ -662,12 +663,8 @@ void Dynamics::pair_forces_over_grid(const T* x) {
           const std::uint64_t lo_key = cell_key(cx + dx, cy + dy, cz - 1);
           const std::uint64_t hi_key = cell_key(cx + dx, cy + dy, cz + 1);
           std::size_t& cur = cursor[col];
-          if (c == c_begin)
-            cur = std::size_t(std::lower_bound(ck, ck + cells, lo_key) - ck);
-          else
-            while (cur < cells && ck[cur] < lo_key) ++cur;
-          std::size_t end = cur;
-          while (end < cells && ck[end] <= hi_key) ++end;
+          if (c == c_begin) cur = std::size_t(std::lower_bound(ck, ck + cells, lo_key) - ck);
+          const std::size_t end = key_run(ck, cells, cur, lo_key, hi_key);
           run_b[col] = cs[cur];
           run_e[col] = cs[end];
         }
