@@ -58,19 +58,22 @@ struct ReachBox {
   double lx, ly, lz, hx, hy, hz, reach;
 };
 
-/// Appends the sorted positions s in [b, e) that are not farther than box.reach past the box
-/// along any axis (fl(c - hi) <= reach and fl(lo - c) <= reach on x, y and z) to the candidate
-/// arrays (cs: s; cx, cy, cz, cr: its position and radius) from place k, in order; returns the
-/// new count. Which form runs changes nothing but time. The AVX-512 form tests eight at a time
-/// and compresses in registers; it writes up to 8 entries past the result (the callers' slack).
-std::size_t gather_in_box_scalar(std::uint32_t b, std::uint32_t e, const double* __restrict px,
-                                 const double* __restrict py, const double* __restrict pz,
-                                 const double* __restrict pr, const ReachBox& box,
-                                 std::uint32_t* __restrict cs, double* __restrict cx,
-                                 double* __restrict cy, double* __restrict cz,
-                                 double* __restrict cr, std::size_t k) {
+/// Writes the sorted positions s in the runs [rb[u], re[u]) (u < runs, in order) that are not
+/// farther than box.reach past the box along any axis (fl(c - hi) <= reach and fl(lo - c) <=
+/// reach on x, y and z) to the candidate arrays (cs: s; cx, cy, cz, cr: its position and
+/// radius), in order; returns the count. Which form runs changes nothing but time. The AVX-512
+/// form tests eight at a time and compresses in registers; it writes up to 8 entries past the
+/// result (the callers' slack). All of a cell's runs in one call: one call per cell, not per run.
+std::size_t gather_in_box_scalar(const std::uint32_t* rb, const std::uint32_t* re, int runs,
+                                 const double* __restrict px, const double* __restrict py,
+                                 const double* __restrict pz, const double* __restrict pr,
+                                 const ReachBox& box, std::uint32_t* __restrict cs,
+                                 double* __restrict cx, double* __restrict cy,
+                                 double* __restrict cz, double* __restrict cr) {
+  std::size_t k = 0;
   // Branch-free: every position is written at the end of the list, which grows only when kept.
-  for (std::uint32_t s = b; s < e; ++s) {
+  for (int u = 0; u < runs; ++u)
+  for (std::uint32_t s = rb[u], e = re[u]; s < e; ++s) {
     const double x = px[s], y = py[s], z = pz[s];
     cs[k] = s;
     cx[k] = x;
@@ -85,17 +88,19 @@ std::size_t gather_in_box_scalar(std::uint32_t b, std::uint32_t e, const double*
 
 #if SIMREEL_HAS_VECTOR_CLONES
 __attribute__((target("avx512f,avx512vl")))
-std::size_t gather_in_box_avx512(std::uint32_t b, std::uint32_t e, const double* __restrict px,
-                                 const double* __restrict py, const double* __restrict pz,
-                                 const double* __restrict pr, const ReachBox& box,
-                                 std::uint32_t* __restrict cs, double* __restrict cx,
-                                 double* __restrict cy, double* __restrict cz,
-                                 double* __restrict cr, std::size_t k) {
+std::size_t gather_in_box_avx512(const std::uint32_t* rb, const std::uint32_t* re, int runs,
+                                 const double* __restrict px, const double* __restrict py,
+                                 const double* __restrict pz, const double* __restrict pr,
+                                 const ReachBox& box, std::uint32_t* __restrict cs,
+                                 double* __restrict cx, double* __restrict cy,
+                                 double* __restrict cz, double* __restrict cr) {
+  std::size_t k = 0;
   const __m512d hx = _mm512_set1_pd(box.hx), hy = _mm512_set1_pd(box.hy), hz = _mm512_set1_pd(box.hz);
   const __m512d lx = _mm512_set1_pd(box.lx), ly = _mm512_set1_pd(box.ly), lz = _mm512_set1_pd(box.lz);
   const __m512d reach = _mm512_set1_pd(box.reach);
   const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  for (std::uint32_t s = b; s < e; s += 8) {
+  for (int u = 0; u < runs; ++u)
+  for (std::uint32_t s = rb[u], e = re[u]; s < e; s += 8) {
     // Masked loads: nothing read past e.
     const __mmask8 live = e - s >= 8 ? __mmask8(0xff) : __mmask8((1u << (e - s)) - 1u);
     const __m512d x = _mm512_maskz_loadu_pd(live, px + s), y = _mm512_maskz_loadu_pd(live, py + s);
@@ -158,9 +163,9 @@ std::size_t in_reach_avx512(double xi, double yi, double zi, double ri, double m
 }
 #endif
 
-using GatherInBox = std::size_t (*)(std::uint32_t, std::uint32_t, const double*, const double*,
-                                    const double*, const double*, const ReachBox&, std::uint32_t*,
-                                    double*, double*, double*, double*, std::size_t);
+using GatherInBox = std::size_t (*)(const std::uint32_t*, const std::uint32_t*, int, const double*,
+                                    const double*, const double*, const double*, const ReachBox&,
+                                    std::uint32_t*, double*, double*, double*, double*);
 
 /// The gather_in_box form this CPU runs (checked once, on first use).
 GatherInBox gather_in_box() {
@@ -478,11 +483,8 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
       box.lz = std::min(box.lz, pz[si]);
       box.hz = std::max(box.hz, pz[si]);
     }
-    std::size_t k = 0;
-    for (int col = 0; col < 5; ++col)
-      k = gather(run_b[col], run_e[col], px, py, pz, pr, box, ps.cand_s.data(), ps.cand_x.data(),
-                 ps.cand_y.data(), ps.cand_z.data(), ps.cand_r.data(), k);
-    m = k;
+    m = gather(run_b, run_e, 5, px, py, pz, pr, box, ps.cand_s.data(), ps.cand_x.data(),
+               ps.cand_y.data(), ps.cand_z.data(), ps.cand_r.data());
     // With particles asleep, a sleeping one meets only the awake candidates (try_pair() would
     // drop a pair of sleepers): the same contacts in the same order, and a settled pile's cells
     // cost a scan of their flags.
