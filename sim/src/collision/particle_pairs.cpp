@@ -15,9 +15,9 @@
 #endif
 
 #include "core/counting_sort.hpp"
+#include "core/key_runs.hpp"
 #include "core/run_claims.hpp"
 #include "core/vector_clones.hpp"
-#include "core/key_runs.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
 #if SIMREEL_HAS_VECTOR_CLONES
