@@ -72,16 +72,18 @@ std::size_t gather_in_box_scalar(const std::uint32_t* rb, const std::uint32_t* r
                                  double* __restrict cz, double* __restrict cr) {
   std::size_t k = 0;
   // Branch-free: every position is written at the end of the list, which grows only when kept.
-  for (int u = 0; u < runs; ++u)
-  for (std::uint32_t s = rb[u], e = re[u]; s < e; ++s) {
-    const double x = px[s], y = py[s], z = pz[s];
-    cs[k] = s;
-    cx[k] = x;
-    cy[k] = y;
-    cz[k] = z;
-    cr[k] = pr[s];
-    k += std::size_t((x - box.hx <= box.reach) & (box.lx - x <= box.reach) & (y - box.hy <= box.reach) &
-                     (box.ly - y <= box.reach) & (z - box.hz <= box.reach) & (box.lz - z <= box.reach));
+  for (int u = 0; u < runs; ++u) {
+    for (std::uint32_t s = rb[u], e = re[u]; s < e; ++s) {
+      const double x = px[s], y = py[s], z = pz[s];
+      cs[k] = s;
+      cx[k] = x;
+      cy[k] = y;
+      cz[k] = z;
+      cr[k] = pr[s];
+      k += std::size_t((x - box.hx <= box.reach) & (box.lx - x <= box.reach) &
+                       (y - box.hy <= box.reach) & (box.ly - y <= box.reach) &
+                       (z - box.hz <= box.reach) & (box.lz - z <= box.reach));
+    }
   }
   return k;
 }
@@ -99,30 +101,31 @@ std::size_t gather_in_box_avx512(const std::uint32_t* rb, const std::uint32_t* r
   const __m512d lx = _mm512_set1_pd(box.lx), ly = _mm512_set1_pd(box.ly), lz = _mm512_set1_pd(box.lz);
   const __m512d reach = _mm512_set1_pd(box.reach);
   const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  for (int u = 0; u < runs; ++u)
-  for (std::uint32_t s = rb[u], e = re[u]; s < e; s += 8) {
-    // Masked loads: nothing read past e.
-    const __mmask8 live = e - s >= 8 ? __mmask8(0xff) : __mmask8((1u << (e - s)) - 1u);
-    const __m512d x = _mm512_maskz_loadu_pd(live, px + s), y = _mm512_maskz_loadu_pd(live, py + s);
-    const __m512d z = _mm512_maskz_loadu_pd(live, pz + s), r = _mm512_maskz_loadu_pd(live, pr + s);
-    __mmask8 keep = live;
-    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(x, hx), reach, _CMP_LE_OQ);
-    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lx, x), reach, _CMP_LE_OQ);
-    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(y, hy), reach, _CMP_LE_OQ);
-    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(ly, y), reach, _CMP_LE_OQ);
-    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(z, hz), reach, _CMP_LE_OQ);
-    keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lz, z), reach, _CMP_LE_OQ);
-    // Compress in registers, then a full store (a compressing store to memory is microcoded
-    // and slow on some cores). Also when none is kept: whether a block keeps any is data, and
-    // the mispredicted branch that skipped it cost more than the stores (the 100k cloud's step
-    // ~3 % faster without it and in_reach_avx512()'s).
-    _mm512_storeu_pd(cx + k, _mm512_maskz_compress_pd(keep, x));
-    _mm512_storeu_pd(cy + k, _mm512_maskz_compress_pd(keep, y));
-    _mm512_storeu_pd(cz + k, _mm512_maskz_compress_pd(keep, z));
-    _mm512_storeu_pd(cr + k, _mm512_maskz_compress_pd(keep, r));
-    const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(s)), step);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(cs + k), _mm256_maskz_compress_epi32(keep, idx));
-    k += std::size_t(std::popcount(unsigned(keep)));
+  for (int u = 0; u < runs; ++u) {
+    for (std::uint32_t s = rb[u], e = re[u]; s < e; s += 8) {
+      // Masked loads: nothing read past e.
+      const __mmask8 live = e - s >= 8 ? __mmask8(0xff) : __mmask8((1u << (e - s)) - 1u);
+      const __m512d x = _mm512_maskz_loadu_pd(live, px + s), y = _mm512_maskz_loadu_pd(live, py + s);
+      const __m512d z = _mm512_maskz_loadu_pd(live, pz + s), r = _mm512_maskz_loadu_pd(live, pr + s);
+      __mmask8 keep = live;
+      keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(x, hx), reach, _CMP_LE_OQ);
+      keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lx, x), reach, _CMP_LE_OQ);
+      keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(y, hy), reach, _CMP_LE_OQ);
+      keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(ly, y), reach, _CMP_LE_OQ);
+      keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(z, hz), reach, _CMP_LE_OQ);
+      keep &= _mm512_cmp_pd_mask(_mm512_sub_pd(lz, z), reach, _CMP_LE_OQ);
+      // Compress in registers, then a full store (a compressing store to memory is microcoded
+      // and slow on some cores). Also when none is kept: whether a block keeps any is data, and
+      // the mispredicted branch that skipped it cost more than the stores (the 100k cloud's step
+      // ~3 % faster without it and in_reach_avx512()'s).
+      _mm512_storeu_pd(cx + k, _mm512_maskz_compress_pd(keep, x));
+      _mm512_storeu_pd(cy + k, _mm512_maskz_compress_pd(keep, y));
+      _mm512_storeu_pd(cz + k, _mm512_maskz_compress_pd(keep, z));
+      _mm512_storeu_pd(cr + k, _mm512_maskz_compress_pd(keep, r));
+      const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(s)), step);
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(cs + k), _mm256_maskz_compress_epi32(keep, idx));
+      k += std::size_t(std::popcount(unsigned(keep)));
+    }
   }
   return k;
 }

@@ -426,17 +426,20 @@ void ParticleCollider::cut_bands(int parts, std::vector<std::size_t>& cut) const
 void ParticleCollider::apply_impulses(int parts) {
   // The impulse on the second particle, p = pn n + pt (the first takes -p), once per contact.
   const auto impulse = [](const Contact& c) { return Vec3(c.pn * c.n + c.pt); };
+  // Particle q's row takes +p or -p: b.v + m p and b.v - m p componentwise, the bits of
+  // v += m p and v -= m p.
   SolveBody* b = body_.data();
-  // b.v - m p and b.v + m p, componentwise: what v -= m p and v += m p give.
-  const auto take = [&](std::uint32_t q, const Vec3& p, double sign) {
-    const double m = inv_mass[q];
-    for (int k = 0; k < 3; ++k) b[q].v[k] = sign > 0.0 ? b[q].v[k] + m * p[k] : b[q].v[k] - m * p[k];
+  const auto gets = [&](std::uint32_t q, const Vec3& p) {
+    for (int k = 0; k < 3; ++k) b[q].v[k] = b[q].v[k] + inv_mass[q] * p[k];
+  };
+  const auto gives = [&](std::uint32_t q, const Vec3& p) {
+    for (int k = 0; k < 3; ++k) b[q].v[k] = b[q].v[k] - inv_mass[q] * p[k];
   };
   if (parts <= 1 || bands_.size() < 2) {
     for (const Contact& c : contacts) {
       const Vec3 p = impulse(c);
-      if (c.i != kCollider) take(c.i, p, -1.0);
-      take(c.j, p, 1.0);
+      if (c.i != kCollider) gives(c.i, p);
+      gets(c.j, p);
     }
     return;
   }
@@ -453,17 +456,17 @@ void ParticleCollider::apply_impulses(int parts) {
       if (b0 > 0)
         for (std::uint32_t q = bands_[b0 - 1].pair_begin; q < bands_[b0 - 1].pair_end; ++q) {
           const Contact& c = contacts[q];
-          if (c.j >= band_first_[b0]) take(c.j, impulse(c), 1.0);
+          if (c.j >= band_first_[b0]) gets(c.j, impulse(c));
         }
       for (std::uint32_t q = bands_[b0].pair_begin; q < bands_[b1 - 1].pair_end; ++q) {
         const Contact& c = contacts[q];
         const Vec3 p = impulse(c);
-        take(c.i, p, -1.0);
-        if (c.j < p1) take(c.j, p, 1.0);
+        gives(c.i, p);
+        if (c.j < p1) gets(c.j, p);
       }
       for (std::uint32_t q = bands_[b0].wall_begin; q < bands_[b1 - 1].wall_end; ++q) {
         const Contact& c = contacts[q];
-        take(c.j, impulse(c), 1.0);
+        gets(c.j, impulse(c));
       }
     }
   }
