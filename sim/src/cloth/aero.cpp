@@ -93,7 +93,9 @@ void cells_kernel(std::ptrdiff_t i0, std::ptrdiff_t i1, std::ptrdiff_t cols,
   const double* W = v + 2 * st;
   // The 18 output arrays are `st` apart (disjoint); GCC cannot prove it for a runtime stride and
   // gives up on the 18 x 18 alias checks.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC ivdep
+#endif
   for (std::ptrdiff_t a = i0; a < i1; ++a) {
     // (a, a + C, a + C + 1)
     aero_one(X[a], Y[a], Z[a], X[a + C], Y[a + C], Z[a + C], X[a + C1], Y[a + C1], Z[a + C1],
