@@ -590,12 +590,43 @@ TEST(SimCollisionMesh, MeshGridPrefetchNamesOnlyCellsOfTheGrid) {
   EXPECT_GT(inside, 500);
 }
 
+/// Asks the grid and the tree about [lo, hi]: true when the grid answered (false: it declined, a
+/// large box). The grid must hand out every triangle whose own box overlaps the query, in the
+/// order the tree visits them (so a first-hit sweep over either gives the same bits); it may add a
+/// triangle whose box misses the query by float rounding (it tests boxes in floats), which the
+/// exact sweep then rejects. `found`: the triangles it handed out.
+bool grid_answers_like_the_tree(const std::vector<detail::Triangle>& tris, const detail::Bvh& bvh,
+                                const detail::MeshGrid& grid, const Vec3& lo, const Vec3& hi, int& found) {
+  const auto box_of = [&](std::uint32_t t) {
+    detail::Aabb b;
+    b.grow(tris[t].a);
+    b.grow(tris[t].b);
+    b.grow(tris[t].c);
+    return b;
+  };
+  std::vector<std::uint32_t> from_tree, from_grid;
+  bvh.query(lo, hi, [&](std::uint32_t t) {
+    if (box_of(t).overlaps(lo, hi)) from_tree.push_back(t);
+  });
+  if (!grid.query(lo, hi, [&](const detail::SweepTriangle& x, std::uint32_t t) {
+        EXPECT_EQ(x.t.a, tris[t].a);  // the grid's copy of the triangle
+        EXPECT_EQ(x.t.normal, tris[t].normal);
+        if (box_of(t).overlaps(lo, hi)) {
+          from_grid.push_back(t);
+        } else {  // one more within float rounding of the box
+          const Vec3 tol = Vec3::Constant(1e-6);  // float rounding of coordinates below 10 m
+          EXPECT_TRUE(box_of(t).overlaps(lo - tol, hi + tol)) << t;
+        }
+      }))
+    return false;
+  found += int(from_grid.size());
+  EXPECT_EQ(from_grid, from_tree) << lo.transpose() << " .. " << hi.transpose();
+  return true;
+}
+
 TEST(SimCollisionMesh, MeshGridGivesTheTreesTrianglesInTheTreesOrder) {
-  // The grid must hand out every triangle whose own box overlaps the query, in the order the
-  // tree visits them (so a first-hit sweep over either gives the same bits), or decline (a large
-  // box); it may add a triangle whose box misses the query by float rounding (it tests boxes in
-  // floats), which the exact sweep then rejects. Triangles of mixed sizes; small and large query
-  // boxes, and boxes that touch a triangle's box or miss it by 1e-9 m.
+  // grid_answers_like_the_tree(), or the grid declines (a large box). Triangles of mixed sizes;
+  // small and large query boxes, and boxes that touch a triangle's box or miss it by 1e-9 m.
   Rng rng(11, 2);
   std::vector<detail::Triangle> tris;
   for (int t = 0; t < 3000; ++t) {
@@ -621,38 +652,55 @@ TEST(SimCollisionMesh, MeshGridGivesTheTreesTrianglesInTheTreesOrder) {
       lo[k] = std::max({t.a[k], t.b[k], t.c[k]}) + (q % 8 == 1 ? 0.0 : 1e-9);
       hi[k] = lo[k] + 0.05;
     }
-    std::vector<std::uint32_t> from_tree, from_grid;
-    bvh.query(lo, hi, [&](std::uint32_t t) {
-      detail::Aabb b;
-      b.grow(tris[t].a);
-      b.grow(tris[t].b);
-      b.grow(tris[t].c);
-      if (b.overlaps(lo, hi)) from_tree.push_back(t);
-    });
-    if (!grid.query(lo, hi, [&](const detail::SweepTriangle& x, std::uint32_t t) {
-          EXPECT_EQ(x.t.a, tris[t].a);  // the grid's copy of the triangle
-          EXPECT_EQ(x.t.normal, tris[t].normal);
-          detail::Aabb b;
-          b.grow(tris[t].a);
-          b.grow(tris[t].b);
-          b.grow(tris[t].c);
-          if (b.overlaps(lo, hi)) {
-            from_grid.push_back(t);
-          } else {  // one more within float rounding of the box
-            const Vec3 tol = Vec3::Constant(1e-6);  // float rounding of coordinates below 10 m
-            EXPECT_TRUE(b.overlaps(lo - tol, hi + tol)) << q << " " << t;
-          }
-        })) {
+    if (grid_answers_like_the_tree(tris, bvh, grid, lo, hi, found)) {
+      ++answered;
+    } else {
       ++declined;
-      continue;
     }
-    ++answered;
-    found += int(from_grid.size());
-    ASSERT_EQ(from_grid, from_tree) << q;
+    if (HasFailure()) return;
   }
   EXPECT_GT(answered, 3000);  // small boxes are answered by the grid
   EXPECT_GT(declined, 100);   // large ones go to the tree
   EXPECT_GT(found, 2000);     // and the answers are not empty
+}
+
+TEST(SimCollisionMesh, MeshGridHaloListsAnswerBoxesAcrossCellSidesLikeTheTree) {
+  // A particle's box near the bowl's shell spans two to eight of the grid's cells most of the
+  // time; the grid answers it from one cell's halo list (the triangles whose boxes overlap the
+  // cell grown by MeshGrid::kHaloCells of its side) when the box lies within that halo. Boxes
+  // about the shell from a tenth of the halo to twice it (the larger ones span more than a
+  // halo: the cells' own lists answer them), many of them reaching just to a cell's halo or
+  // just past it: every answer is the tree's.
+  const MeshDef b = bowl(0.3, 16, 48, mat(0.3, 0.5));
+  std::vector<detail::Triangle> tris;
+  for (const auto& t : b.triangles) {
+    detail::Triangle x{b.vertices[t[0]], b.vertices[t[1]], b.vertices[t[2]], Vec3::Zero()};
+    x.normal = (x.b - x.a).cross(x.c - x.a).normalized();
+    tris.push_back(x);
+  }
+  const detail::Bvh bvh(tris);
+  const detail::MeshGrid grid(tris, bvh.visit_order());
+  ASSERT_GT(grid.halo(), 0.0);  // the bowl's halo lists are within their budget
+  const double halo = grid.halo(), cell = halo / detail::MeshGrid::kHaloCells;
+  Rng rng(29, 1);
+  int answered = 0, found = 0;
+  for (int q = 0; q < 20000; ++q) {
+    Vec3 d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 0.05));
+    d.normalize();
+    const Vec3 p = (0.3 + rng.uniform(-0.03, 0.01)) * d;
+    const double h = halo * rng.uniform(0.1, 2.0);
+    Vec3 lo = p - Vec3::Constant(h), hi = p + Vec3::Constant(h);
+    if (q % 3 == 0) {  // on one axis, reaching from about the middle of a cell to its halo's side
+      const int k = q / 3 % 3;
+      const double side = grid.cell_side(lo[k] + h, k) + (q % 2 == 0 ? cell + halo : -halo);
+      const double nudge = q % 6 < 2 ? 0.0 : q % 6 < 4 ? 1e-9 : -1e-9;
+      (q % 2 == 0 ? hi[k] : lo[k]) = side + nudge;
+    }
+    if (grid_answers_like_the_tree(tris, bvh, grid, lo, hi, found)) ++answered;
+    if (HasFailure()) return;
+  }
+  EXPECT_GT(answered, 15000);  // the largest boxes span more than kMaxCells cells: the tree
+  EXPECT_GT(found, 20000);
 }
 
 TEST(SimCollisionMesh, SweptSphereHitsFaceEdgeAndVertexWithTheirNormals) {

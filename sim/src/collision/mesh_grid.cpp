@@ -74,71 +74,23 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
     cell *= 1.25;
   }
   inv_cell_ = 1.0 / cell;
+  cell_size_ = cell;
   for (int k = 0; k < 3; ++k) {
     dim_[k] = std::int64_t(std::floor(size[k] * inv_cell_)) + 1;
     last_[k] = double(dim_[k] - 1);
   }
-  const std::size_t cells = std::size_t(dim_[0] * dim_[1] * dim_[2]);
-  auto cell_range = [&](std::size_t r, int k, std::int64_t& c0, std::int64_t& c1) {
-    const double a = (box[6 * r + std::size_t(k)] - lo_[k]) * inv_cell_;
-    const double b = (box[6 * r + 3 + std::size_t(k)] - lo_[k]) * inv_cell_;
-    c0 = std::clamp(std::int64_t(a), std::int64_t(0), dim_[k] - 1);
-    c1 = std::clamp(std::int64_t(b), std::int64_t(0), dim_[k] - 1);
-  };
-  // Two passes of a counting sort: counts per cell, then ranks in increasing order per cell.
-  // The cells' runs lie in Z-order (Morton) of the cells, not in row order: particles are
-  // resolved in Z-order of where they are (particle_response.cpp), so the runs they read next
-  // lie next in memory.
-  std::vector<std::uint32_t> count(cells, 0);
-  const auto each_cell = [&](std::size_t r, auto&& g) {
-    std::int64_t c0[3], c1[3];
-    for (int k = 0; k < 3; ++k) cell_range(r, k, c0[k], c1[k]);
-    for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
-      for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
-        for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
-          g(std::size_t((z * dim_[1] + y) * dim_[0] + x));
-  };
-  for (std::size_t r = 0; r < n; ++r) each_cell(r, [&](std::size_t c) { ++count[c]; });
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // (Morton code, cell)
-  for (std::int64_t z = 0; z < dim_[2]; ++z)
-    for (std::int64_t y = 0; y < dim_[1]; ++y)
-      for (std::int64_t x = 0; x < dim_[0]; ++x) {
-        const std::size_t c = std::size_t((z * dim_[1] + y) * dim_[0] + x);
-        if (count[c] == 0) continue;
-        std::uint64_t code = 0;
-        for (int bit = 0; bit < 21; ++bit)
-          code |= ((std::uint64_t(x) >> bit & 1) << (3 * bit)) |
-                  ((std::uint64_t(y) >> bit & 1) << (3 * bit + 1)) |
-                  ((std::uint64_t(z) >> bit & 1) << (3 * bit + 2));
-        order.emplace_back(code, std::uint32_t(c));
-      }
-  std::sort(order.begin(), order.end());
-  cell_.assign(cells, Cell{0, 0});
-  std::uint32_t next = 0;
-  for (const auto& [code, c] : order) {
-    cell_[c].begin = cell_[c].end = next;
-    next += (count[c] + kLanes - 1) / kLanes;
+  fill_cells(box, 0.0, cell_, blocks_);
+  // The halo lists (see query()), within their budget. The triangles' boxes grow by the halo
+  // and a little more (far more than the rounding of the cell arithmetic here and in query(),
+  // and of the boxes to floats), so every triangle whose box overlaps a query box that lies
+  // within a cell's halo is on that cell's list.
+  const double halo = kHaloCells * cell;
+  const double grow = halo + 1e-6 * cell + 1e-6 * (lo_.cwiseAbs().maxCoeff() + hi_.cwiseAbs().maxCoeff());
+  const std::size_t halo_entries = entries(box, grow);
+  if (halo_entries <= kHaloBudget * entries(box, 0.0) && halo_entries <= kHaloMaxEntries) {
+    fill_cells(box, grow, halo_cell_, halo_blocks_);
+    halo_ = halo;
   }
-  Block empty;
-  for (int l = 0; l < kLanes; ++l) {
-    for (int k = 0; k < 3; ++k) {
-      empty.lo[k][l] = std::numeric_limits<float>::infinity();
-      empty.hi[k][l] = -std::numeric_limits<float>::infinity();
-    }
-    empty.rank[l] = 0;
-  }
-  blocks_.assign(next, empty);
-  std::fill(count.begin(), count.end(), 0u);  // now: entries placed per cell
-  for (std::size_t r = 0; r < n; ++r)
-    each_cell(r, [&](std::size_t c) {
-      Block& b = blocks_[cell_[c].begin + count[c] / kLanes];
-      const std::uint32_t l = count[c]++ % kLanes;
-      for (int k = 0; k < 3; ++k) {
-        b.lo[k][l] = float(box[6 * r + std::size_t(k)]);
-        b.hi[k][l] = float(box[6 * r + 3 + std::size_t(k)]);
-      }
-      b.rank[l] = std::uint32_t(r);
-    });
   // The columns' z extents: over each column its box spans, the part of each triangle that lies
   // over the column (the triangle clipped to the column's rectangle, widened by far more than
   // the rounding of the column arithmetic, so that every point of the triangle whose column indices
@@ -225,10 +177,92 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
     column_[2 * col] = std::uint8_t(std::clamp(lo, 0.0, 253.0));
     column_[2 * col + 1] = std::uint8_t(std::clamp(hi, 1.0, 255.0));
   }
-  for (std::size_t c = 0; c < cells; ++c) cell_[c].end = cell_[c].begin + (count[c] + kLanes - 1) / kLanes;
   visit_ = visit;
   tris_.reserve(n);
   for (std::size_t r = 0; r < n; ++r) tris_.emplace_back(tris[visit[r]]);
+}
+
+void MeshGrid::cell_range(const std::vector<double>& box, double grow, std::size_t r, int k,
+                          std::int64_t& c0, std::int64_t& c1) const {
+  const double a = (box[6 * r + std::size_t(k)] - grow - lo_[k]) * inv_cell_;
+  const double b = (box[6 * r + 3 + std::size_t(k)] + grow - lo_[k]) * inv_cell_;
+  c0 = std::clamp(std::int64_t(std::floor(a)), std::int64_t(0), dim_[k] - 1);
+  c1 = std::clamp(std::int64_t(std::floor(b)), std::int64_t(0), dim_[k] - 1);
+}
+
+std::size_t MeshGrid::entries(const std::vector<double>& box, double grow) const {
+  std::size_t total = 0;
+  for (std::size_t r = 0; r < box.size() / 6; ++r) {
+    std::size_t cells = 1;
+    for (int k = 0; k < 3; ++k) {
+      std::int64_t c0, c1;
+      cell_range(box, grow, r, k, c0, c1);
+      cells *= std::size_t(c1 - c0 + 1);
+    }
+    total += cells;
+  }
+  return total;
+}
+
+void MeshGrid::fill_cells(const std::vector<double>& box, double grow, std::vector<Cell>& cell_of,
+                          std::vector<Block>& blocks) const {
+  const std::size_t n = box.size() / 6;
+  const std::size_t cells = std::size_t(dim_[0] * dim_[1] * dim_[2]);
+  // Two passes of a counting sort: counts per cell, then ranks in increasing order per cell.
+  // The cells' runs lie in Z-order (Morton) of the cells, not in row order: particles are
+  // resolved in Z-order of where they are (particle_response.cpp), so the runs they read next
+  // lie next in memory.
+  std::vector<std::uint32_t> count(cells, 0);
+  const auto each_cell = [&](std::size_t r, auto&& g) {
+    std::int64_t c0[3], c1[3];
+    for (int k = 0; k < 3; ++k) cell_range(box, grow, r, k, c0[k], c1[k]);
+    for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
+      for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
+        for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
+          g(std::size_t((z * dim_[1] + y) * dim_[0] + x));
+  };
+  for (std::size_t r = 0; r < n; ++r) each_cell(r, [&](std::size_t c) { ++count[c]; });
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // (Morton code, cell)
+  for (std::int64_t z = 0; z < dim_[2]; ++z)
+    for (std::int64_t y = 0; y < dim_[1]; ++y)
+      for (std::int64_t x = 0; x < dim_[0]; ++x) {
+        const std::size_t c = std::size_t((z * dim_[1] + y) * dim_[0] + x);
+        if (count[c] == 0) continue;
+        std::uint64_t code = 0;
+        for (int bit = 0; bit < 21; ++bit)
+          code |= ((std::uint64_t(x) >> bit & 1) << (3 * bit)) |
+                  ((std::uint64_t(y) >> bit & 1) << (3 * bit + 1)) |
+                  ((std::uint64_t(z) >> bit & 1) << (3 * bit + 2));
+        order.emplace_back(code, std::uint32_t(c));
+      }
+  std::sort(order.begin(), order.end());
+  cell_of.assign(cells, Cell{0, 0});
+  std::uint32_t next = 0;
+  for (const auto& [code, c] : order) {
+    cell_of[c].begin = next;
+    next += (count[c] + kLanes - 1) / kLanes;
+    cell_of[c].end = next;
+  }
+  Block empty;
+  for (int l = 0; l < kLanes; ++l) {
+    for (int k = 0; k < 3; ++k) {
+      empty.lo[k][l] = std::numeric_limits<float>::infinity();
+      empty.hi[k][l] = -std::numeric_limits<float>::infinity();
+    }
+    empty.rank[l] = 0;
+  }
+  blocks.assign(next, empty);
+  std::fill(count.begin(), count.end(), 0u);  // now: entries placed per cell
+  for (std::size_t r = 0; r < n; ++r)
+    each_cell(r, [&](std::size_t c) {
+      Block& b = blocks[cell_of[c].begin + count[c] / kLanes];
+      const std::uint32_t l = count[c]++ % kLanes;
+      for (int k = 0; k < 3; ++k) {
+        b.lo[k][l] = float(box[6 * r + std::size_t(k)]);
+        b.hi[k][l] = float(box[6 * r + 3 + std::size_t(k)]);
+      }
+      b.rank[l] = std::uint32_t(r);
+    });
 }
 
 }  // namespace simreel::sim::detail
