@@ -368,6 +368,37 @@ TEST(SimParticleCollision, LargeSystemRemovesOverlapsAsASmallOneDoes) {
   }
 }
 
+TEST(SimParticleCollision, ProjectionLetsASpeculativeContactCloseItsGapButNotOverlap) {
+  // A bead 0.02 r above one that cannot move (a sleeper: inverse mass 0), both at rest: within
+  // the pair margin, a speculative contact (target -gap / h: it may close the gap this step).
+  // Whatever the step did, the projection must leave the bead alone where it closed the gap and
+  // bring it back only from an overlap, to touching: pushing it back to the gap it was found with
+  // undid gravity's work every step, and a settled pile's beads read a velocity without moving
+  // (AllButAFewBeadsOfALargeSettledPileSleep).
+  const double r = 0.01, h = 1.0 / 240, gap = 0.02 * r;
+  for (const double end_gap : {gap, 0.5 * gap, 0.0, -0.005 * r, -0.03 * r}) {
+    detail::ParticleCollider pc;
+    pc.x = {Vec3::Zero(), Vec3(0, 0, 2 * r + gap)};
+    pc.v = {Vec3::Zero(), Vec3::Zero()};
+    pc.inv_mass = {0.0, 1000.0};
+    pc.radius = {r, r};
+    pc.restitution = {0.2, 0.2};
+    pc.friction = {0.3, 0.3};
+    pc.find_contacts(0.05, h);
+    ASSERT_EQ(pc.contacts.size(), 1u);
+    EXPECT_NEAR(pc.contacts[0].depth, -gap, 1e-15);
+    EXPECT_NEAR(pc.contacts[0].target, -gap / h, 1e-12);
+    pc.x[1] = Vec3(0, 0, 2 * r + end_gap);  // where the step left it
+    pc.project_positions();
+    EXPECT_EQ(pc.x[0], Vec3::Zero());
+    // Apart or touching: untouched (to the bit); overlapping: back to touching, not beyond.
+    if (end_gap >= 0.0)
+      EXPECT_EQ(pc.x[1].z(), 2 * r + end_gap) << "end gap " << end_gap;
+    else
+      EXPECT_NEAR(pc.x[1].z(), 2 * r, 1e-15) << "end gap " << end_gap;
+  }
+}
+
 /// Colliders for the wavefront tests: the ground plane and a box moving into the heap (its
 /// contacts carry a surface velocity).
 std::vector<detail::Collider> ground_and_moving_box() {

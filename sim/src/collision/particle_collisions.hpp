@@ -159,8 +159,11 @@ class ParticleCollider {
   /// the impulses the contacts hold: the warm start, zero as find_contacts() leaves them.
   void solve();
   /// Moves positions to remove position_fraction of each overlap beyond the slop (velocities
-  /// untouched); colliders do not move, their contacts' depths are measured from x_before
-  /// (set to x if it is not filled).
+  /// untouched): a contact found at depth d > 0 ends at no more than d - position_fraction x
+  /// (d - slop) (pairs; colliders: (1 - position_fraction) d), one found apart (speculative) at
+  /// no more than 0: it may close its gap but not overlap. Colliders do not move, their
+  /// contacts' depths are measured from x_before (set to x if it is not filled). Nonlinear
+  /// Gauss–Seidel over the contacts, as Box2D v2's position correction.
   void project_positions();
   double cell_size = 0.0;  ///< (m) of the last find_contacts(), at its finest level
   int levels = 1;          ///< grid levels of the last find_contacts() (1: uniform grid)
