@@ -86,6 +86,15 @@ class ParticleCollider {
   /// bits are the same at every width (the solver test compares 4, 2 and 1). Eight AVX-512
   /// lanes were slower than four on a Xeon.
   int max_lanes = 4;
+  /// A lone contact (no other contact touches either of its particles) is solved by the first
+  /// sweep: its normal impulse reaches its target and its friction impulse the Coulomb-clamped
+  /// value that cancels the sliding (a pair's relative velocity changes by the impulse over
+  /// m_eff, so the next sweep finds the same unclamped value), and nothing else moves its
+  /// particles. true: the later sweeps leave the lone contacts out (schedule() puts them at the
+  /// end of each band's range, which changes no bit of the first sweep: they share no particle
+  /// with anything); the results differ from all sweeps over them only by rounding. false: every
+  /// sweep visits them, the reference the tests compare it with.
+  bool lone_contacts = true;
   /// run() takes restitution, friction and `collide` from the members when they are alike
   /// instead of filling the per-particle arrays (the same bits, a cheaper fill); false: always
   /// the arrays, the reference the tests compare it with.
@@ -259,6 +268,9 @@ class ParticleCollider {
   /// sweep in contact order (find_contacts() used directly).
   struct Band {
     std::uint32_t pair_begin, pair_end, wall_begin, wall_end;
+    /// (work_ positions, set by schedule()) where the band's lone pairs and lone collider
+    /// contacts start: [pair_lone, pair_end) and [wall_lone, wall_end) (see `lone_contacts`).
+    std::uint32_t pair_lone = 0, wall_lone = 0;
   };
   std::vector<Band> bands_;
   std::vector<std::uint32_t> band_first_;  ///< band -> its first sorted position, + n
@@ -281,13 +293,17 @@ class ParticleCollider {
   /// sorted by wave, where no two contacts of a wave share a particle and each particle's
   /// contacts keep their order. A Gauss–Seidel sweep over work_ gives the same bits as one over
   /// `contacts` (each update reads and writes only its own two particles), but neighbouring
-  /// updates no longer wait on each other, so the processor overlaps them.
+  /// updates no longer wait on each other, so the processor overlaps them. Each range's lone
+  /// contacts (`lone_contacts`) go after its coupled ones, pairs then collider contacts, in runs
+  /// for the SIMD lanes; Band::pair_lone and wall_lone (lone_begin_ without bands) mark them.
   void schedule();
   /// `sweeps` passes of over(begin, end) over the contacts: in contact order, or for bands the
   /// even bands' pairs, the odd bands' pairs, then every band's collider contacts, each phase
   /// split over the threads for a large system (the same order at any thread count).
   template <class F>
-  void sweep_bands(int sweeps, const F& over);
+  /// skip_lone: the sweeps after the first leave out each range's lone contacts (the solve's
+  /// work_ positions; the projection, over `contacts` itself, visits them all).
+  void sweep_bands(int sweeps, const F& over, bool skip_lone);
   /// What a sweep reads of the contacts, one column per field in wavefront order (88 bytes a
   /// contact against Contact's 128: the large solves are bound by memory). A run of one wave's
   /// contacts is then a run of each column, so the SIMD updates load and store a field for all
@@ -308,7 +324,11 @@ class ParticleCollider {
   /// contacts per wave
   struct WaveScratch {
     std::vector<std::uint32_t> last_wave, wave_count;
+    std::vector<std::uint32_t> coupled, lone;  ///< a range's contacts, lone ones apart
   };
+  /// schedule(): each particle's contacts, counted up to 2 (1: any contact of it is lone)
+  std::vector<std::uint8_t> degree_;
+  std::uint32_t lone_begin_ = 0;  ///< without bands: the work_ position of the first lone contact
   std::vector<WaveScratch> wave_scratch_;
   /// (work_ position) the run of one wave's contacts that starts there, solved together in SIMD
   /// lanes: 2: four (AVX2), 1: two (SSE2), 0: this one alone. schedule() marks only runs that

@@ -277,9 +277,13 @@ __attribute__((target("avx2"))) void sweep_wide(W& w, const std::uint8_t* next, 
 }  // namespace
 
 template <class F>
-void ParticleCollider::sweep_bands(int sweeps, const F& over) {
+void ParticleCollider::sweep_bands(int sweeps, const F& over, bool skip_lone) {
+  // With skip_lone, the first sweep visits every contact and the later ones leave out the lone
+  // contacts at the end of each range (work_ positions: schedule(); none when lone_contacts is
+  // false).
+  const auto later = [&](int it) { return skip_lone && it > 0; };
   if (bands_.empty()) {
-    for (int it = 0; it < sweeps; ++it) over(std::size_t(0), contacts.size());
+    for (int it = 0; it < sweeps; ++it) over(std::size_t(0), later(it) ? std::size_t(lone_begin_) : contacts.size());
     return;
   }
   const std::size_t nb = bands_.size();
@@ -291,18 +295,18 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
   // A phase's bands: first, first + step, ... (the even, the odd, then all of them).
   const auto first_of = [](int phase) { return phase == 1 ? std::size_t(1) : std::size_t(0); };
   const auto step_of = [](int phase) { return phase == 2 ? std::size_t(1) : std::size_t(2); };
-  const auto solve_band = [&](int phase, std::size_t b) {
+  const auto solve_band = [&](int it, int phase, std::size_t b) {
     const Band& band = bands_[b];
     if (phase < 2) {
-      over(std::size_t(band.pair_begin), std::size_t(band.pair_end));
+      over(std::size_t(band.pair_begin), std::size_t(later(it) ? band.pair_lone : band.pair_end));
     } else {
-      over(std::size_t(band.wall_begin), std::size_t(band.wall_end));
+      over(std::size_t(band.wall_begin), std::size_t(later(it) ? band.wall_lone : band.wall_end));
     }
   };
   if (parts == 1) {
     for (int it = 0; it < sweeps; ++it)
       for (int phase = 0; phase < 3; ++phase)
-        for (std::size_t b = first_of(phase); b < nb; b += step_of(phase)) solve_band(phase, b);
+        for (std::size_t b = first_of(phase); b < nb; b += step_of(phase)) solve_band(it, phase, b);
     return;
   }
   // For a large system one parallel region holds all the sweeps (a barrier after each phase).
@@ -349,7 +353,7 @@ void ParticleCollider::sweep_bands(int sweeps, const F& over) {
       for (int phase = 0; phase < 3; ++phase) {
         const std::size_t first = first_of(phase), step = step_of(phase);
         drain_runs(&run_[std::size_t(3 * it + phase) * p], p, t,
-                   [&](std::size_t k) { solve_band(phase, first + step * k); });
+                   [&](std::size_t k) { solve_band(it, phase, first + step * k); });
 #pragma omp barrier
       }
     }
@@ -530,7 +534,7 @@ void ParticleCollider::solve_rows() {
       c.pt = Vec3(work_.pt[0][k], work_.pt[1][k], work_.pt[2][k]);
     }
   };
-  sweep_bands(iterations, sweep);
+  sweep_bands(iterations, sweep, true);
   give_back();
 }
 
@@ -547,17 +551,29 @@ void ParticleCollider::schedule() {
   const int par = threads > 1 && x.size() >= kParallelMin && bands_.size() > 1 ? threads : 1;
   if (wave_scratch_.size() < std::size_t(par)) wave_scratch_.resize(std::size_t(par));
   for (int t = 0; t < par; ++t) wave_scratch_[std::size_t(t)].last_wave.assign(x.size(), 0);
+  // Each particle's contacts, counted to 2: a contact whose particles have one each is lone.
+  degree_.assign(lone_contacts ? x.size() : 0, 0);
+  if (lone_contacts)
+    for (const Contact& c : contacts) {
+      degree_[c.j] = std::uint8_t(std::min(2, degree_[c.j] + 1));
+      if (c.i != kCollider) degree_[c.i] = std::uint8_t(std::min(2, degree_[c.i] + 1));
+    }
+  const auto lone = [&](const Contact& c) {
+    return lone_contacts && degree_[c.j] == 1 && (c.i == kCollider || degree_[c.i] == 1);
+  };
   // Contact q's wave is one past the latest wave of the contacts before it (in its window) that
   // share a particle with it, so a particle's contacts keep their order and the contacts of one
   // wave share none: sorting a window by wave (stably) changes no result, and the sweep can
   // overlap each wave's contacts. Windows of kWindow contacts keep the reordered sweep's reads
-  // near each other in memory.
+  // near each other in memory. The window's contacts are idx[0, len), placed from work position
+  // `out`.
   constexpr std::size_t kWindow = 2048;
-  const auto order_window = [&](std::size_t begin, std::size_t end, WaveScratch& ws) {
+  const auto order_window = [&](const std::uint32_t* idx, std::size_t len, std::size_t out, WaveScratch& ws) {
     std::vector<std::uint32_t>& last_wave = ws.last_wave;
     std::vector<std::uint32_t>& wave_count = ws.wave_count;
     std::uint32_t top = 0;
-    for (std::size_t q = begin; q < end; ++q) {
+    for (std::size_t k = 0; k < len; ++k) {
+      const std::uint32_t q = idx[k];
       const Contact& c = contacts[q];
       const bool wall = c.i == kCollider;
       std::uint32_t w = last_wave[c.j];
@@ -571,12 +587,12 @@ void ParticleCollider::schedule() {
       top = std::max(top, w);
     }
     wave_count.assign(std::size_t(top) + 2, 0);
-    for (std::size_t q = begin; q < end; ++q) ++wave_count[wave_[q] + 1];
+    for (std::size_t k = 0; k < len; ++k) ++wave_count[wave_[idx[k]] + 1];
     for (std::size_t w = 0; w + 1 < wave_count.size(); ++w) wave_count[w + 1] += wave_count[w];
-    for (std::size_t q = begin; q < end; ++q)
-      sched_[begin + wave_count[wave_[q]]++] = std::uint32_t(q);
+    for (std::size_t k = 0; k < len; ++k) sched_[out + wave_count[wave_[idx[k]]]++] = idx[k];
     // Runs of neighbours in one wave go to the widest update the CPU runs together (pair_next_).
-    for (std::size_t k = begin; k < end;) {
+    const std::size_t end = out + len;
+    for (std::size_t k = out; k < end;) {
       const std::uint32_t wk = wave_[sched_[k]];  // sorted: k .. k + r - 1 alike where the last is
       if (lanes >= 4 && k + 3 < end && wave_[sched_[k + 3]] == wk) {
         pair_next_[k] = 2;
@@ -588,27 +604,55 @@ void ParticleCollider::schedule() {
         ++k;
       }
     }
-    for (std::size_t q = begin; q < end; ++q) {
-      last_wave[contacts[q].j] = 0;
-      if (contacts[q].i != kCollider) last_wave[contacts[q].i] = 0;
+    for (std::size_t k = 0; k < len; ++k) {
+      const Contact& c = contacts[idx[k]];
+      last_wave[c.j] = 0;
+      if (c.i != kCollider) last_wave[c.i] = 0;
     }
   };
+  // The range [begin, end): its coupled contacts in windows (or in contact order without the
+  // wavefront), then its lone ones, pairs before collider contacts (one wave: they share no
+  // particle). Returns the work position of the first lone one.
   const auto order_range = [&](std::size_t begin, std::size_t end, WaveScratch& ws) {
-    for (std::size_t w = begin; w < end; w += kWindow)
-      order_window(w, std::min(end, w + kWindow), ws);
+    std::vector<std::uint32_t>& coupled = ws.coupled;
+    std::vector<std::uint32_t>& alone = ws.lone;
+    coupled.clear();
+    alone.clear();
+    for (std::size_t q = begin; q < end; ++q) (lone(contacts[q]) ? alone : coupled).push_back(std::uint32_t(q));
+    std::stable_partition(alone.begin(), alone.end(), [&](std::uint32_t q) { return contacts[q].i != kCollider; });
+    if (wavefront) {
+      for (std::size_t w = 0; w < coupled.size(); w += kWindow)
+        order_window(coupled.data() + w, std::min(coupled.size() - w, kWindow), begin + w, ws);
+    } else {
+      std::copy(coupled.begin(), coupled.end(), sched_.begin() + std::ptrdiff_t(begin));
+    }
+    const std::size_t first_lone = begin + coupled.size();
+    std::copy(alone.begin(), alone.end(), sched_.begin() + std::ptrdiff_t(first_lone));
+    for (std::size_t k = first_lone; k < end;) {  // runs of one kind in the widest lanes
+      const bool wall = contacts[sched_[k]].i == kCollider;
+      const auto same = [&](std::size_t r) { return (contacts[sched_[r]].i == kCollider) == wall; };
+      if (lanes >= 4 && k + 3 < end && same(k + 3)) {
+        pair_next_[k] = 2;
+        k += 4;
+      } else if (lanes >= 2 && k + 1 < end && same(k + 1)) {
+        pair_next_[k] = 1;
+        k += 2;
+      } else {
+        ++k;
+      }
+    }
+    return std::uint32_t(first_lone);
   };
-  if (!wavefront) {
-    for (std::size_t q = 0; q < m; ++q) sched_[q] = std::uint32_t(q);
-  } else if (bands_.empty()) {
-    order_range(0, m, wave_scratch_[0]);
+  if (bands_.empty()) {
+    lone_begin_ = order_range(0, m, wave_scratch_[0]);
   } else {
     const int nb = int(bands_.size());
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (int bi = 0; bi < nb; ++bi) {
       WaveScratch& ws = wave_scratch_[std::size_t(omp_get_thread_num())];
-      const Band& b = bands_[std::size_t(bi)];
-      order_range(b.pair_begin, b.pair_end, ws);
-      order_range(b.wall_begin, b.wall_end, ws);
+      Band& b = bands_[std::size_t(bi)];
+      b.pair_lone = order_range(b.pair_begin, b.pair_end, ws);
+      b.wall_lone = order_range(b.wall_begin, b.wall_end, ws);
     }
   }
   const std::ptrdiff_t mm = std::ptrdiff_t(m);
@@ -666,7 +710,7 @@ void ParticleCollider::project_positions() {
     }
   };
   // A large system's sweeps go like the solve's, the same order at any thread count.
-  sweep_bands(position_iterations, project);
+  sweep_bands(position_iterations, project, false);
 }
 
 }  // namespace simreel::sim::detail
