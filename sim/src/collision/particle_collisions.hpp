@@ -68,6 +68,10 @@ struct ParticleGroupMember {
   double gravity = 0.0;
 };
 
+/// The widest contact update of the sweeps this CPU runs (4 lanes: AVX2, 2: SSE2, else 1),
+/// at most max_lanes (checked once per CPU feature).
+int solve_lanes(int max_lanes);
+
 class ParticleCollider {
  public:
   int iterations = 16;            ///< Gauss–Seidel sweeps per step
