@@ -161,8 +161,8 @@ void ParticleCollider::schedule() {
     std::vector<std::uint32_t>& alone = ws.lone;
     coupled.clear();
     alone.clear();
+    // (`contacts` holds the pairs, then the collider contacts, so the lone ones come in that order.)
     for (std::size_t q = begin; q < end; ++q) (lone(contacts[q]) ? alone : coupled).push_back(std::uint32_t(q));
-    std::stable_partition(alone.begin(), alone.end(), [&](std::uint32_t q) { return contacts[q].i != kCollider; });
     if (wavefront) {
       for (std::size_t w = 0; w < coupled.size(); w += kWindow)
         order_window(coupled.data() + w, std::min(coupled.size() - w, kWindow), begin + w, ws);
