@@ -507,10 +507,17 @@ TEST(SimParticleCollision, WavefrontSweepsGiveTheBitsOfTheContactOrder) {
   }
   detail::ParticleCollider b = a;
   b.wavefront = false;
-  // The wavefront sweep with four lanes at most (AVX2), two (where AVX2 is missing) and one.
-  std::vector<detail::ParticleCollider> lanes(3, a);
-  lanes[1].max_lanes = 2;
-  lanes[2].max_lanes = 1;
+  // The wavefront sweep with eight contacts at once (two interleaved groups of four AVX2 lanes,
+  // the default), four, two (where AVX2 is missing) and one.
+  ASSERT_EQ(a.max_lanes, 8);
+  // Eight and four also with AVX2's 16 registers where the CPU has AVX-512VL's 32.
+  std::vector<detail::ParticleCollider> lanes(6, a);
+  lanes[1].max_lanes = 4;
+  lanes[2].max_lanes = 2;
+  lanes[3].max_lanes = 1;
+  lanes[4].avx512_registers = false;
+  lanes[5].max_lanes = 4;
+  lanes[5].avx512_registers = false;
   const std::vector<Vec3> v0 = a.v;
   b.solve();
   for (auto& l : lanes) l.solve();

@@ -68,8 +68,8 @@ struct ParticleGroupMember {
   double gravity = 0.0;
 };
 
-/// The widest contact update of the sweeps this CPU runs (4 lanes: AVX2, 2: SSE2, else 1),
-/// at most max_lanes (checked once per CPU feature).
+/// The widest contact update of the sweeps this CPU runs (8: two groups of four AVX2 lanes, or
+/// 4: AVX2; 2: SSE2; else 1), at most max_lanes (checked once per CPU feature).
 int solve_lanes(int max_lanes);
 
 class ParticleCollider {
@@ -85,11 +85,17 @@ class ParticleCollider {
   /// The sweeps visit the contacts in wavefront order (see schedule(); the same bits, faster);
   /// false: in contact order, the reference the tests compare it with.
   bool wavefront = true;
-  /// The most contacts of one wave the wavefront sweeps solve at once (4, 2 or 1): the sweeps
-  /// use four lanes where the CPU has AVX2 and two (SSE2) otherwise, never more than this. The
-  /// bits are the same at every width (the solver test compares 4, 2 and 1). Eight AVX-512
-  /// lanes were slower than four on a Xeon.
-  int max_lanes = 4;
+  /// The most contacts of one wave the wavefront sweeps solve at once (8, 4, 2 or 1): where the
+  /// CPU has AVX2, runs of eight as two groups of four lanes whose updates are interleaved step
+  /// by step (the processor overlaps their chains of dependent operations), and four; two
+  /// (SSE2) otherwise; never more than this. The bits are the same at every width (the solver
+  /// test compares 8, 4, 2 and 1). Eight AVX-512 lanes in one register were slower than four
+  /// on a Xeon (their particles' rows need gathers and scatters).
+  int max_lanes = 8;
+  /// The AVX2 sweeps use AVX-512VL's 32 vector registers where the CPU has them (the same
+  /// instructions and bits; two groups' updates then fit without spilling, 0.85x the cold
+  /// solve's time on a Xeon); false: the 16 of AVX2, which the solver test compares.
+  bool avx512_registers = true;
   /// A lone contact (no other contact touches either of its particles) is solved by the first
   /// sweep: its normal impulse reaches its target and its friction impulse the Coulomb-clamped
   /// value that cancels the sliding (a pair's relative velocity changes by the impulse over
@@ -335,7 +341,8 @@ class ParticleCollider {
   std::uint32_t lone_begin_ = 0;  ///< without bands: the work_ position of the first lone contact
   std::vector<WaveScratch> wave_scratch_;
   /// (work_ position) the run of one wave's contacts that starts there, solved together in SIMD
-  /// lanes: 2: four (AVX2), 1: two (SSE2), 0: this one alone. schedule() marks only runs that
+  /// lanes: 3: eight (two groups of four, AVX2), 2: four (AVX2), 1: two (SSE2), 0: this one
+  /// alone. schedule() marks only runs that
   /// the CPU and max_lanes allow.
   std::vector<std::uint8_t> pair_next_;
   /// Fills bands_ from the contacts of find_pairs() and find_collider_contacts() on sorted

@@ -137,7 +137,10 @@ void ParticleCollider::schedule() {
     const std::size_t end = out + len;
     for (std::size_t k = out; k < end;) {
       const std::uint32_t wk = wave_[sched_[k]];  // sorted: k .. k + r - 1 alike where the last is
-      if (lanes >= 4 && k + 3 < end && wave_[sched_[k + 3]] == wk) {
+      if (lanes >= 8 && k + 7 < end && wave_[sched_[k + 7]] == wk) {
+        pair_next_[k] = 3;
+        k += 8;
+      } else if (lanes >= 4 && k + 3 < end && wave_[sched_[k + 3]] == wk) {
         pair_next_[k] = 2;
         k += 4;
       } else if (lanes >= 2 && k + 1 < end && wave_[sched_[k + 1]] == wk) {
@@ -174,7 +177,10 @@ void ParticleCollider::schedule() {
     for (std::size_t k = first_lone; k < end;) {  // runs of one kind in the widest lanes
       const bool wall = contacts[sched_[k]].i == kCollider;
       const auto same = [&](std::size_t r) { return (contacts[sched_[r]].i == kCollider) == wall; };
-      if (lanes >= 4 && k + 3 < end && same(k + 3)) {
+      if (lanes >= 8 && k + 7 < end && same(k + 7)) {
+        pair_next_[k] = 3;
+        k += 8;
+      } else if (lanes >= 4 && k + 3 < end && same(k + 3)) {
         pair_next_[k] = 2;
         k += 4;
       } else if (lanes >= 2 && k + 1 < end && same(k + 1)) {

@@ -162,65 +162,85 @@ __attribute__((target("avx2"), always_inline)) inline void store_bodies(SolveBod
   _mm256_store_pd(b[p[3]].v, _mm256_permute2f128_pd(c, e, 0x31));
 }
 
-/// update2() for contacts q .. q + 3 of one wave, in the four lanes of AVX registers. The
-/// contacts' fields are loaded whole from their columns; the particles' velocities and inverse
-/// masses by transposing their rows.
-template <bool wall, class W>
+/// update2() for contacts q .. q + 4G - 1 of one wave, in the four lanes of AVX registers, G
+/// groups of four. The contacts' fields are loaded whole from their columns; the particles'
+/// velocities and inverse masses by transposing their rows. With G = 2 each step of the update
+/// is taken for both groups before the next: the two chains of dependent operations (the
+/// square root and the division among them) are then near each other in the instruction
+/// stream, and the processor overlaps them, where one group's update alone spans more
+/// instructions than it looks ahead.
+template <bool wall, int G, class W>
 __attribute__((target("avx2"), always_inline)) inline void update4(W& w, std::size_t q, const Vec3* vc,
                                                                    SolveBody* b) {
-  const std::uint32_t* ci = &w.i[q];
-  const std::uint32_t* cj = &w.j[q];
-  __m256d n[3], vi[4], vj[4], dv[3], pt[3];
-  load_bodies(b, cj, vj);
-  if (wall) {
-    for (int k = 0; k < 3; ++k) vi[k] = _mm256_setr_pd(vc[0][k], vc[1][k], vc[2][k], vc[3][k]);
-    vi[3] = _mm256_setzero_pd();
-  } else {
-    load_bodies(b, ci, vi);
+  __m256d n[G][3], vi[G][4], vj[G][4], dv[G][3], pt[G][3], pt_new[G][3];
+  __m256d m_eff[G], pn[G], pn_new[G], wi[G], wj[G], f[G];
+  for (int g = 0; g < G; ++g) {
+    const std::size_t r = q + std::size_t(4 * g);
+    load_bodies(b, &w.j[r], vj[g]);
+    if (wall) {
+      const Vec3* c = vc + 4 * g;
+      for (int k = 0; k < 3; ++k) vi[g][k] = _mm256_setr_pd(c[0][k], c[1][k], c[2][k], c[3][k]);
+      vi[g][3] = _mm256_setzero_pd();
+    } else {
+      load_bodies(b, &w.i[r], vi[g]);
+    }
+    for (int k = 0; k < 3; ++k) {
+      n[g][k] = _mm256_loadu_pd(&w.n[k][r]);
+      pt[g][k] = _mm256_loadu_pd(&w.pt[k][r]);
+    }
+    wj[g] = vj[g][3];
+    wi[g] = vi[g][3];
+    m_eff[g] = _mm256_loadu_pd(&w.m_eff[r]);
+    pn[g] = _mm256_loadu_pd(&w.pn[r]);
   }
-  for (int k = 0; k < 3; ++k) {
-    n[k] = _mm256_loadu_pd(&w.n[k][q]);
-    pt[k] = _mm256_loadu_pd(&w.pt[k][q]);
+  for (int g = 0; g < G; ++g) {
+    const std::size_t r = q + std::size_t(4 * g);
+    for (int k = 0; k < 3; ++k) dv[g][k] = _mm256_sub_pd(vj[g][k], vi[g][k]);
+    const __m256d vn = dot4(dv[g], n[g]);
+    pn_new[g] = _mm256_max_pd(
+        _mm256_add_pd(pn[g], _mm256_mul_pd(m_eff[g], _mm256_sub_pd(_mm256_loadu_pd(&w.target[r]), vn))),
+        _mm256_setzero_pd());
+    const __m256d dpn = _mm256_sub_pd(pn_new[g], pn[g]);
+    _mm256_storeu_pd(&w.pn[r], pn_new[g]);
+    const __m256d si = _mm256_mul_pd(dpn, wi[g]), sj = _mm256_mul_pd(dpn, wj[g]);
+    for (int k = 0; k < 3; ++k) {
+      if (!wall) vi[g][k] = _mm256_sub_pd(vi[g][k], _mm256_mul_pd(si, n[g][k]));
+      vj[g][k] = _mm256_add_pd(vj[g][k], _mm256_mul_pd(sj, n[g][k]));
+    }
   }
-  const __m256d wj = vj[3], wi = vi[3];
-  const __m256d m_eff = _mm256_loadu_pd(&w.m_eff[q]), pn = _mm256_loadu_pd(&w.pn[q]);
-  for (int k = 0; k < 3; ++k) dv[k] = _mm256_sub_pd(vj[k], vi[k]);
-  const __m256d vn = dot4(dv, n);
-  const __m256d pn_new = _mm256_max_pd(
-      _mm256_add_pd(pn, _mm256_mul_pd(m_eff, _mm256_sub_pd(_mm256_loadu_pd(&w.target[q]), vn))),
-      _mm256_setzero_pd());
-  const __m256d dpn = _mm256_sub_pd(pn_new, pn);
-  _mm256_storeu_pd(&w.pn[q], pn_new);
-  const __m256d si = _mm256_mul_pd(dpn, wi), sj = _mm256_mul_pd(dpn, wj);
-  for (int k = 0; k < 3; ++k) {
-    if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(si, n[k]));
-    vj[k] = _mm256_add_pd(vj[k], _mm256_mul_pd(sj, n[k]));
+  for (int g = 0; g < G; ++g) {
+    for (int k = 0; k < 3; ++k) dv[g][k] = _mm256_sub_pd(vj[g][k], vi[g][k]);
+    const __m256d dvn = dot4(dv[g], n[g]);
+    for (int k = 0; k < 3; ++k) {
+      const __m256d vt = _mm256_sub_pd(dv[g][k], _mm256_mul_pd(dvn, n[g][k]));
+      pt_new[g][k] = _mm256_sub_pd(pt[g][k], _mm256_mul_pd(m_eff[g], vt));
+    }
   }
-  for (int k = 0; k < 3; ++k) dv[k] = _mm256_sub_pd(vj[k], vi[k]);
-  const __m256d dvn = dot4(dv, n);
-  __m256d pt_new[3];
-  for (int k = 0; k < 3; ++k) {
-    const __m256d vt = _mm256_sub_pd(dv[k], _mm256_mul_pd(dvn, n[k]));
-    pt_new[k] = _mm256_sub_pd(pt[k], _mm256_mul_pd(m_eff, vt));
+  for (int g = 0; g < G; ++g) {
+    const std::size_t r = q + std::size_t(4 * g);
+    const __m256d bound = _mm256_mul_pd(_mm256_loadu_pd(&w.mu[r]), pn_new[g]);
+    const __m256d len = _mm256_sqrt_pd(dot4(pt_new[g], pt_new[g]));
+    f[g] = _mm256_min_pd(_mm256_div_pd(bound, len), _mm256_set1_pd(1.0));
   }
-  const __m256d bound = _mm256_mul_pd(_mm256_loadu_pd(&w.mu[q]), pn_new);
-  const __m256d len = _mm256_sqrt_pd(dot4(pt_new, pt_new));
-  const __m256d f = _mm256_min_pd(_mm256_div_pd(bound, len), _mm256_set1_pd(1.0));
-  for (int k = 0; k < 3; ++k) {
-    pt_new[k] = _mm256_mul_pd(pt_new[k], f);
-    const __m256d dpt = _mm256_sub_pd(pt_new[k], pt[k]);
-    _mm256_storeu_pd(&w.pt[k][q], pt_new[k]);
-    if (!wall) vi[k] = _mm256_sub_pd(vi[k], _mm256_mul_pd(wi, dpt));
-    vj[k] = _mm256_add_pd(vj[k], _mm256_mul_pd(wj, dpt));
+  for (int g = 0; g < G; ++g) {
+    const std::size_t r = q + std::size_t(4 * g);
+    for (int k = 0; k < 3; ++k) {
+      pt_new[g][k] = _mm256_mul_pd(pt_new[g][k], f[g]);
+      const __m256d dpt = _mm256_sub_pd(pt_new[g][k], pt[g][k]);
+      _mm256_storeu_pd(&w.pt[k][r], pt_new[g][k]);
+      if (!wall) vi[g][k] = _mm256_sub_pd(vi[g][k], _mm256_mul_pd(wi[g], dpt));
+      vj[g][k] = _mm256_add_pd(vj[g][k], _mm256_mul_pd(wj[g], dpt));
+    }
+    if (!wall) store_bodies(b, &w.i[r], vi[g], wi[g]);
+    store_bodies(b, &w.j[r], vj[g], wj[g]);
   }
-  if (!wall) store_bodies(b, ci, vi, wi);
-  store_bodies(b, cj, vj, wj);
 }
 
 /// The widest update the CPU runs, up to `max_lanes` (checked once per CPU feature).
 int widest_lanes(int max_lanes) {
   __builtin_cpu_init();
   static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (max_lanes >= 8 && avx2) return 8;
   if (max_lanes >= 4 && avx2) return 4;
   return std::min(max_lanes, 2);
 }
@@ -259,19 +279,40 @@ void sweep_narrow(W& w, const std::uint8_t* next, const Vec3* vc, SolveBody* b, 
 }
 
 #if SIMREEL_SOLVE_WIDE
-/// sweep_narrow() with the runs marked for four lanes in AVX registers (AVX2 CPUs only), the
-/// updates inlined into the loop.
+/// sweep_narrow() with the runs marked for eight and four lanes in AVX registers (AVX2 CPUs
+/// only), the updates inlined into the loop.
 template <class W>
-__attribute__((target("avx2"))) void sweep_wide(W& w, const std::uint8_t* next, const Vec3* vc, SolveBody* b,
-                                                std::size_t begin, std::size_t end) {
+__attribute__((target("avx2"), always_inline)) inline void sweep_wide_loop(W& w, const std::uint8_t* next,
+                                                                           const Vec3* vc, SolveBody* b,
+                                                                           std::size_t begin, std::size_t end) {
   for (std::size_t q = begin; q < end;) {
-    if (next[q] == 2) {
-      w.i[q] == ParticleCollider::kCollider ? update4<true>(w, q, vc + q, b) : update4<false>(w, q, vc + q, b);
+    if (next[q] == 3) {
+      w.i[q] == ParticleCollider::kCollider ? update4<true, 2>(w, q, vc + q, b) : update4<false, 2>(w, q, vc + q, b);
+      q += 8;
+    } else if (next[q] == 2) {
+      w.i[q] == ParticleCollider::kCollider ? update4<true, 1>(w, q, vc + q, b) : update4<false, 1>(w, q, vc + q, b);
       q += 4;
     } else {
       q += update_narrow(w, next, vc, b, q);
     }
   }
+}
+template <class W>
+__attribute__((target("avx2"))) void sweep_wide(W& w, const std::uint8_t* next, const Vec3* vc, SolveBody* b,
+                                                std::size_t begin, std::size_t end) {
+  sweep_wide_loop(w, next, vc, b, begin, end);
+}
+/// sweep_wide() where the CPU has AVX-512VL: the same instructions on 256-bit registers (the
+/// same bits), but 32 of them instead of 16, so two groups' updates fit without spilling.
+template <class W>
+__attribute__((target("avx2,avx512f,avx512vl"))) void sweep_wide_evex(W& w, const std::uint8_t* next, const Vec3* vc,
+                                                                      SolveBody* b, std::size_t begin, std::size_t end) {
+  sweep_wide_loop(w, next, vc, b, begin, end);
+}
+bool has_evex() {
+  __builtin_cpu_init();
+  static const bool evex = __builtin_cpu_supports("avx512vl");
+  return evex;
 }
 #endif
 
@@ -449,12 +490,13 @@ void ParticleCollider::solve_rows() {
   const std::uint8_t* next = pair_next_.data();
   const Vec3* vc = work_vc_.data();
 #if SIMREEL_SOLVE_WIDE
-  const bool wide = wavefront && solve_lanes(max_lanes) >= 4;  // runs of four marked
+  const bool wide = wavefront && solve_lanes(max_lanes) >= 4;  // runs of four or eight marked
+  const bool evex = wide && avx512_registers && has_evex();
 #endif
   const auto sweep = [&](std::size_t begin, std::size_t end) {
 #if SIMREEL_SOLVE_WIDE
     if (wide) {
-      sweep_wide(work_, next, vc, bp, begin, end);
+      evex ? sweep_wide_evex(work_, next, vc, bp, begin, end) : sweep_wide(work_, next, vc, bp, begin, end);
       return;
     }
 #endif
