@@ -537,6 +537,17 @@ TEST(SimParticleCollision, WavefrontSweepsGiveTheBitsOfTheContactOrder) {
     sliding += c.mu > 0.0 && c.pn > 0.0 && c.pt.norm() >= c.mu * c.pn * (1 - 1e-12);
   }
   EXPECT_GT(sliding, 100) << "the case must have contacts at the friction bound";
+  // The overlap projection in the sweeps' work order (what run() does) against contact order:
+  // the same bits, each wavefront's order and width alike.
+  const std::vector<Vec3> x0 = b.x;
+  b.project_positions();
+  for (auto& l : lanes) l.project_positions(true);
+  int moved = 0;
+  for (std::size_t p = 0; p < a.x.size(); ++p) {
+    for (const auto& l : lanes) ASSERT_EQ(l.x[p], b.x[p]) << "particle " << p << ", lanes " << l.max_lanes;
+    moved += b.x[p] != x0[p];
+  }
+  EXPECT_GT(moved, 1000) << "the case must have overlaps to project";
 }
 
 TEST(SimParticleCollision, LoneContactsAreSolvedByTheFirstSweep) {

@@ -163,7 +163,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       v[u] = after;
     }
   }
-  project_positions();
+  project_positions(true);
   // Back to the members' particles, each working entry written to its own (x, v and x_before
   // stay in working order).
   {

@@ -184,6 +184,9 @@ class ParticleCollider {
   /// contacts' depths are measured from x_before (set to x if it is not filled). Nonlinear
   /// Gauss–Seidel over the contacts, as Box2D v2's position correction.
   void project_positions();
+  /// project_positions() over the contacts in the order of the last solve()'s sweeps when
+  /// work_order (the same bits, faster; only while the contacts are those that solve() had).
+  void project_positions(bool work_order);
   double cell_size = 0.0;  ///< (m) of the last find_contacts(), at its finest level
   int levels = 1;          ///< grid levels of the last find_contacts() (1: uniform grid)
 
@@ -328,6 +331,7 @@ class ParticleCollider {
   };
   SolverColumns work_;
   std::vector<Vec3> work_vc_;
+  std::vector<double> work_depth_;  ///< Contact::depth in work order (the projection's)
   std::vector<SolveBody> body_;  ///< solve(): v and inv_mass of each particle during the sweeps
   std::vector<std::uint32_t> sched_, wave_;
   /// schedule(): per thread, each particle's latest wave in the current window, and a window's

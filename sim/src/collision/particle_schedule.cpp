@@ -87,6 +87,7 @@ void ParticleCollider::schedule() {
   work_.resize(m);
   const int lanes = wavefront ? solve_lanes(max_lanes) : 1;
   work_vc_.resize(m);
+  work_depth_.resize(m);
   wave_.resize(m);
   pair_next_.assign(m, 0);
   // The bands are ordered on their own (a band's windows, its particles' latest waves in the
@@ -219,6 +220,7 @@ void ParticleCollider::schedule() {
     work_.target[k] = c.target;
     work_.mu[k] = c.mu;
     work_.pn[k] = c.pn;
+    work_depth_[k] = c.depth;
     if (c.i == kCollider) work_vc_[k] = wall_vc[sched_[k] - (m - wall_vc.size())];
   }
 }

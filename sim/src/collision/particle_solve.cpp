@@ -516,39 +516,61 @@ void ParticleCollider::solve_rows() {
   give_back();
 }
 
-void ParticleCollider::project_positions() {
+void ParticleCollider::project_positions() { project_positions(false); }
+
+void ParticleCollider::project_positions(bool work_order) {
   if (x_before.size() != x.size()) x_before = x;
+  // The update of a contact between particles i and j (i == kCollider: j against a collider,
+  // n its normal) found at depth `found` (negative: apart).
+  const auto update = [&](std::uint32_t i, std::uint32_t j, double found, const Vec3& n) {
+    const bool wall = i == kCollider;
+    double slop = 0.0, depth = 0.0;
+    Vec3 nn = n;
+    if (wall) {
+      // The surface as the plane of its closest feature at the start of the projection.
+      depth = found - n.dot(x[j] - x_before[j]);
+    } else {
+      const Vec3 d = x[j] - x[i];
+      const double dist = d.norm();
+      if (!(dist > 0.0)) return;
+      nn = d / dist;
+      depth = radius[i] + radius[j] - dist;
+      slop = slop_fraction * std::min(radius[i], radius[j]);
+    }
+    // Each contact aims at the same end depth in every sweep, so the sweeps converge to it.
+    // A speculative contact (found apart) may close its gap (goal 0) but not go deeper, a
+    // collider's as a pair's. Holding a pair at the gap it was found with instead undid, every
+    // step, what the solve let gravity close (it allows an approach of gap / h): a settled pile
+    // kept beads whose velocity read 1-9 cm/s while the projection put them back where they
+    // were, so they never fell asleep (201 of 5,000 in the bowl at 10 s).
+    const double goal = wall ? (found > 0.0 ? (1.0 - position_fraction) * found : 0.0)
+                             : std::max(0.0, found - position_fraction * std::max(0.0, found - slop));
+    if (!(depth > goal)) return;
+    const double wi = wall ? 0.0 : inv_mass[i], wj = inv_mass[j];
+    const double corr = (depth - goal) / (wi + wj);
+    if (!wall) x[i] -= corr * wi * nn;
+    x[j] += corr * wj * nn;
+  };
+  // In work order (solve_rows()'s schedule, its columns and work_depth_) the same sweep to the
+  // bit: each update moves only its two particles and the schedule keeps each particle's
+  // contacts in their order. Consecutive updates then share no particle, where in contact order
+  // consecutive pairs mostly share their first one and each waited on the one before (its
+  // square root and two divisions).
+  if (work_order) {
+    const auto project = [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::uint32_t i = work_.i[k];
+        const Vec3 n = i == kCollider ? Vec3(work_.n[0][k], work_.n[1][k], work_.n[2][k]) : Vec3::Zero();
+        update(i, work_.j[k], work_depth_[k], n);
+      }
+    };
+    sweep_bands(position_iterations, project, false);
+    return;
+  }
   const auto project = [&](std::size_t begin, std::size_t end) {
     for (std::size_t q = begin; q < end; ++q) {
       const Contact& c = contacts[q];
-      const bool wall = c.i == kCollider;
-      double slop = 0.0, depth = 0.0;
-      Vec3 nn = c.n;
-      if (wall) {
-        // The surface as the plane of its closest feature at the start of the projection.
-        depth = c.depth - c.n.dot(x[c.j] - x_before[c.j]);
-      } else {
-        const Vec3 d = x[c.j] - x[c.i];
-        const double dist = d.norm();
-        if (!(dist > 0.0)) continue;
-        nn = d / dist;
-        depth = radius[c.i] + radius[c.j] - dist;
-        slop = slop_fraction * std::min(radius[c.i], radius[c.j]);
-      }
-      // Each contact aims at the same end depth in every sweep, so the sweeps converge to it.
-      // A speculative contact (found apart, c.depth < 0) may close its gap (goal 0) but not go
-      // deeper, a collider's as a pair's. Holding a pair at the gap it was found with instead
-      // undid, every step, what the solve let gravity close (it allows an approach of gap / h):
-      // a settled pile kept beads whose velocity read 1-9 cm/s while the projection put them
-      // back where they were, so they never fell asleep (201 of 5,000 in the bowl at 10 s).
-      const double goal =
-          wall ? (c.depth > 0.0 ? (1.0 - position_fraction) * c.depth : 0.0)
-               : std::max(0.0, c.depth - position_fraction * std::max(0.0, c.depth - slop));
-      if (!(depth > goal)) continue;
-      const double wi = wall ? 0.0 : inv_mass[c.i], wj = inv_mass[c.j];
-      const double corr = (depth - goal) / (wi + wj);
-      if (!wall) x[c.i] -= corr * wi * nn;
-      x[c.j] += corr * wj * nn;
+      update(c.i, c.j, c.depth, c.n);
     }
   };
   // A large system's sweeps go like the solve's, the same order at any thread count.
