@@ -236,6 +236,108 @@ __attribute__((target("avx2"), always_inline)) inline void update4(W& w, std::si
   }
 }
 
+/// What the overlap projection's updates read and write (project_positions()).
+struct ProjectColumns {
+  Vec3* x;
+  const Vec3* x_before;
+  const double *radius, *inv_mass;
+  const std::uint32_t *i, *j;
+  const double* found;  ///< each contact's depth when found (negative: apart)
+  const double* n[3];   ///< each contact's normal (a collider contact's is used)
+  double position_fraction, slop_fraction;
+};
+
+/// Lane k of the four particles p[0..3]'s positions (x: component 0, ...).
+__attribute__((target("avx2"), always_inline)) inline __m256d lane_load(const Vec3* x, const std::uint32_t* p, int c) {
+  return _mm256_setr_pd(x[p[0]][c], x[p[1]][c], x[p[2]][c], x[p[3]][c]);
+}
+__attribute__((target("avx2"), always_inline)) inline __m256d lane_load(const double* a, const std::uint32_t* p) {
+  return _mm256_setr_pd(a[p[0]], a[p[1]], a[p[2]], a[p[3]]);
+}
+
+/// The projection's update (project_positions()) of contacts q .. q + 4G - 1 of one wave, in
+/// the four lanes of AVX registers, G groups interleaved as update4()'s; each lane performs the
+/// scalar update's operations in its order, and a lane whose contact does not push keeps its
+/// particles' positions bit for bit.
+template <bool wall, int G>
+__attribute__((target("avx2"), always_inline)) inline void project4(const ProjectColumns& a, std::size_t q) {
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d xi[G][3], xj[G][3], nn[G][3], depth[G], goal[G], wi[G], wj[G], push[G];
+  for (int g = 0; g < G; ++g) {
+    const std::size_t r = q + std::size_t(4 * g);
+    const std::uint32_t* pj = a.j + r;
+    const __m256d found = _mm256_loadu_pd(a.found + r);
+    for (int c = 0; c < 3; ++c) xj[g][c] = lane_load(a.x, pj, c);
+    wj[g] = lane_load(a.inv_mass, pj);
+    if (wall) {
+      __m256d d[3];
+      for (int c = 0; c < 3; ++c) {
+        nn[g][c] = _mm256_loadu_pd(a.n[c] + r);
+        d[c] = _mm256_sub_pd(xj[g][c], lane_load(a.x_before, pj, c));
+      }
+      depth[g] = _mm256_sub_pd(found, dot4(nn[g], d));
+      goal[g] = _mm256_blendv_pd(zero, _mm256_mul_pd(_mm256_set1_pd(1.0 - a.position_fraction), found),
+                                 _mm256_cmp_pd(found, zero, _CMP_GT_OQ));
+      wi[g] = zero;
+      push[g] = _mm256_cmp_pd(depth[g], goal[g], _CMP_GT_OQ);
+    } else {
+      const std::uint32_t* pi = a.i + r;
+      __m256d d[3];
+      for (int c = 0; c < 3; ++c) {
+        xi[g][c] = lane_load(a.x, pi, c);
+        d[c] = _mm256_sub_pd(xj[g][c], xi[g][c]);
+      }
+      const __m256d dist = _mm256_sqrt_pd(dot4(d, d));
+      for (int c = 0; c < 3; ++c) nn[g][c] = _mm256_div_pd(d[c], dist);
+      const __m256d ri = lane_load(a.radius, pi), rj = lane_load(a.radius, pj);
+      depth[g] = _mm256_sub_pd(_mm256_add_pd(ri, rj), dist);
+      // min_pd(rj, ri) is std::min(ri, rj) (rj < ri ? rj : ri); max_pd(y, 0) std::max(0.0, y).
+      const __m256d slop = _mm256_mul_pd(_mm256_set1_pd(a.slop_fraction), _mm256_min_pd(rj, ri));
+      goal[g] = _mm256_max_pd(
+          _mm256_sub_pd(found, _mm256_mul_pd(_mm256_set1_pd(a.position_fraction),
+                                             _mm256_max_pd(_mm256_sub_pd(found, slop), zero))),
+          zero);
+      wi[g] = lane_load(a.inv_mass, pi);
+      push[g] = _mm256_and_pd(_mm256_cmp_pd(dist, zero, _CMP_GT_OQ), _mm256_cmp_pd(depth[g], goal[g], _CMP_GT_OQ));
+    }
+  }
+  for (int g = 0; g < G; ++g) {
+    const std::size_t r = q + std::size_t(4 * g);
+    const __m256d corr = _mm256_div_pd(_mm256_sub_pd(depth[g], goal[g]), _mm256_add_pd(wi[g], wj[g]));
+    const __m256d si = _mm256_mul_pd(corr, wi[g]), sj = _mm256_mul_pd(corr, wj[g]);
+    alignas(32) double oi[3][4], oj[3][4];
+    for (int c = 0; c < 3; ++c) {
+      _mm256_store_pd(oj[c], _mm256_blendv_pd(xj[g][c], _mm256_add_pd(xj[g][c], _mm256_mul_pd(sj, nn[g][c])), push[g]));
+      if (!wall)
+        _mm256_store_pd(oi[c], _mm256_blendv_pd(xi[g][c], _mm256_sub_pd(xi[g][c], _mm256_mul_pd(si, nn[g][c])), push[g]));
+    }
+    for (int l = 0; l < 4; ++l) {
+      if (!wall) a.x[a.i[r + std::size_t(l)]] = Vec3(oi[0][l], oi[1][l], oi[2][l]);
+      a.x[a.j[r + std::size_t(l)]] = Vec3(oj[0][l], oj[1][l], oj[2][l]);
+    }
+  }
+}
+
+/// One projection sweep over work positions [begin, end): the runs marked for four and eight
+/// lanes in AVX registers, the others by `one` (the scalar update of work position k).
+template <class F>
+__attribute__((target("avx2"))) void project_wide(const ProjectColumns& a, const std::uint8_t* next,
+                                                  std::size_t begin, std::size_t end, const F& one) {
+  for (std::size_t q = begin; q < end;) {
+    const bool wall = a.i[q] == ParticleCollider::kCollider;
+    if (next[q] == 3) {
+      wall ? project4<true, 2>(a, q) : project4<false, 2>(a, q);
+      q += 8;
+    } else if (next[q] == 2) {
+      wall ? project4<true, 1>(a, q) : project4<false, 1>(a, q);
+      q += 4;
+    } else {
+      one(q);
+      ++q;
+    }
+  }
+}
+
 /// The widest update the CPU runs, up to `max_lanes` (checked once per CPU feature).
 int widest_lanes(int max_lanes) {
   __builtin_cpu_init();
@@ -557,12 +659,27 @@ void ParticleCollider::project_positions(bool work_order) {
   // consecutive pairs mostly share their first one and each waited on the one before (its
   // square root and two divisions).
   if (work_order) {
+    const auto one = [&](std::size_t k) {
+      const std::uint32_t i = work_.i[k];
+      const Vec3 n = i == kCollider ? Vec3(work_.n[0][k], work_.n[1][k], work_.n[2][k]) : Vec3::Zero();
+      update(i, work_.j[k], work_depth_[k], n);
+    };
+#if SIMREEL_SOLVE_WIDE
+    // The runs of one wave the schedule marked for the SIMD lanes: the same bits, four updates
+    // at a time.
+    if (wavefront && solve_lanes(max_lanes) >= 4) {
+      const ProjectColumns cols{x.data(),       x_before.data(),   radius.data(),
+                                inv_mass.data(), work_.i.data(),    work_.j.data(),
+                                work_depth_.data(), {work_.n[0].data(), work_.n[1].data(), work_.n[2].data()},
+                                position_fraction, slop_fraction};
+      const std::uint8_t* next = pair_next_.data();
+      const auto project = [&](std::size_t begin, std::size_t end) { project_wide(cols, next, begin, end, one); };
+      sweep_bands(position_iterations, project, false);
+      return;
+    }
+#endif
     const auto project = [&](std::size_t begin, std::size_t end) {
-      for (std::size_t k = begin; k < end; ++k) {
-        const std::uint32_t i = work_.i[k];
-        const Vec3 n = i == kCollider ? Vec3(work_.n[0][k], work_.n[1][k], work_.n[2][k]) : Vec3::Zero();
-        update(i, work_.j[k], work_depth_[k], n);
-      }
+      for (std::size_t k = begin; k < end; ++k) one(k);
     };
     sweep_bands(position_iterations, project, false);
     return;
