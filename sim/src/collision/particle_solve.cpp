@@ -14,6 +14,7 @@
 
 #include "collision/particle_collisions.hpp"
 #include "core/run_claims.hpp"
+#include "core/vector_clones.hpp"
 #include "particles/forces.hpp"  // kParallelMin
 
 namespace simreel::sim::detail {
@@ -238,16 +239,15 @@ __attribute__((target("avx2"), always_inline)) inline void update4(W& w, std::si
 
 /// What the overlap projection's updates read and write (project_positions()).
 struct ProjectColumns {
-  Vec3* x;
+  Vec3* x;  ///< and x_before, radius, inv_mass: per particle
   const Vec3* x_before;
   const double *radius, *inv_mass;
-  const std::uint32_t *i, *j;
-  const double* found;  ///< each contact's depth when found (negative: apart)
-  const double* n[3];   ///< each contact's normal (a collider contact's is used)
+  const std::uint32_t *i, *j;  ///< and found (its depth when found, negative: apart), n: per contact
+  const double *found, *n[3];
   double position_fraction, slop_fraction;
 };
 
-/// Lane k of the four particles p[0..3]'s positions (x: component 0, ...).
+/// Component c of the four particles p[0..3]'s positions, one a lane; then a[p[0..3]].
 __attribute__((target("avx2"), always_inline)) inline __m256d lane_load(const Vec3* x, const std::uint32_t* p, int c) {
   return _mm256_setr_pd(x[p[0]][c], x[p[1]][c], x[p[2]][c], x[p[3]][c]);
 }
@@ -411,10 +411,13 @@ __attribute__((target("avx2,avx512f,avx512vl"))) void sweep_wide_evex(W& w, cons
                                                                       SolveBody* b, std::size_t begin, std::size_t end) {
   sweep_wide_loop(w, next, vc, b, begin, end);
 }
+/// The CPU runs sweep_wide_evex() (the pair search's test: SIMREEL_NO_VECTOR_CLONES is off for both).
 bool has_evex() {
-  __builtin_cpu_init();
-  static const bool evex = __builtin_cpu_supports("avx512vl");
+#if SIMREEL_HAS_VECTOR_CLONES
+  static const bool evex = cpu_has_avx512vl();
   return evex;
+#endif
+  return false;
 }
 #endif
 
