@@ -691,7 +691,8 @@ detail::Dynamics pair_dynamics(const std::vector<double>& mass, const std::vecto
 // even, then those whose cell's x is odd, each meets the particles after it in that order within
 // its 27 cells, and the pair's force F = coef (x_i - x_j) is added to i and subtracted from j. A
 // brute-force loop over all particles in that order gives the same bits, at 1, 2, 3 and 4
-// threads, with the neighbour runs read in place (AVX-512 CPUs) or copied first (3,000
+// threads, eight, four and one candidate at a time (as the CPU allows), with the neighbour runs
+// read in place (AVX-512 or AVX2 CPUs) or copied first (3,000
 // particles: above the split threshold; cells of both signs, so both parities; plus a clump of
 // 200 in a few cells, whose runs are longer than a block of eight).
 TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
@@ -743,15 +744,18 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
     }
   std::vector<double> want(3 * n, 0.25);  // the pair forces add to what is there
   for (std::size_t k = 0; k < 3 * n; ++k) want[k] += f[k] / mass[k / 3];
-  for (const bool in_place : {true, false})
-    for (int threads : {1, 2, 3, 4}) {
-      detail::Dynamics dyn = pair_dynamics(mass, charge, pf, threads);
-      dyn.pair_runs_in_place = in_place;
-      std::vector<double> got(3 * n, 0.25);
-      dyn.add_pair_forces(x.data(), got.data());
-      ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0)
-          << threads << " threads, runs in place " << in_place;
-    }
+  // Eight (AVX-512VL), four (AVX2) and one candidate at a time, as the CPU allows.
+  for (const int lanes : {8, 4, 1})
+    for (const bool in_place : {true, false})
+      for (int threads : {1, 2, 3, 4}) {
+        detail::Dynamics dyn = pair_dynamics(mass, charge, pf, threads);
+        dyn.pair_runs_in_place = in_place;
+        dyn.pair_lanes = lanes;
+        std::vector<double> got(3 * n, 0.25);
+        dyn.add_pair_forces(x.data(), got.data());
+        ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0)
+            << threads << " threads, runs in place " << in_place << ", lanes " << lanes;
+      }
 }
 
 // The same bits at 1, 2, 3 and 4 threads for a system well above the split threshold: 60,000

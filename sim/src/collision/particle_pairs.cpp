@@ -14,6 +14,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/compress_avx2.hpp"
 #include "core/counting_sort.hpp"
 #include "core/key_runs.hpp"
 #include "core/run_claims.hpp"
@@ -164,20 +165,96 @@ std::size_t in_reach_avx512(double xi, double yi, double zi, double ri, double m
   }
   return k;
 }
+
+/// gather_in_box_scalar() four at a time with AVX2 (for CPUs without AVX-512): the same tests by
+/// the same operations, the kept lanes moved to the front by a table (core/compress_avx2.hpp); the
+/// last one to three of a run as the scalar form does. The same entries in the same order.
+__attribute__((target("avx2")))
+std::size_t gather_in_box_avx2(const std::uint32_t* rb, const std::uint32_t* re, int runs,
+                               const double* __restrict px, const double* __restrict py,
+                               const double* __restrict pz, const double* __restrict pr,
+                               const ReachBox& box, std::uint32_t* __restrict cs,
+                               double* __restrict cx, double* __restrict cy,
+                               double* __restrict cz, double* __restrict cr) {
+  std::size_t k = 0;
+  const __m256d hx = _mm256_set1_pd(box.hx), hy = _mm256_set1_pd(box.hy), hz = _mm256_set1_pd(box.hz);
+  const __m256d lx = _mm256_set1_pd(box.lx), ly = _mm256_set1_pd(box.ly), lz = _mm256_set1_pd(box.lz);
+  const __m256d reach = _mm256_set1_pd(box.reach);
+  for (int u = 0; u < runs; ++u) {
+    std::uint32_t s = rb[u];
+    const std::uint32_t e = re[u];
+    for (; s + 4 <= e; s += 4) {
+      const __m256d x = _mm256_loadu_pd(px + s), y = _mm256_loadu_pd(py + s);
+      const __m256d z = _mm256_loadu_pd(pz + s), r = _mm256_loadu_pd(pr + s);
+      __m256d keep = _mm256_cmp_pd(_mm256_sub_pd(x, hx), reach, _CMP_LE_OQ);
+      keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(lx, x), reach, _CMP_LE_OQ));
+      keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(y, hy), reach, _CMP_LE_OQ));
+      keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(ly, y), reach, _CMP_LE_OQ));
+      keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(z, hz), reach, _CMP_LE_OQ));
+      keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(lz, z), reach, _CMP_LE_OQ));
+      const int mask = _mm256_movemask_pd(keep);
+      // Stored also when none is kept: see gather_in_box_avx512().
+      compress_store4(cx + k, x, mask);
+      compress_store4(cy + k, y, mask);
+      compress_store4(cz + k, z, mask);
+      compress_store4(cr + k, r, mask);
+      compress_store4(cs + k, lane_indices4(s), mask);
+      k += std::size_t(std::popcount(unsigned(mask)));
+    }
+    k += gather_in_box_scalar(&s, &e, 1, px, py, pz, pr, box, cs + k, cx + k, cy + k, cz + k, cr + k);
+  }
+  return k;
+}
+
+/// in_reach_avx512()'s pass four at a time with AVX2: within_reach()'s test by the same
+/// operations in each lane, the places and squared distances of those within reach at the
+/// front of `hit` and `hd2`, in order (up to 4 entries written past the count); returns it.
+__attribute__((target("avx2")))
+std::size_t in_reach_avx2(double xi, double yi, double zi, double ri, double margin,
+                          const double* __restrict cx, const double* __restrict cy,
+                          const double* __restrict cz, const double* __restrict cr, std::size_t m,
+                          std::uint32_t* __restrict hit, double* __restrict hd2) {
+  const __m256d x = _mm256_set1_pd(xi), y = _mm256_set1_pd(yi), z = _mm256_set1_pd(zi);
+  const __m256d r = _mm256_set1_pd(ri), mg = _mm256_set1_pd(margin), zero = _mm256_setzero_pd();
+  std::size_t k = 0, b = 0;
+  for (; b + 4 <= m; b += 4) {
+    const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(cx + b), x);
+    const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(cy + b), y);
+    const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(cz + b), z);
+    const __m256d e = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
+                                    _mm256_mul_pd(dz, dz));
+    const __m256d rj = _mm256_loadu_pd(cr + b);
+    const __m256d smaller = _mm256_blendv_pd(r, rj, _mm256_cmp_pd(rj, r, _CMP_LT_OQ));  // rj < ri ? rj : ri
+    const __m256d reach = _mm256_add_pd(_mm256_add_pd(r, rj), _mm256_mul_pd(mg, smaller));
+    const int mask = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(e, _mm256_mul_pd(reach, reach), _CMP_LT_OQ),
+                                                      _mm256_cmp_pd(e, zero, _CMP_GT_OQ)));
+    compress_store4(hd2 + k, e, mask);
+    compress_store4(hit + k, lane_indices4(std::uint32_t(b)), mask);
+    k += std::size_t(std::popcount(unsigned(mask)));
+  }
+  for (; b < m; ++b) {
+    double d2 = 0.0;
+    within_reach(xi, yi, zi, ri, margin, cx + b, cy + b, cz + b, cr + b, 1, &d2);
+    hit[k] = std::uint32_t(b);
+    hd2[k] = d2;
+    k += std::size_t(d2 > 0.0);
+  }
+  return k;
+}
 #endif
 
 using GatherInBox = std::size_t (*)(const std::uint32_t*, const std::uint32_t*, int, const double*,
                                     const double*, const double*, const double*, const ReachBox&,
                                     std::uint32_t*, double*, double*, double*, double*);
 
-/// The gather_in_box form this CPU runs (checked once, on first use).
-GatherInBox gather_in_box() {
+/// The gather_in_box form of `lanes` (compress_width() or less).
+GatherInBox gather_in_box(int lanes) {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const GatherInBox f = cpu_has_avx512vl() ? &gather_in_box_avx512 : &gather_in_box_scalar;
-  return f;
-#else
-  return &gather_in_box_scalar;
+  if (lanes >= 8) return &gather_in_box_avx512;
+  if (lanes >= 4) return &gather_in_box_avx2;
 #endif
+  (void)lanes;
+  return &gather_in_box_scalar;
 }
 
 }  // namespace
@@ -435,10 +512,8 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
   // reach_box, so fl(c - x_i)² >= reach², and the squared distance is no smaller) is out of
   // reach of each of them.
   const double reach_box = (max_radius_ + max_radius_) + margin * max_radius_;
-  const GatherInBox gather = gather_in_box();
-#if SIMREEL_HAS_VECTOR_CLONES
-  static const bool wide = cpu_has_avx512vl();  // in_reach_avx512() for within_reach() and its scan
-#endif
+  const int lanes = std::min(compress_width(), pair_search_lanes);
+  const GatherInBox gather = gather_in_box(lanes);
   // Half stencil: the cell itself (later particles) and the cell above it (z + 1), then the
   // columns (dx, dy) = (0, 1), (1, -1), (1, 0), (1, 1), three cells each (z - 1 .. z + 1), all
   // later in key order. Cells are visited in key order, so each column's first occupied cell
@@ -519,11 +594,13 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
         continue;
       }
 #if SIMREEL_HAS_VECTOR_CLONES
-      if (wide) {
+      // One pass for the distances and the compaction of those within reach (in_reach_avx512()
+      // or in_reach_avx2()) instead of within_reach() and a scan of its output.
+      if (lanes >= 4) {
         const std::size_t hits =
-            in_reach_avx512(px[si], py[si], pz[si], pr[si], margin, ps.cand_x.data() + from,
-                            ps.cand_y.data() + from, ps.cand_z.data() + from, ps.cand_r.data() + from,
-                            m - from, ps.hit_u.data(), ps.cand_d2.data());
+            (lanes >= 8 ? in_reach_avx512 : in_reach_avx2)(
+                px[si], py[si], pz[si], pr[si], margin, ps.cand_x.data() + from, ps.cand_y.data() + from,
+                ps.cand_z.data() + from, ps.cand_r.data() + from, m - from, ps.hit_u.data(), ps.cand_d2.data());
         for (std::size_t u = 0; u < hits; ++u)
           try_pair(order_[si], order_[ps.cand_s[from + ps.hit_u[u]]], ps.cand_d2[u], contact_speed, h, out);
         continue;

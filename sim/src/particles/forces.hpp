@@ -56,10 +56,14 @@ struct Dynamics {
   std::vector<Spring> springs;
   std::vector<Pull> pulls;
   int threads = 1;
-  /// Dense pair-force grids: read each cell's neighbour runs in place with AVX-512 where the CPU
-  /// runs it (false: copy them into one candidate list first, as other CPUs do). The same pairs
-  /// in the same order either way, so the same bits; the tests compare the two.
+  /// Dense pair-force grids: read each cell's neighbour runs in place with AVX-512 or AVX2 where
+  /// the CPU runs it (false: copy them into one candidate list first, as other CPUs do). The
+  /// same pairs in the same order either way, so the same bits; the tests compare the two.
   bool pair_runs_in_place = true;
+  /// The most candidate pairs tested at once (8, 4 or 1): eight AVX-512VL lanes or four AVX2
+  /// lanes where the CPU has them, the kept ones compressed to the front; else one by one. The
+  /// same pairs in the same order at every width (the tests compare 8, 4 and 1).
+  int pair_lanes = 8;
   /// Semi-implicit Euler with pair forces as the only forces between particles takes them block
   /// by block with the integration (false: the general path, with (n x 3) velocity and
   /// acceleration arrays). The same bits either way; the tests compare the two.

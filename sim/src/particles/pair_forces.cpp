@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/compress_avx2.hpp"
 #include "core/key_runs.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"
@@ -247,20 +248,87 @@ std::size_t cell_pairs_avx512(const double* __restrict sx, const double* __restr
   return p;
 }
 
+/// append_within_avx512() four candidates at a time with AVX2 (for CPUs without AVX-512): the
+/// kept ones moved to the front by a table (core/compress_avx2.hpp); the last one to three as
+/// the scalar form. Writes up to 4 entries past the result.
+__attribute__((target("avx2")))
+std::size_t append_within_avx2(std::uint32_t si, const std::uint32_t* __restrict cs,
+                               const double* __restrict r2, std::size_t len, double cut2,
+                               std::uint32_t* __restrict pi, std::uint32_t* __restrict pj,
+                               double* __restrict pr2, std::size_t p) {
+  const __m256d c = _mm256_set1_pd(cut2);
+  const __m128i vi = _mm_set1_epi32(int(si));
+  std::size_t u = 0;
+  for (; u + 4 <= len; u += 4) {
+    const __m256d d = _mm256_loadu_pd(r2 + u);
+    const int k = _mm256_movemask_pd(_mm256_cmp_pd(d, c, _CMP_LT_OQ));
+    compress_store4(pr2 + p, d, k);
+    compress_store4(pj + p, _mm_loadu_si128(reinterpret_cast<const __m128i*>(cs + u)), k);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(pi + p), vi);
+    p += std::size_t(std::popcount(unsigned(k)));
+  }
+  return append_within_scalar(si, cs + u, r2 + u, len - u, cut2, pi, pj, pr2, p);
+}
+
+/// block_pairs_avx512() for four candidates with AVX2: lanes past `left` load nothing (a
+/// masked load) and are not kept. Writes up to 4 entries past the result.
+__attribute__((target("avx2"), always_inline)) inline std::size_t
+block_pairs_avx2(__m256d xi, __m256d yi, __m256d zi, __m128i vi, __m256d cut2,
+                 const double* __restrict sx, const double* __restrict sy,
+                 const double* __restrict sz, std::uint32_t u, std::uint32_t left,
+                 std::uint32_t* __restrict pi, std::uint32_t* __restrict pj,
+                 double* __restrict pr2, std::size_t p) {
+  const __m256i lane = _mm256_cmpgt_epi64(_mm256_set1_epi64x(std::int64_t(std::min(left, 4u))),
+                                          _mm256_setr_epi64x(0, 1, 2, 3));
+  const __m256d dx = _mm256_sub_pd(xi, _mm256_maskload_pd(sx + u, lane));
+  const __m256d dy = _mm256_sub_pd(yi, _mm256_maskload_pd(sy + u, lane));
+  const __m256d dz = _mm256_sub_pd(zi, _mm256_maskload_pd(sz + u, lane));
+  const __m256d d =
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+  const int k = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(d, cut2, _CMP_LT_OQ), _mm256_castsi256_pd(lane)));
+  compress_store4(pr2 + p, d, k);
+  compress_store4(pj + p, lane_indices4(u), k);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(pi + p), vi);
+  return p + std::size_t(std::popcount(unsigned(k)));
+}
+
+/// cell_pairs_avx512() with AVX2's four lanes (block_pairs_avx2()): the same pairs in the same
+/// order. Writes up to 4 entries past the result.
+__attribute__((target("avx2")))
+std::size_t cell_pairs_avx2(const double* __restrict sx, const double* __restrict sy,
+                            const double* __restrict sz, std::uint32_t first,
+                            std::uint32_t last, const std::uint32_t* rb,
+                            const std::uint32_t* re, double cut2, std::uint32_t* __restrict pi,
+                            std::uint32_t* __restrict pj, double* __restrict pr2,
+                            std::size_t p) {
+  const __m256d c = _mm256_set1_pd(cut2);
+  for (std::uint32_t si = first; si < last; ++si) {
+    const __m256d xi = _mm256_set1_pd(sx[si]), yi = _mm256_set1_pd(sy[si]), zi = _mm256_set1_pd(sz[si]);
+    const __m128i vi = _mm_set1_epi32(int(si));
+    for (int r = 0; r < 5; ++r) {
+      const std::uint32_t b = r == 0 ? si + 1 : rb[r], len = re[r] - b;
+      p = block_pairs_avx2(xi, yi, zi, vi, c, sx, sy, sz, b, len, pi, pj, pr2, p);
+      for (std::uint32_t u = 4; u < len; u += 4)
+        p = block_pairs_avx2(xi, yi, zi, vi, c, sx, sy, sz, b + u, len - u, pi, pj, pr2, p);
+    }
+  }
+  return p;
+}
+
 #endif
 
 using AppendWithin = std::size_t (*)(std::uint32_t, const std::uint32_t*, const double*,
                                      std::size_t, double, std::uint32_t*, std::uint32_t*, double*,
                                      std::size_t);
 
-/// The append_within form this CPU runs (checked once, on first use).
-AppendWithin append_within() {
+/// The append_within form of `lanes` (compress_width() or less).
+AppendWithin append_within(int lanes) {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const AppendWithin f = cpu_has_avx512vl() ? &append_within_avx512 : &append_within_scalar;
-  return f;
-#else
-  return &append_within_scalar;
+  if (lanes >= 8) return &append_within_avx512;
+  if (lanes >= 4) return &append_within_avx2;
 #endif
+  (void)lanes;
+  return &append_within_scalar;
 }
 
 /// Bit k set when r2[k] < cut2 (false for NaN, as the scalar test), k < len <= 64. Two lanes a
@@ -497,10 +565,10 @@ void Dynamics::pair_forces_over_grid(const T* x) {
   // cell to its last. A particle of plane X thus receives, whatever the thread count, first the
   // contributions of the plane done in the first pass (X if even, X - 1 if X is odd), then those
   // of the other, each in that plane's own visiting order: a fixed sequence of additions.
-  const AppendWithin append = append_within();
+  const int lanes = std::min(compress_width(), pair_lanes);
+  const AppendWithin append = append_within(lanes);
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const bool avx512 = cpu_has_avx512vl();
-  const bool in_place = avx512 && pair_runs_in_place;
+  const bool in_place = lanes >= 4 && pair_runs_in_place;
 #endif
   const auto half_cell = [&](PairGather& g, std::size_t c, std::size_t ix, std::size_t iy,
                              std::size_t iz) {
@@ -528,8 +596,8 @@ void Dynamics::pair_forces_over_grid(const T* x) {
 #if SIMREEL_HAS_VECTOR_CLONES
     if (in_place) {
       g.reserve_pairs(g.pairs + std::size_t(last - first) * m + 8);
-      g.pairs = cell_pairs_avx512(sx, sy, sz, first, last, rb, re, cut2, g.pi.data(),
-                                  g.pj.data(), g.pr2.data(), g.pairs);
+      g.pairs = (lanes >= 8 ? cell_pairs_avx512 : cell_pairs_avx2)(sx, sy, sz, first, last, rb, re, cut2,
+                                                                 g.pi.data(), g.pj.data(), g.pr2.data(), g.pairs);
       return;
     }
 #endif
