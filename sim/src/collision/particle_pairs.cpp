@@ -167,8 +167,8 @@ std::size_t in_reach_avx512(double xi, double yi, double zi, double ri, double m
 }
 
 /// gather_in_box_scalar() four at a time with AVX2 (for CPUs without AVX-512): the same tests by
-/// the same operations, the kept lanes moved to the front by a table (core/compress_avx2.hpp); the
-/// last one to three of a run as the scalar form does. The same entries in the same order.
+/// the same operations, the kept lanes moved to the front by a table (core/compress_avx2.hpp).
+/// The same entries in the same order; writes up to 4 entries past the result.
 __attribute__((target("avx2")))
 std::size_t gather_in_box_avx2(const std::uint32_t* rb, const std::uint32_t* re, int runs,
                                const double* __restrict px, const double* __restrict py,
@@ -181,12 +181,12 @@ std::size_t gather_in_box_avx2(const std::uint32_t* rb, const std::uint32_t* re,
   const __m256d lx = _mm256_set1_pd(box.lx), ly = _mm256_set1_pd(box.ly), lz = _mm256_set1_pd(box.lz);
   const __m256d reach = _mm256_set1_pd(box.reach);
   for (int u = 0; u < runs; ++u) {
-    std::uint32_t s = rb[u];
-    const std::uint32_t e = re[u];
-    for (; s + 4 <= e; s += 4) {
-      const __m256d x = _mm256_loadu_pd(px + s), y = _mm256_loadu_pd(py + s);
-      const __m256d z = _mm256_loadu_pd(pz + s), r = _mm256_loadu_pd(pr + s);
-      __m256d keep = _mm256_cmp_pd(_mm256_sub_pd(x, hx), reach, _CMP_LE_OQ);
+    for (std::uint32_t s = rb[u], e = re[u]; s < e; s += 4) {
+      // Masked loads: nothing read past e (those lanes are not kept).
+      const __m256i live = live_lanes4(e - s);
+      const __m256d x = _mm256_maskload_pd(px + s, live), y = _mm256_maskload_pd(py + s, live);
+      const __m256d z = _mm256_maskload_pd(pz + s, live), r = _mm256_maskload_pd(pr + s, live);
+      __m256d keep = _mm256_and_pd(_mm256_castsi256_pd(live), _mm256_cmp_pd(_mm256_sub_pd(x, hx), reach, _CMP_LE_OQ));
       keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(lx, x), reach, _CMP_LE_OQ));
       keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(y, hy), reach, _CMP_LE_OQ));
       keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(ly, y), reach, _CMP_LE_OQ));
@@ -201,7 +201,6 @@ std::size_t gather_in_box_avx2(const std::uint32_t* rb, const std::uint32_t* re,
       compress_store4(cs + k, lane_indices4(s), mask);
       k += std::size_t(std::popcount(unsigned(mask)));
     }
-    k += gather_in_box_scalar(&s, &e, 1, px, py, pz, pr, box, cs + k, cx + k, cy + k, cz + k, cr + k);
   }
   return k;
 }
@@ -216,28 +215,24 @@ std::size_t in_reach_avx2(double xi, double yi, double zi, double ri, double mar
                           std::uint32_t* __restrict hit, double* __restrict hd2) {
   const __m256d x = _mm256_set1_pd(xi), y = _mm256_set1_pd(yi), z = _mm256_set1_pd(zi);
   const __m256d r = _mm256_set1_pd(ri), mg = _mm256_set1_pd(margin), zero = _mm256_setzero_pd();
-  std::size_t k = 0, b = 0;
-  for (; b + 4 <= m; b += 4) {
-    const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(cx + b), x);
-    const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(cy + b), y);
-    const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(cz + b), z);
+  std::size_t k = 0;
+  for (std::size_t b = 0; b < m; b += 4) {
+    // Masked loads: nothing read past m (those lanes are not kept).
+    const __m256i live = live_lanes4(m - b);
+    const __m256d dx = _mm256_sub_pd(_mm256_maskload_pd(cx + b, live), x);
+    const __m256d dy = _mm256_sub_pd(_mm256_maskload_pd(cy + b, live), y);
+    const __m256d dz = _mm256_sub_pd(_mm256_maskload_pd(cz + b, live), z);
     const __m256d e = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
                                     _mm256_mul_pd(dz, dz));
-    const __m256d rj = _mm256_loadu_pd(cr + b);
+    const __m256d rj = _mm256_maskload_pd(cr + b, live);
     const __m256d smaller = _mm256_blendv_pd(r, rj, _mm256_cmp_pd(rj, r, _CMP_LT_OQ));  // rj < ri ? rj : ri
     const __m256d reach = _mm256_add_pd(_mm256_add_pd(r, rj), _mm256_mul_pd(mg, smaller));
-    const int mask = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(e, _mm256_mul_pd(reach, reach), _CMP_LT_OQ),
-                                                      _mm256_cmp_pd(e, zero, _CMP_GT_OQ)));
+    const int mask = _mm256_movemask_pd(_mm256_and_pd(
+        _mm256_castsi256_pd(live), _mm256_and_pd(_mm256_cmp_pd(e, _mm256_mul_pd(reach, reach), _CMP_LT_OQ),
+                                                 _mm256_cmp_pd(e, zero, _CMP_GT_OQ))));
     compress_store4(hd2 + k, e, mask);
     compress_store4(hit + k, lane_indices4(std::uint32_t(b)), mask);
     k += std::size_t(std::popcount(unsigned(mask)));
-  }
-  for (; b < m; ++b) {
-    double d2 = 0.0;
-    within_reach(xi, yi, zi, ri, margin, cx + b, cy + b, cz + b, cr + b, 1, &d2);
-    hit[k] = std::uint32_t(b);
-    hd2[k] = d2;
-    k += std::size_t(d2 > 0.0);
   }
   return k;
 }

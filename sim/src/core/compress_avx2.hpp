@@ -8,6 +8,7 @@
 #if SIMREEL_HAS_VECTOR_CLONES
 #include <immintrin.h>
 
+#include <cstddef>
 #include <cstdint>
 
 namespace simreel::sim::detail {
@@ -48,6 +49,12 @@ __attribute__((target("avx2"), always_inline)) inline void compress_store4(doubl
 __attribute__((target("avx2"), always_inline)) inline void compress_store4(std::uint32_t* out, __m128i v, int mask) {
   const __m128i perm = _mm_load_si128(reinterpret_cast<const __m128i*>(kCompress4.u[mask]));
   _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_castps_si128(_mm_permutevar_ps(_mm_castsi128_ps(v), perm)));
+}
+
+/// All ones in the first min(left, 4) 64-bit lanes, zero in the rest: a mask for
+/// _mm256_maskload_pd (masked lanes read nothing) and for the compare.
+__attribute__((target("avx2"), always_inline)) inline __m256i live_lanes4(std::size_t left) {
+  return _mm256_cmpgt_epi64(_mm256_set1_epi64x(std::int64_t(left < 4 ? left : 4)), _mm256_setr_epi64x(0, 1, 2, 3));
 }
 
 /// {base, base + 1, base + 2, base + 3}.

@@ -278,8 +278,7 @@ block_pairs_avx2(__m256d xi, __m256d yi, __m256d zi, __m128i vi, __m256d cut2,
                  const double* __restrict sz, std::uint32_t u, std::uint32_t left,
                  std::uint32_t* __restrict pi, std::uint32_t* __restrict pj,
                  double* __restrict pr2, std::size_t p) {
-  const __m256i lane = _mm256_cmpgt_epi64(_mm256_set1_epi64x(std::int64_t(std::min(left, 4u))),
-                                          _mm256_setr_epi64x(0, 1, 2, 3));
+  const __m256i lane = live_lanes4(left);
   const __m256d dx = _mm256_sub_pd(xi, _mm256_maskload_pd(sx + u, lane));
   const __m256d dy = _mm256_sub_pd(yi, _mm256_maskload_pd(sy + u, lane));
   const __m256d dz = _mm256_sub_pd(zi, _mm256_maskload_pd(sz + u, lane));
