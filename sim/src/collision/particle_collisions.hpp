@@ -242,7 +242,14 @@ class ParticleCollider {
   /// Appends to `out` the contact of i and j, d2 (m²) apart within reach, unless they are apart
   /// and approaching faster than contact_speed (see find_contacts()).
   void try_pair(std::uint32_t i, std::uint32_t j, double d2, double contact_speed, double h,
-                std::vector<Contact>& out);
+                std::vector<Contact>& out) {
+    try_pair(i, j, d2, x[j] - x[i], contact_speed, h, out);
+  }
+  /// The same with d = x[j] - x[i] (m) given: the pair search has the sorted copies of both
+  /// positions at hand (the same doubles), where x[j] of a neighbouring plane's particle is a
+  /// cache miss.
+  void try_pair(std::uint32_t i, std::uint32_t j, double d2, const Vec3& d, double contact_speed,
+                double h, std::vector<Contact>& out);
   /// One pair search's scratch: a cell's candidates (sorted position, x, y, z, radius; 8 spare
   /// entries for gather_in_box()) and their squared distances within reach (0: out of reach);
   /// the same of its awake candidates (index into cand_s).

@@ -411,14 +411,13 @@ bool ParticleCollider::build_grid(bool sorted_copies) {
   return true;
 }
 
-void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2,
+void ParticleCollider::try_pair(std::uint32_t i, std::uint32_t j, double d2, const Vec3& d,
                                 double contact_speed, double h, std::vector<Contact>& out) {
   if (inv_mass[i] == 0.0 && inv_mass[j] == 0.0) {  // both asleep: neither moves
     // Kept aside with its place in the contact order, in case an impact wakes one of them.
     if (record_sleeper_pairs_) sleeper_pairs_.push_back({i, j, std::uint32_t(out.size()), d2});
     return;
   }
-  const Vec3 d = x[j] - x[i];
   const double rr = radius[i] + radius[j];
   const double dist = std::sqrt(d2);
   const double vn = (v[j] - v[i]).dot(d) / dist;  // < 0: approaching
@@ -596,8 +595,13 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
             (lanes >= 8 ? in_reach_avx512 : in_reach_avx2)(
                 px[si], py[si], pz[si], pr[si], margin, ps.cand_x.data() + from, ps.cand_y.data() + from,
                 ps.cand_z.data() + from, ps.cand_r.data() + from, m - from, ps.hit_u.data(), ps.cand_d2.data());
-        for (std::size_t u = 0; u < hits; ++u)
-          try_pair(order_[si], order_[ps.cand_s[from + ps.hit_u[u]]], ps.cand_d2[u], contact_speed, h, out);
+        // d from the sorted copies, bit for bit x[j] - x[i].
+        const double xi = px[si], yi = py[si], zi = pz[si];
+        for (std::size_t u = 0; u < hits; ++u) {
+          const std::size_t q = from + ps.hit_u[u];
+          try_pair(order_[si], order_[ps.cand_s[q]], ps.cand_d2[u],
+                   Vec3(ps.cand_x[q] - xi, ps.cand_y[q] - yi, ps.cand_z[q] - zi), contact_speed, h, out);
+        }
         continue;
       }
 #endif
