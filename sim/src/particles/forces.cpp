@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/vector_clones.hpp"
+#include "particles/row_lanes.hpp"
 #include "simreel/sim/particle_system.hpp"
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/ranges.hpp"
@@ -106,25 +107,6 @@ void noise_coordinates(std::size_t len, const double* __restrict x, const double
   }
 }
 
-/// a += (w drag / m) (amplitude R u - v) for len particles, 0 where w = 0 (outside the region);
-/// R row-major in q.
-SIMREEL_VECTOR_CLONES
-void add_noise_drag(std::size_t len, const double* __restrict w, const double* __restrict ux,
-                    const double* __restrict uy, const double* __restrict uz, const double* q,
-                    double amplitude, double drag, const double* __restrict mass,
-                    const double* __restrict v, double* __restrict a) {
-  for (std::size_t k = 0; k < len; ++k) {
-    const double u0 = amplitude * (q[0] * ux[k] + q[1] * uy[k] + q[2] * uz[k]);
-    const double u1 = amplitude * (q[3] * ux[k] + q[4] * uy[k] + q[5] * uz[k]);
-    const double u2 = amplitude * (q[6] * ux[k] + q[7] * uy[k] + q[8] * uz[k]);
-    const double s = w[k] * drag / mass[k];
-    const bool in = w[k] != 0.0;
-    a[3 * k] += in ? s * (u0 - v[3 * k]) : 0.0;
-    a[3 * k + 1] += in ? s * (u1 - v[3 * k + 1]) : 0.0;
-    a[3 * k + 2] += in ? s * (u2 - v[3 * k + 2]) : 0.0;
-  }
-}
-
 /// Adds curl-noise field f's acceleration (FieldState::acceleration()) to a for the len <=
 /// kNoiseBlock particles whose rows x, v, mass and a point at, the curl of each particle taken in
 /// one vectorised batch (GradientNoise::curl).
@@ -147,7 +129,7 @@ void add_curl_block(const FieldState& f, std::size_t len, const double* x, const
     std::fill(w, w + len, 1.0);
   else
     for (std::size_t k = 0; k < len; ++k) w[k] = f.weight(Vec3(x[3 * k], x[3 * k + 1], x[3 * k + 2]));
-  add_noise_drag(len, w, ux, uy, uz, q, d.amplitude, d.drag, mass, v, a);
+  add_noise_drag_rows(len, w, ux, uy, uz, q, d.amplitude, d.drag, mass, v, a);
 }
 
 }  // namespace

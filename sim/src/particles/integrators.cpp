@@ -11,6 +11,7 @@
 #include <initializer_list>
 
 #include "core/vector_clones.hpp"
+#include "particles/row_lanes.hpp"
 
 namespace simreel::sim::detail {
 
@@ -167,27 +168,6 @@ inline void semi_implicit_particle(const Dynamics& dyn, double h, double m, doub
   }
 }
 
-/// semi_implicit_particle() with a linear drag (c_2 = 0) for len particles, in element-wise
-/// loops the compiler vectorises: the same operations in the same order per particle.
-SIMREEL_VECTOR_CLONES
-void semi_implicit_linear_lanes(std::size_t len, double h, double drag, double g0, double g1,
-                                double g2, const double* __restrict m, double* __restrict x,
-                                double* __restrict v, const double* __restrict a) {
-  for (std::size_t i = 0; i < len; ++i) {
-    const double c = drag / m[i];
-    const double damp = 1.0 / (1.0 + h * c);
-    const double v0 = (v[3 * i] + h * a[3 * i]) * damp;
-    const double v1 = (v[3 * i + 1] + h * a[3 * i + 1]) * damp;
-    const double v2 = (v[3 * i + 2] + h * a[3 * i + 2]) * damp;
-    v[3 * i] = v0;
-    v[3 * i + 1] = v1;
-    v[3 * i + 2] = v2;
-    x[3 * i] += h * v0 - 0.5 * h * h * (g0 - c * v0) * damp * damp;
-    x[3 * i + 1] += h * v1 - 0.5 * h * h * (g1 - c * v1) * damp * damp;
-    x[3 * i + 2] += h * v2 - 0.5 * h * h * (g2 - c * v2) * damp * damp;
-  }
-}
-
 /// Float store rows -> double (m entries each).
 SIMREEL_VECTOR_CLONES
 void widen_lanes(std::size_t m, const float* __restrict px, const float* __restrict pv,
@@ -235,7 +215,7 @@ bool semi_implicit_blocks(ParticleStore& s, std::size_t begin, std::size_t end, 
     for (std::size_t i = 0; i < len; ++i) m[i] = s.mass[b + i];
     dyn.eval_block(t0, len, x, v, m, a, false);
     if (linear)
-      semi_implicit_linear_lanes(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
+      semi_implicit_linear_rows(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
                                  dyn.gravity.z(), m, x, v, a);
     else
       for (std::size_t i = 0; i < len; ++i)
@@ -297,7 +277,7 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
       a[3 * i + 2] += o[2];
     }
     if (linear)
-      semi_implicit_linear_lanes(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
+      semi_implicit_linear_rows(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
                                  dyn.gravity.z(), mass + b, x, v, a);
     else
       for (std::size_t i = 0; i < len; ++i)
@@ -389,7 +369,7 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
 #pragma omp parallel for schedule(static) num_threads(th) if (par)
         for (std::size_t blk = 0; blk < blocks; ++blk) {
           const std::size_t b = blk * B, len = std::min(n, b + B) - b;
-          semi_implicit_linear_lanes(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
+          semi_implicit_linear_rows(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
                                      dyn.gravity.z(), w.m.data() + b, x + 3 * b, v + 3 * b,
                                      w.a1.data() + 3 * b);
         }

@@ -1,0 +1,205 @@
+// Row kernels (row_lanes.hpp). The compiler's vector clones of these loops spend most of their
+// time taking the rows of three apart into x, y and z vectors and putting them back (perf
+// annotate on the AMD EPYC: vperm2f128, vblendpd and vinsertf128 held most of the samples of
+// the semi-implicit lanes). The AVX2 forms instead work on the rows as they lie: four particles
+// are twelve doubles, three registers, and only the per-particle values (c, d, the drag
+// factor, the curl) are spread over them, with single-source permutes.
+#include "particles/row_lanes.hpp"
+
+#include "core/vector_clones.hpp"
+
+#if SIMREEL_HAS_VECTOR_CLONES
+#include <immintrin.h>
+#endif
+
+namespace simreel::sim::detail {
+
+namespace {
+
+SIMREEL_VECTOR_CLONES
+void semi_implicit_linear_clones(std::size_t len, double h, double drag, double g0, double g1,
+                                 double g2, const double* __restrict m, double* __restrict x,
+                                 double* __restrict v, const double* __restrict a) {
+  for (std::size_t i = 0; i < len; ++i) {
+    const double c = drag / m[i];
+    const double damp = 1.0 / (1.0 + h * c);
+    const double v0 = (v[3 * i] + h * a[3 * i]) * damp;
+    const double v1 = (v[3 * i + 1] + h * a[3 * i + 1]) * damp;
+    const double v2 = (v[3 * i + 2] + h * a[3 * i + 2]) * damp;
+    v[3 * i] = v0;
+    v[3 * i + 1] = v1;
+    v[3 * i + 2] = v2;
+    x[3 * i] += h * v0 - 0.5 * h * h * (g0 - c * v0) * damp * damp;
+    x[3 * i + 1] += h * v1 - 0.5 * h * h * (g1 - c * v1) * damp * damp;
+    x[3 * i + 2] += h * v2 - 0.5 * h * h * (g2 - c * v2) * damp * damp;
+  }
+}
+
+SIMREEL_VECTOR_CLONES
+void add_noise_drag_clones(std::size_t len, const double* __restrict w,
+                           const double* __restrict ux, const double* __restrict uy,
+                           const double* __restrict uz, const double* q, double amplitude,
+                           double drag, const double* __restrict mass,
+                           const double* __restrict v, double* __restrict a) {
+  for (std::size_t k = 0; k < len; ++k) {
+    const double u0 = amplitude * (q[0] * ux[k] + q[1] * uy[k] + q[2] * uz[k]);
+    const double u1 = amplitude * (q[3] * ux[k] + q[4] * uy[k] + q[5] * uz[k]);
+    const double u2 = amplitude * (q[6] * ux[k] + q[7] * uy[k] + q[8] * uz[k]);
+    const double s = w[k] * drag / mass[k];
+    const bool in = w[k] != 0.0;
+    a[3 * k] += in ? s * (u0 - v[3 * k]) : 0.0;
+    a[3 * k + 1] += in ? s * (u1 - v[3 * k + 1]) : 0.0;
+    a[3 * k + 2] += in ? s * (u2 - v[3 * k + 2]) : 0.0;
+  }
+}
+
+#if SIMREEL_HAS_VECTOR_CLONES
+
+#define SIMREEL_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+/// Particle values p0..p3 spread over four rows of three: (p0 p0 p0 p1), (p1 p1 p2 p2),
+/// (p2 p3 p3 p3).
+struct Spread3 {
+  __m256d r0, r1, r2;
+};
+SIMREEL_AVX2 Spread3 spread3(__m256d p) {
+  return {_mm256_permute4x64_pd(p, 0x40), _mm256_permute4x64_pd(p, 0xA5),
+          _mm256_permute4x64_pd(p, 0xFE)};
+}
+
+/// Three per-axis vectors (a0..a3), (b0..b3), (c0..c3) as four rows: (a0 b0 c0 a1),
+/// (b1 c1 a2 b2), (c2 a3 b3 c3).
+SIMREEL_AVX2 Spread3 interleave3(__m256d a, __m256d b, __m256d c) {
+  const __m256d r0 = _mm256_blend_pd(_mm256_blend_pd(_mm256_permute4x64_pd(a, 0x40),
+                                                     _mm256_permute4x64_pd(b, 0x00), 0x2),
+                                     _mm256_permute4x64_pd(c, 0x00), 0x4);
+  const __m256d r1 = _mm256_blend_pd(_mm256_blend_pd(_mm256_permute4x64_pd(b, 0x95),
+                                                     _mm256_permute4x64_pd(c, 0x55), 0x2),
+                                     _mm256_permute4x64_pd(a, 0xAA), 0x4);
+  const __m256d r2 = _mm256_blend_pd(_mm256_blend_pd(_mm256_permute4x64_pd(c, 0xEA),
+                                                     _mm256_permute4x64_pd(a, 0xFF), 0x2),
+                                     _mm256_permute4x64_pd(b, 0xFF), 0x4);
+  return {r0, r1, r2};
+}
+
+/// One register of rows (four doubles at x, v, a) through the clone's two statements.
+SIMREEL_AVX2 void semi_implicit_quad(double* x, double* v, const double* a, __m256d h,
+                                     __m256d hh, __m256d g, __m256d c, __m256d d) {
+  const __m256d vn = _mm256_mul_pd(_mm256_add_pd(_mm256_loadu_pd(v), _mm256_mul_pd(h, _mm256_loadu_pd(a))), d);
+  _mm256_storeu_pd(v, vn);
+  // h v' - ((((h² / 2) (g - c v')) d) d), grouped as the clone groups 0.5 * h * h * (...) * d * d
+  const __m256d t = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(hh, _mm256_sub_pd(g, _mm256_mul_pd(c, vn))), d), d);
+  _mm256_storeu_pd(x, _mm256_add_pd(_mm256_loadu_pd(x), _mm256_sub_pd(_mm256_mul_pd(h, vn), t)));
+}
+
+__attribute__((target("avx2"))) void semi_implicit_linear_avx2(
+    std::size_t len, double h, double drag, double g0, double g1, double g2,
+    const double* __restrict m, double* __restrict x, double* __restrict v,
+    const double* __restrict a) {
+  const __m256d hv = _mm256_set1_pd(h), dv = _mm256_set1_pd(drag), one = _mm256_set1_pd(1.0);
+  const __m256d hh = _mm256_set1_pd(0.5 * h * h);
+  const __m256d gA = _mm256_setr_pd(g0, g1, g2, g0), gB = _mm256_setr_pd(g1, g2, g0, g1),
+                gC = _mm256_setr_pd(g2, g0, g1, g2);
+  std::size_t i = 0;
+  for (; i + 4 <= len; i += 4) {
+    const __m256d c = _mm256_div_pd(dv, _mm256_loadu_pd(m + i));
+    const __m256d d = _mm256_div_pd(one, _mm256_add_pd(one, _mm256_mul_pd(hv, c)));
+    const Spread3 cs = spread3(c), ds = spread3(d);
+    double *xi = x + 3 * i, *vi = v + 3 * i;
+    const double* ai = a + 3 * i;
+    semi_implicit_quad(xi, vi, ai, hv, hh, gA, cs.r0, ds.r0);
+    semi_implicit_quad(xi + 4, vi + 4, ai + 4, hv, hh, gB, cs.r1, ds.r1);
+    semi_implicit_quad(xi + 8, vi + 8, ai + 8, hv, hh, gC, cs.r2, ds.r2);
+  }
+  if (i < len) semi_implicit_linear_clones(len - i, h, drag, g0, g1, g2, m + i, x + 3 * i, v + 3 * i, a + 3 * i);
+}
+
+/// Row r of amplitude R u for four particles: amplitude ((q_r0 x + q_r1 y) + q_r2 z), grouped as
+/// the clone groups it (q + r: the row's three entries, broadcast).
+SIMREEL_AVX2 __m256d curl_row(const __m256d* q, int r, __m256d amp, __m256d x, __m256d y,
+                              __m256d z) {
+  return _mm256_mul_pd(amp, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(q[r], x), _mm256_mul_pd(q[r + 1], y)),
+                                          _mm256_mul_pd(q[r + 2], z)));
+}
+
+/// a += (in ? s (u - v) : +0) over one register of rows; `in` all ones or all zeros per lane.
+SIMREEL_AVX2 void noise_drag_quad(double* a, const double* v, __m256d u, __m256d s, __m256d in) {
+  const __m256d t = _mm256_and_pd(in, _mm256_mul_pd(s, _mm256_sub_pd(u, _mm256_loadu_pd(v))));
+  _mm256_storeu_pd(a, _mm256_add_pd(_mm256_loadu_pd(a), t));
+}
+
+__attribute__((target("avx2"))) void add_noise_drag_avx2(
+    std::size_t len, const double* __restrict w, const double* __restrict ux,
+    const double* __restrict uy, const double* __restrict uz, const double* q, double amplitude,
+    double drag, const double* __restrict mass, const double* __restrict v,
+    double* __restrict a) {
+  __m256d qv[9];
+  for (int k = 0; k < 9; ++k) qv[k] = _mm256_set1_pd(q[k]);
+  const __m256d amp = _mm256_set1_pd(amplitude), dv = _mm256_set1_pd(drag);
+  std::size_t k = 0;
+  for (; k + 4 <= len; k += 4) {
+    const __m256d x = _mm256_loadu_pd(ux + k), y = _mm256_loadu_pd(uy + k), z = _mm256_loadu_pd(uz + k);
+    const Spread3 u = interleave3(curl_row(qv, 0, amp, x, y, z), curl_row(qv, 3, amp, x, y, z),
+                                   curl_row(qv, 6, amp, x, y, z));
+    const __m256d wk = _mm256_loadu_pd(w + k);
+    const Spread3 s = spread3(_mm256_div_pd(_mm256_mul_pd(wk, dv), _mm256_loadu_pd(mass + k)));
+    // w != 0 as all-ones lanes: where w = 0 the term is +0.0, the clone's select
+    const Spread3 in = spread3(_mm256_cmp_pd(wk, _mm256_setzero_pd(), _CMP_NEQ_UQ));
+    double* ak = a + 3 * k;
+    const double* vk = v + 3 * k;
+    noise_drag_quad(ak, vk, u.r0, s.r0, in.r0);
+    noise_drag_quad(ak + 4, vk + 4, u.r1, s.r1, in.r1);
+    noise_drag_quad(ak + 8, vk + 8, u.r2, s.r2, in.r2);
+  }
+  if (k < len)
+    add_noise_drag_clones(len - k, w + k, ux + k, uy + k, uz + k, q, amplitude, drag, mass + k,
+                          v + 3 * k, a + 3 * k);
+}
+
+#undef SIMREEL_AVX2
+
+/// 4 where the AVX2 forms run by default (AVX2 without AVX-512), else 1.
+int default_row_lanes() {
+  static const int w = !cpu_has_avx512vl() && row_lanes_avx2() ? 4 : 1;
+  return w;
+}
+
+#endif
+
+}  // namespace
+
+bool row_lanes_avx2() {
+#if SIMREEL_HAS_VECTOR_CLONES
+  static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+  return yes;
+#else
+  return false;
+#endif
+}
+
+void semi_implicit_linear_rows(std::size_t len, double h, double drag, double g0, double g1,
+                               double g2, const double* m, double* x, double* v, const double* a,
+                               int lanes) {
+#if SIMREEL_HAS_VECTOR_CLONES
+  if (lanes == 0) lanes = default_row_lanes();
+  if (lanes == 4 && row_lanes_avx2()) return semi_implicit_linear_avx2(len, h, drag, g0, g1, g2, m, x, v, a);
+#else
+  (void)lanes;
+#endif
+  semi_implicit_linear_clones(len, h, drag, g0, g1, g2, m, x, v, a);
+}
+
+void add_noise_drag_rows(std::size_t len, const double* w, const double* ux, const double* uy,
+                         const double* uz, const double* q, double amplitude, double drag,
+                         const double* mass, const double* v, double* a, int lanes) {
+#if SIMREEL_HAS_VECTOR_CLONES
+  if (lanes == 0) lanes = default_row_lanes();
+  if (lanes == 4 && row_lanes_avx2())
+    return add_noise_drag_avx2(len, w, ux, uy, uz, q, amplitude, drag, mass, v, a);
+#else
+  (void)lanes;
+#endif
+  add_noise_drag_clones(len, w, ux, uy, uz, q, amplitude, drag, mass, v, a);
+}
+
+}  // namespace simreel::sim::detail
