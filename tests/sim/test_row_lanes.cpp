@@ -110,5 +110,39 @@ TEST(SimRowLanes, NoiseDragAvx2EqualsClonesBitForBit) {
     }
 }
 
+TEST(SimRowLanes, RowsAndColumnsAvx2EqualClonesAndRoundTrip) {
+  Rng rng(13);
+  for (std::size_t len : kLengths) {
+    std::vector<float> rows(3 * len);
+    for (std::size_t k = 0; k < 3 * len; ++k) rows[k] = float(rng.uniform(-1e3, 1e3));
+    if (len > 2) rows[4] = -0.0f;  // a signed zero and a subnormal keep their bits
+    if (len > 3) rows[9] = 1e-40f;
+    for (int lanes : {1, 4}) {
+      if (lanes == 4 && !detail::row_lanes_avx2()) continue;
+      std::vector<double> x(len), y(len), z(len);
+      detail::rows_to_columns(rows.data(), len, x.data(), y.data(), z.data(), lanes);
+      const auto exact = [](double got, float want) {
+        const double w = want;
+        return std::memcmp(&got, &w, sizeof(double)) == 0;
+      };
+      for (std::size_t k = 0; k < len; ++k) {
+        ASSERT_TRUE(exact(x[k], rows[3 * k])) << "len " << len << " lanes " << lanes << " row " << k;
+        ASSERT_TRUE(exact(y[k], rows[3 * k + 1])) << "len " << len << " lanes " << lanes << " row " << k;
+        ASSERT_TRUE(exact(z[k], rows[3 * k + 2])) << "len " << len << " lanes " << lanes << " row " << k;
+      }
+      std::vector<float> fx(len), fy(len), fz(len), back(3 * len + 1, 7.0f);
+      for (std::size_t k = 0; k < len; ++k) {
+        fx[k] = float(x[k]);
+        fy[k] = float(y[k]);
+        fz[k] = float(z[k]);
+      }
+      detail::columns_to_rows(fx.data(), fy.data(), fz.data(), len, back.data(), lanes);
+      EXPECT_EQ(std::memcmp(back.data(), rows.data(), 3 * len * sizeof(float)), 0)
+          << "len " << len << " lanes " << lanes;
+      EXPECT_EQ(back[3 * len], 7.0f) << "wrote past the rows";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace simreel::sim

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/vector_clones.hpp"
+#include "particles/row_lanes.hpp"
 
 #if SIMREEL_HAS_VECTOR_CLONES
 #include <immintrin.h>
@@ -225,46 +226,37 @@ void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
   columns_clear_scalar(b, n, c, pend, clear);
 }
 
-/// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
-/// positions or null; mass, radius, age: len), each lane's step min(age, h).
+/// The per-particle scalars of gather_block(): mass, radius and each lane's step min(age, h).
 SIMREEL_VECTOR_CLONES
-void gather_block(const float* __restrict x, const float* __restrict v,
-                  const float* __restrict prev, const float* __restrict mass,
-                  const float* __restrict radius, const float* __restrict age, double h,
-                  std::size_t len, PlaneRestLanes& l) {
+void gather_scalars(const float* __restrict mass, const float* __restrict radius,
+                    const float* __restrict age, double h, std::size_t len, PlaneRestLanes& l) {
   for (std::size_t k = 0; k < len; ++k) {
-    l.bx[k] = x[3 * k];
-    l.by[k] = x[3 * k + 1];
-    l.bz[k] = x[3 * k + 2];
-    l.vx[k] = v[3 * k];
-    l.vy[k] = v[3 * k + 1];
-    l.vz[k] = v[3 * k + 2];
     l.m[k] = mass[k];
     l.r[k] = radius[k];
     const double a = age[k];
     l.dt[k] = h < a ? h : a;  // std::min(a, h)
   }
-  if (prev != nullptr)
-    for (std::size_t k = 0; k < len; ++k) {
-      l.ax[k] = prev[3 * k];
-      l.ay[k] = prev[3 * k + 1];
-      l.az[k] = prev[3 * k + 2];
-    }
+}
+
+/// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
+/// positions or null; mass, radius, age: len), each lane's step min(age, h). The rows go
+/// through rows_to_columns(), whose AVX2 form does not take them apart value by value.
+void gather_block(const float* __restrict x, const float* __restrict v,
+                  const float* __restrict prev, const float* __restrict mass,
+                  const float* __restrict radius, const float* __restrict age, double h,
+                  std::size_t len, PlaneRestLanes& l) {
+  rows_to_columns(x, len, l.bx, l.by, l.bz);
+  rows_to_columns(v, len, l.vx, l.vy, l.vz);
+  gather_scalars(mass, radius, age, h, len, l);
+  if (prev != nullptr) rows_to_columns(prev, len, l.ax, l.ay, l.az);
 }
 
 /// The lanes' outputs back into the block (x, v: len x 3): the results of the lanes that
 /// plane_rest() resolved, the others' values as they were.
-SIMREEL_VECTOR_CLONES
 void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x,
                    float* __restrict v) {
-  for (std::size_t k = 0; k < len; ++k) {
-    x[3 * k] = l.ox[k];
-    x[3 * k + 1] = l.oy[k];
-    x[3 * k + 2] = l.oz[k];
-    v[3 * k] = l.ovx[k];
-    v[3 * k + 1] = l.ovy[k];
-    v[3 * k + 2] = l.ovz[k];
-  }
+  columns_to_rows(l.ox, l.oy, l.oz, len, x);
+  columns_to_rows(l.ovx, l.ovy, l.ovz, len, v);
 }
 
 /// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of

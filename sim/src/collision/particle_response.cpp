@@ -13,6 +13,7 @@
 #include "collision/body_impulses.hpp"
 #include "collision/collide_memo.hpp"
 #include "collision/mesh_prefetch.hpp"
+#include "core/vector_clones.hpp"
 #include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
@@ -311,6 +312,14 @@ bool resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   return dead;
 }
 
+/// True when every lane of l's first len was resolved by plane_rest() (ok) and stored outside
+/// the plane (gap >= 0; false for NaN).
+SIMREEL_VECTOR_CLONES bool all_resolved_outside(const PlaneRestLanes& l, std::size_t len) {
+  unsigned open = 0;
+  for (std::size_t k = 0; k < len; ++k) open |= unsigned(l.ok[k] == 0.0) | unsigned(!(l.gap[k] >= 0.0));
+  return open == 0;
+}
+
 /// Particles [i0, i0 + len) of s against the one plane colliders[0]: the fast path for those
 /// resting on it, resolve() for the others near it. Most of a block on the plane: every lane goes
 /// through in place; a few: a compacted list of them. `dense`: the previous block's case, a guess
@@ -345,6 +354,9 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
     if (!gathered) gather();
     plane_rest(l, len, pp);
     scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
+    // A settled block: every lane resolved and stored outside the plane, so the loop below
+    // would do nothing; one branch-free pass says so instead of a branch per lane.
+    if (all_resolved_outside(l, len)) return;
     for (std::size_t k = 0; k < len; ++k) {
       if (l.ok[k] == 0.0) {
         if (near[k]) resolve(s, i0 + k, l.dt[k], colliders, ctx, f);

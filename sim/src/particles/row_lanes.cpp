@@ -53,7 +53,67 @@ void add_noise_drag_clones(std::size_t len, const double* __restrict w,
   }
 }
 
+SIMREEL_VECTOR_CLONES
+void rows_to_columns_clones(const float* __restrict rows, std::size_t len, double* __restrict x,
+                            double* __restrict y, double* __restrict z) {
+  for (std::size_t k = 0; k < len; ++k) {
+    x[k] = rows[3 * k];
+    y[k] = rows[3 * k + 1];
+    z[k] = rows[3 * k + 2];
+  }
+}
+
+SIMREEL_VECTOR_CLONES
+void columns_to_rows_clones(const float* __restrict x, const float* __restrict y,
+                            const float* __restrict z, std::size_t len, float* __restrict rows) {
+  for (std::size_t k = 0; k < len; ++k) {
+    rows[3 * k] = x[k];
+    rows[3 * k + 1] = y[k];
+    rows[3 * k + 2] = z[k];
+  }
+}
+
 #if SIMREEL_HAS_VECTOR_CLONES
+
+/// Four rows of three floats, (a0 a1 a2 a3) = (x0 y0 z0 x1), (b..) = (y1 z1 x2 y2),
+/// (c..) = (z2 x3 y3 z3), to the columns (x0..x3), (y0..y3), (z0..z3): two blends gather each
+/// column's floats into the lanes a permute then puts in order (each permute its own inverse,
+/// which columns_to_rows_avx2() uses the other way).
+__attribute__((target("avx2"))) void rows_to_columns_avx2(const float* __restrict rows,
+                                                          std::size_t len, double* __restrict x,
+                                                          double* __restrict y,
+                                                          double* __restrict z) {
+  std::size_t k = 0;
+  for (; k + 4 <= len; k += 4) {
+    const __m128 a = _mm_loadu_ps(rows + 3 * k), b = _mm_loadu_ps(rows + 3 * k + 4),
+                 c = _mm_loadu_ps(rows + 3 * k + 8);
+    const __m128 tx = _mm_blend_ps(_mm_blend_ps(a, b, 0x4), c, 0x2);  // a0 c1 b2 a3
+    const __m128 ty = _mm_blend_ps(_mm_blend_ps(a, b, 0x9), c, 0x4);  // b0 a1 c2 b3
+    const __m128 tz = _mm_blend_ps(_mm_blend_ps(a, b, 0x2), c, 0x9);  // c0 b1 a2 c3
+    _mm256_storeu_pd(x + k, _mm256_cvtps_pd(_mm_shuffle_ps(tx, tx, _MM_SHUFFLE(1, 2, 3, 0))));
+    _mm256_storeu_pd(y + k, _mm256_cvtps_pd(_mm_shuffle_ps(ty, ty, _MM_SHUFFLE(2, 3, 0, 1))));
+    _mm256_storeu_pd(z + k, _mm256_cvtps_pd(_mm_shuffle_ps(tz, tz, _MM_SHUFFLE(3, 0, 1, 2))));
+  }
+  if (k < len) rows_to_columns_clones(rows + 3 * k, len - k, x + k, y + k, z + k);
+}
+
+__attribute__((target("avx2"))) void columns_to_rows_avx2(const float* __restrict x,
+                                                          const float* __restrict y,
+                                                          const float* __restrict z,
+                                                          std::size_t len,
+                                                          float* __restrict rows) {
+  std::size_t k = 0;
+  for (; k + 4 <= len; k += 4) {
+    const __m128 X = _mm_loadu_ps(x + k), Y = _mm_loadu_ps(y + k), Z = _mm_loadu_ps(z + k);
+    const __m128 tx = _mm_shuffle_ps(X, X, _MM_SHUFFLE(1, 2, 3, 0));  // x0 x3 x2 x1
+    const __m128 ty = _mm_shuffle_ps(Y, Y, _MM_SHUFFLE(2, 3, 0, 1));  // y1 y0 y3 y2
+    const __m128 tz = _mm_shuffle_ps(Z, Z, _MM_SHUFFLE(3, 0, 1, 2));  // z2 z1 z0 z3
+    _mm_storeu_ps(rows + 3 * k, _mm_blend_ps(_mm_blend_ps(tx, ty, 0x2), tz, 0x4));
+    _mm_storeu_ps(rows + 3 * k + 4, _mm_blend_ps(_mm_blend_ps(ty, tz, 0x2), tx, 0x4));
+    _mm_storeu_ps(rows + 3 * k + 8, _mm_blend_ps(_mm_blend_ps(tz, tx, 0x2), ty, 0x4));
+  }
+  if (k < len) columns_to_rows_clones(x + k, y + k, z + k, len - k, rows + 3 * k);
+}
 
 #define SIMREEL_AVX2 __attribute__((target("avx2"), always_inline)) inline
 
@@ -200,6 +260,28 @@ void add_noise_drag_rows(std::size_t len, const double* w, const double* ux, con
   (void)lanes;
 #endif
   add_noise_drag_clones(len, w, ux, uy, uz, q, amplitude, drag, mass, v, a);
+}
+
+void rows_to_columns(const float* rows, std::size_t len, double* x, double* y, double* z,
+                     int lanes) {
+#if SIMREEL_HAS_VECTOR_CLONES
+  if (lanes == 0) lanes = default_row_lanes();
+  if (lanes == 4 && row_lanes_avx2()) return rows_to_columns_avx2(rows, len, x, y, z);
+#else
+  (void)lanes;
+#endif
+  rows_to_columns_clones(rows, len, x, y, z);
+}
+
+void columns_to_rows(const float* x, const float* y, const float* z, std::size_t len, float* rows,
+                     int lanes) {
+#if SIMREEL_HAS_VECTOR_CLONES
+  if (lanes == 0) lanes = default_row_lanes();
+  if (lanes == 4 && row_lanes_avx2()) return columns_to_rows_avx2(x, y, z, len, rows);
+#else
+  (void)lanes;
+#endif
+  columns_to_rows_clones(x, y, z, len, rows);
 }
 
 }  // namespace simreel::sim::detail

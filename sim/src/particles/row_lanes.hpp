@@ -30,6 +30,15 @@ void add_noise_drag_rows(std::size_t len, const double* w, const double* ux, con
                          const double* uz, const double* q, double amplitude, double drag,
                          const double* mass, const double* v, double* a, int lanes = 0);
 
+/// Rows of three floats (len x 3, as the particle store keeps positions and velocities) to three
+/// columns of doubles x, y, z (len each), exactly. `lanes` as above.
+void rows_to_columns(const float* rows, std::size_t len, double* x, double* y, double* z,
+                     int lanes = 0);
+
+/// Three columns of floats x, y, z (len each) to rows of three (len x 3). `lanes` as above.
+void columns_to_rows(const float* x, const float* y, const float* z, std::size_t len, float* rows,
+                     int lanes = 0);
+
 /// True where the CPU runs the AVX2 forms above (lanes = 4).
 bool row_lanes_avx2();
 
