@@ -41,7 +41,7 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
   int cleared = 0, kept = 0, near_aabb_count = 0;
   for (int round = 0; round < 40; ++round) {
     std::vector<float> x(3 * kN), v(3 * kN), age(kN), r(kN);
-    std::uint8_t pend[kN], clear[kN], clear_scalar[kN];
+    std::uint8_t pend[kN], clear[kN], clear4[kN], clear_scalar[kN];
     for (std::size_t k = 0; k < kN; ++k) {
       const double px = rng.uniform(-2.3, 2.3), py = rng.uniform(-2.3, 2.3);
       const double dz = k % 9 == 0 ? 0.0 : rng.uniform(-0.3, 0.6) * (k % 3 == 0 ? 0.1 : 1.0);
@@ -58,17 +58,20 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
       // Most asked or a few (a block where the memo answered the rest); the others left alone.
       pend[k] = (round % 2 == 0 ? k % 7 != 3 : k % 13 == 2) ? 1 : 0;
       clear[k] = 1;
+      clear4[k] = 1;
       clear_scalar[k] = 1;
     }
     detail::SweptBounds b;
     detail::swept_bounds_plain(x.data(), v.data(), age.data(), r.data(), kN, h, g, b);
     std::uint8_t near[kN] = {};
     detail::near_solid(b, kN, c.aabb_center.data(), c.aabb_half.data(), near);
-    // The form this CPU runs (AVX-512 lanes where it has them) and the scalar one; a block's
-    // length that is not a multiple of the lanes' eight in some rounds.
+    // The widest form this CPU runs (AVX-512 lanes where it has them), the AVX2 one (where it
+    // has AVX2) and the scalar one; a block's length that is not a multiple of the lanes' eight
+    // or four in some rounds.
     const std::size_t len = round % 4 == 1 ? kN - 3 : kN;
     detail::columns_clear_block(b, len, c, pend, clear);
-    detail::columns_clear_block(b, len, c, pend, clear_scalar, false);
+    detail::columns_clear_block(b, len, c, pend, clear4, 4);
+    detail::columns_clear_block(b, len, c, pend, clear_scalar, 1);
     for (std::size_t k = 0; k < kN; ++k) {
       // collide()'s own test for particle k, as start_of_step(), near_aabb and columns_clear()
       // compute it.
@@ -85,6 +88,7 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
                                                  p0.cwiseMax(p1) + Vec3::Constant(grow));
       const bool expect = k >= len || pend[k] == 0 || !in_aabb || columns;
       ASSERT_EQ(clear[k] != 0, expect) << round << " " << k;
+      ASSERT_EQ(clear4[k] != 0, expect) << round << " " << k;
       ASSERT_EQ(clear_scalar[k] != 0, expect) << round << " " << k;
       near_aabb_count += in_aabb;
       if (k < len && pend[k] != 0 && in_aabb) (columns ? cleared : kept) += 1;

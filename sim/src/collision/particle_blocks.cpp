@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 #include "core/vector_clones.hpp"
 #include "particles/row_lanes.hpp"
@@ -206,22 +207,152 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
     for (unsigned r = kept; r != 0; r &= r - 1) clear[k0 + std::size_t(std::countr_zero(r))] = 0;
   }
 }
+
+/// Lanes k of a 4-bit mask as all-ones 64-bit lanes (for masked loads and double gathers).
+__attribute__((target("avx2"), always_inline)) inline __m256i mask_lanes64(unsigned bits) {
+  const __m256i bit = _mm256_setr_epi64x(1, 2, 4, 8);
+  return _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(std::int64_t(bits)), bit), bit);
+}
+
+/// The same as 32-bit lanes (for int gathers).
+__attribute__((target("avx2"), always_inline)) inline __m128i mask_lanes32(unsigned bits) {
+  const __m128i bit = _mm_setr_epi32(1, 2, 4, 8);
+  return _mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(int(bits)), bit), bit);
+}
+
+/// column_cell() in AVX2's four lanes.
+__attribute__((target("avx2"), always_inline)) inline __m128i column_cell4(__m256d v, __m256d origin,
+                                                                          __m256d inv, __m256d last) {
+  const __m256d zero = _mm256_setzero_pd();
+  v = _mm256_mul_pd(_mm256_sub_pd(v, origin), inv);
+  v = _mm256_blendv_pd(v, zero, _mm256_cmp_pd(v, zero, _CMP_LT_OQ));
+  v = _mm256_blendv_pd(v, last, _mm256_cmp_pd(last, v, _CMP_LT_OQ));
+  return _mm256_cvttpd_epi32(v);
+}
+
+/// The compare of four doubles as a 4-bit mask.
+__attribute__((target("avx2"), always_inline)) inline unsigned bits4(__m256d m) {
+  return unsigned(_mm256_movemask_pd(m));
+}
+
+/// columns_clear_avx512() four particles at a time with AVX2, for CPUs without AVX-512: the
+/// same operations in each lane and the same order of the early answers, the lane masks kept as
+/// four bits (movemask) and widened to vectors for the masked loads and gathers. On the AMD
+/// EPYC the scalar loop's branches held a quarter of the rain benchmark's time.
+__attribute__((target("avx2")))
+void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
+                        const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
+  const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
+  const double* center = c.aabb_center.data();
+  const double* half = c.aabb_half.data();
+  const __m256d sign = _mm256_castsi256_pd(_mm256_set1_epi64x(std::int64_t(0x8000000000000000ull)));
+  const __m128i dim_x = _mm_set1_epi32(int(t.dim_x)), one = _mm_set1_epi32(1);
+  const __m128i byte = _mm_set1_epi32(0xff);
+  for (std::size_t k0 = 0; k0 < n; k0 += 4) {
+    const std::size_t lanes = std::min<std::size_t>(4, n - k0);
+    unsigned asked = 0;
+    for (std::size_t j = 0; j < lanes; ++j) asked |= unsigned(pend[k0 + j] != 0) << j;
+    if (asked == 0) continue;
+    const __m256i m = mask_lanes64(asked);
+    const __m256d g = _mm256_maskload_pd(b.grow + k0, m);
+    __m256d lo[3], hi[3];
+    unsigned in_aabb = asked;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = _mm256_maskload_pd(b.lo[a] + k0, m);
+      hi[a] = _mm256_maskload_pd(b.hi[a] + k0, m);
+      const __m256d e = _mm256_add_pd(_mm256_set1_pd(half[a]), g);
+      const __m256d neg_e = _mm256_xor_pd(e, sign);
+      const __m256d ca = _mm256_set1_pd(center[a]);
+      in_aabb &= bits4(_mm256_cmp_pd(_mm256_sub_pd(lo[a], ca), e, _CMP_LE_OQ)) &
+                 bits4(_mm256_cmp_pd(_mm256_sub_pd(hi[a], ca), neg_e, _CMP_GE_OQ));
+    }
+    if (in_aabb == 0) continue;
+    unsigned kept = in_aabb;  // lanes whose columns do not clear them (so far: all)
+    if (!t.empty) {
+      unsigned outside = 0, ordered = 0xf;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = _mm256_sub_pd(lo[a], g);
+        hi[a] = _mm256_add_pd(hi[a], g);
+        outside |= bits4(_mm256_cmp_pd(lo[a], _mm256_set1_pd(t.hi[a]), _CMP_GT_OQ)) |
+                   bits4(_mm256_cmp_pd(hi[a], _mm256_set1_pd(t.lo[a]), _CMP_LT_OQ));
+        ordered &= bits4(_mm256_cmp_pd(lo[a], hi[a], _CMP_LE_OQ));
+      }
+      unsigned ask = in_aabb & ~outside & ordered;
+      __m128i c0[2], c1[2];
+      for (int a = 0; a < 2; ++a) {
+        const __m256d origin = _mm256_set1_pd(t.lo[a]), inv = _mm256_set1_pd(t.inv_column);
+        const __m256d last = _mm256_set1_pd(t.last[a]);
+        c0[a] = column_cell4(lo[a], origin, inv, last);
+        c1[a] = column_cell4(hi[a], origin, inv, last);
+        ask &= ~unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_sub_epi32(c1[a], c0[a]), one))));
+      }
+      unsigned clear_lanes = outside;
+      if (ask != 0) {
+        // Four lanes' loads one by one: AVX2's gathers cost more than the loads on the AMD
+        // EPYC. Lanes not asked read column 0 (their index zeroed) and are not kept.
+        const __m128i ask32 = mask_lanes32(ask);
+        const __m128i row0 = _mm_mullo_epi32(c0[1], dim_x), row1 = _mm_mullo_epi32(c1[1], dim_x);
+        const auto words = [&](__m128i idx) {
+          alignas(16) std::int32_t at[4];
+          _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm_and_si128(idx, ask32));
+          std::int32_t w[4];
+          for (int j = 0; j < 4; ++j) std::memcpy(&w[j], t.column + 2 * std::ptrdiff_t(at[j]), 4);
+          return _mm_setr_epi32(w[0], w[1], w[2], w[3]);
+        };
+        const __m128i w00 = words(_mm_add_epi32(row0, c0[0]));
+        const __m128i w10 = words(_mm_add_epi32(row0, c1[0]));
+        const __m128i w01 = words(_mm_add_epi32(row1, c0[0]));
+        const __m128i w11 = words(_mm_add_epi32(row1, c1[0]));
+        // Each word holds a column's two bytes (low, high level) and the next column's two.
+#define SIMREEL_LOW(w) _mm_and_si128(w, byte)
+#define SIMREEL_HIGH(w) _mm_and_si128(_mm_srli_epi32(w, 8), byte)
+        const __m128i qlo = _mm_min_epu32(_mm_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
+                                          _mm_min_epu32(SIMREEL_LOW(w01), SIMREEL_LOW(w11)));
+        const __m128i qhi = _mm_max_epu32(_mm_max_epu32(SIMREEL_HIGH(w00), SIMREEL_HIGH(w10)),
+                                          _mm_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
+#undef SIMREEL_LOW
+#undef SIMREEL_HIGH
+        alignas(16) std::int32_t ql[4], qh[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(ql), qlo);
+        _mm_store_si128(reinterpret_cast<__m128i*>(qh), qhi);
+        const __m256d level_hi = _mm256_setr_pd(t.level[qh[0]], t.level[qh[1]], t.level[qh[2]], t.level[qh[3]]);
+        const __m256d level_lo = _mm256_setr_pd(t.level[ql[0]], t.level[ql[1]], t.level[ql[2]], t.level[ql[3]]);
+        clear_lanes |= ask & (bits4(_mm256_cmp_pd(lo[2], level_hi, _CMP_GT_OQ)) |
+                              bits4(_mm256_cmp_pd(hi[2], level_lo, _CMP_LT_OQ)));
+      }
+      kept &= ~clear_lanes;
+    }
+    for (unsigned r = kept; r != 0; r &= r - 1) clear[k0 + std::size_t(std::countr_zero(r))] = 0;
+  }
+}
 #endif
 }  // namespace
 
 void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
-                         bool wide) {
+                         int lanes) {
 #if SIMREEL_HAS_VECTOR_CLONES
   static const bool avx512 = cpu_has_avx512vl();
+  static const bool avx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
   const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
   // The lanes' column index is a 32-bit integer.
-  if (wide && avx512 && (t.last[0] + 1.0) * (t.last[1] + 1.0) < 0x1p30) {
+  const bool fits = (t.last[0] + 1.0) * (t.last[1] + 1.0) < 0x1p30;
+  if (lanes >= 8 && avx512 && fits) {
     columns_clear_avx512(b, n, c, pend, clear);
     return;
   }
+  if (lanes >= 4 && avx2 && fits) {
+    // A block the collide memo mostly answered (a settled scene) asks for a few particles,
+    // each then alone in its four lanes: one at a time is faster there.
+    std::size_t asked = 0;
+    for (std::size_t k = 0; k < n; ++k) asked += pend[k] != 0;
+    if (4 * asked >= n) {
+      columns_clear_avx2(b, n, c, pend, clear);
+      return;
+    }
+  }
 #else
-  (void)wide;
+  (void)lanes;
 #endif
   columns_clear_scalar(b, n, c, pend, clear);
 }

@@ -65,12 +65,12 @@ void near_block_plain(const float* __restrict x, const float* __restrict v,
 
 /// clear[k] = 0 for each k with pend[k] set whose bounds overlap column-tested mesh c's AABB (as
 /// near_solid()) and are not cleared by its columns (c.mesh->grid.clear_of() of the bounds grown
-/// by b.grow[k]); the others' entries untouched. collide()'s columns_clear() for a block. `wide`:
-/// in AVX-512 lanes where the CPU runs them (the same answers; false: one particle at a time,
-/// for the tests that compare the two).
+/// by b.grow[k]); the others' entries untouched. collide()'s columns_clear() for a block.
+/// `lanes`: the most particles at once, as the CPU runs them: 8 (AVX-512VL), 4 (AVX2) or 1 (the
+/// same answers at each; the tests compare them).
 void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
-                         bool wide = true);
+                         int lanes = 8);
 
 /// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
 /// positions or null; mass, radius, age: len), each lane's step min(age, h).
