@@ -92,25 +92,39 @@ bool floor_cells(const double* __restrict x, std::size_t len, double inv,
                  std::int32_t* __restrict c, std::int32_t* __restrict lo,
                  std::int32_t* __restrict hi) {
   constexpr double kClamp = double(2 * kCellBias);  // (so the conversion is defined)
-  std::int32_t l0 = lo[0], l1 = lo[1], l2 = lo[2], h0 = hi[0], h1 = hi[1], h2 = hi[2];
-  unsigned ok = 1;
-  for (std::size_t i = 0; i < len; ++i) {
-    std::int32_t ci[3];
-    for (int d = 0; d < 3; ++d) {
-      const double f = std::floor(x[3 * i + std::size_t(d)] * inv);
-      ok &= unsigned(std::abs(f) < double(kCellBias));  // (false for NaN)
-      const double g = f < -kClamp ? -kClamp : f > kClamp ? kClamp : f == f ? f : 0.0;
-      ci[d] = std::int32_t(g);
-      c[3 * i + std::size_t(d)] = ci[d];
-    }
-    l0 = std::min(l0, ci[0]);
-    l1 = std::min(l1, ci[1]);
-    l2 = std::min(l2, ci[2]);
-    h0 = std::max(h0, ci[0]);
-    h1 = std::max(h1, ci[1]);
-    h2 = std::max(h2, ci[2]);
+  // One flat loop over the 3 len coordinates (no taking rows apart), the bounds kept per place
+  // in a period of twelve (four rows: axes x y z x, y z x y, z x y z), folded by axis at the end.
+  constexpr std::size_t kPeriod = 12;
+  std::int32_t mn[kPeriod], mx[kPeriod];
+  for (std::size_t j = 0; j < kPeriod; ++j) {
+    mn[j] = lo[j % 3];
+    mx[j] = hi[j % 3];
   }
-  lo[0] = l0, lo[1] = l1, lo[2] = l2, hi[0] = h0, hi[1] = h1, hi[2] = h2;
+  unsigned ok = 1;
+  const auto cell = [&](std::size_t k) {
+    const double f = std::floor(x[k] * inv);
+    ok &= unsigned(std::abs(f) < double(kCellBias));  // (false for NaN)
+    const double g = f < -kClamp ? -kClamp : f > kClamp ? kClamp : f == f ? f : 0.0;
+    return std::int32_t(g);
+  };
+  const std::size_t m = 3 * len, whole = m - m % kPeriod;
+  for (std::size_t k0 = 0; k0 < whole; k0 += kPeriod)
+    for (std::size_t j = 0; j < kPeriod; ++j) {
+      const std::int32_t ck = cell(k0 + j);
+      c[k0 + j] = ck;
+      mn[j] = std::min(mn[j], ck);
+      mx[j] = std::max(mx[j], ck);
+    }
+  for (std::size_t k = whole; k < m; ++k) {
+    const std::int32_t ck = cell(k);
+    c[k] = ck;
+    mn[k - whole] = std::min(mn[k - whole], ck);
+    mx[k - whole] = std::max(mx[k - whole], ck);
+  }
+  for (std::size_t j = 0; j < kPeriod; ++j) {
+    lo[j % 3] = std::min(lo[j % 3], mn[j]);
+    hi[j % 3] = std::max(hi[j % 3], mx[j]);
+  }
   return ok != 0;
 }
 
