@@ -390,6 +390,13 @@ void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x
   columns_to_rows(l.ovx, l.ovy, l.ovz, len, v);
 }
 
+SIMREEL_VECTOR_CLONES
+bool all_resolved_outside(const PlaneRestLanes& l, std::size_t len) {
+  unsigned open = 0;
+  for (std::size_t k = 0; k < len; ++k) open |= unsigned(l.ok[k] == 0.0) | unsigned(!(l.gap[k] >= 0.0));
+  return open == 0;
+}
+
 /// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of
 /// near_planes(), on the same values).
 SIMREEL_VECTOR_CLONES

@@ -13,7 +13,6 @@
 #include "collision/body_impulses.hpp"
 #include "collision/collide_memo.hpp"
 #include "collision/mesh_prefetch.hpp"
-#include "core/vector_clones.hpp"
 #include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
@@ -310,14 +309,6 @@ bool resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
   for (const Collider& c : colliders)
     if (c.shape == Collider::Shape::plane) keep_stored_out(c, pf, r);
   return dead;
-}
-
-/// True when every lane of l's first len was resolved by plane_rest() (ok) and stored outside
-/// the plane (gap >= 0; false for NaN).
-SIMREEL_VECTOR_CLONES bool all_resolved_outside(const PlaneRestLanes& l, std::size_t len) {
-  unsigned open = 0;
-  for (std::size_t k = 0; k < len; ++k) open |= unsigned(l.ok[k] == 0.0) | unsigned(!(l.gap[k] >= 0.0));
-  return open == 0;
 }
 
 /// Particles [i0, i0 + len) of s against the one plane colliders[0]: the fast path for those
