@@ -1,6 +1,8 @@
 // The row kernels' AVX2 forms (particles/row_lanes.hpp) give the compiler's clones' results bit
 // for bit, over lengths that leave every tail, with masses, weights and signs that reach every
-// select; and the semi-implicit step is exact for a constant acceleration (Coutinho §2.2).
+// select; and the semi-implicit step is exact for a constant acceleration (Coutinho §2.2). (On a
+// CPU without AVX2, lanes = 4 runs the clones: the comparisons then hold trivially, the checks
+// against the formulas do not.)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,7 +28,6 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
 const std::size_t kLengths[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 64, 255, 256};
 
 TEST(SimRowLanes, SemiImplicitLinearAvx2EqualsClonesBitForBit) {
-  if (!detail::row_lanes_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
   Rng rng(11);
   for (std::size_t len : kLengths) {
     for (double drag : {0.0, 0.02, 3.5}) {
@@ -75,7 +76,6 @@ TEST(SimRowLanes, SemiImplicitLinearIsExactForConstantAccelerationAtEachWidth) {
 }
 
 TEST(SimRowLanes, NoiseDragAvx2EqualsClonesBitForBit) {
-  if (!detail::row_lanes_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
   Rng rng(12);
   // A rotation about an oblique axis, row-major.
   const double c = std::cos(0.7), s = std::sin(0.7);
