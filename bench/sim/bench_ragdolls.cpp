@@ -40,7 +40,7 @@
 // per frame of S substeps each, so its solver runs at the same 1/(60 N) s as Bullet's steps.
 // Usage: bench_ragdolls [--reps N] [--steps N] [--simreel-substeps S] [--bullet-steps N] [--frames N] [--no-sleep]
 //                       [--simreel-only] [--write-scene FILE]  (writes the 20-ragdoll scene JSON and exits)
-// Figures go in bench/README.md and issue notes, never thresholds in tests.
+// Figures go in docs/benchmarks.md and issue notes, never thresholds in tests.
 #include <time.h>
 
 #include <algorithm>
