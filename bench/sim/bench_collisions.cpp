@@ -17,6 +17,11 @@
 //   internal_world_steady/N/T
 //                         steps 3-32: past the first touch of the arrays and most of the random
 //                         cloud's relaxation, the per-step cost a long simulation sees
+//   internal_motion/N     not a timing: how far the same cloud's particles move over steps 1-32,
+//                         and how often a candidate-pair list with a skin (rebuilt once any
+//                         particle has moved half the skin since it was built) would be
+//                         rebuilt: counters rebuilds_<skin>mm over steps 1-10 and 3-32, and the
+//                         median and largest step displacement at steps 10 and 32 (mm)
 //   internal_grid/N, internal_solve/N
 //                         the grid pair search (broad) and the sequential-impulse solve (narrow
 //                         and response) of the same particles
@@ -28,6 +33,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -237,6 +243,65 @@ void internal_hash(benchmark::State& state) {
   state.counters["hash48"] = double(h & ((std::uint64_t{1} << 48) - 1));
 }
 
+/// internal_motion(state): the cloud of internal_world/N/1 advanced 32 steps, each particle's
+/// displacement per step and since a (simulated) skin list was last built, for skins of 2, 5, 10
+/// and 20 mm (0.1 to 1 particle diameters). A list built at step b serves the steps after it
+/// while every particle has moved less than half the skin since b (Verlet 1967; the usual
+/// criterion, e.g. LAMMPS's neigh_modify check), so `rebuilds` counts the steps that need a new
+/// one. Counts and quantiles only, never thresholds (figures go in docs/benchmarks.md).
+void internal_motion(benchmark::State& state) {
+  const auto n = std::size_t(state.range(0));
+  const double skins_mm[] = {2, 5, 10, 20};
+  for (auto _ : state) {
+    World world(WorldDef{1.0 / 240, 1, 0.05, 1});
+    const ParticleSystemHandle ps = add_cloud(world, n);
+    const auto positions = [&] {
+      const ParticleView v = world.particles(ps);
+      return std::vector<float>(v.position, v.position + 3 * v.count);
+    };
+    const auto distance = [](const std::vector<float>& a, const std::vector<float>& b,
+                             std::size_t i) {
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double d = double(a[3 * i + std::size_t(k)]) - double(b[3 * i + std::size_t(k)]);
+        d2 += d * d;
+      }
+      return std::sqrt(d2);
+    };
+    std::vector<float> last = positions();
+    std::vector<std::vector<float>> built(std::size(skins_mm), last);
+    int early[std::size(skins_mm)] = {}, later[std::size(skins_mm)] = {};
+    std::vector<double> step_mm(n);
+    for (int s = 1; s <= 32; ++s) {
+      world.advance(1.0 / 240);
+      const std::vector<float> now = positions();
+      for (std::size_t i = 0; i < n; ++i) step_mm[i] = 1e3 * distance(now, last, i);
+      for (std::size_t k = 0; k < std::size(skins_mm); ++k) {
+        double moved = 0;
+        for (std::size_t i = 0; i < n; ++i) moved = std::max(moved, distance(now, built[k], i));
+        if (1e3 * moved >= 0.5 * skins_mm[k]) {  // this step needs a fresh list
+          built[k] = now;
+          early[k] += s <= 10;
+          later[k] += s >= 3;
+        }
+      }
+      if (s == 10 || s == 32) {
+        std::vector<double> sorted = step_mm;
+        std::sort(sorted.begin(), sorted.end());
+        const std::string at = "step" + std::to_string(s);
+        state.counters[at + "_median_mm"] = sorted[n / 2];
+        state.counters[at + "_max_mm"] = sorted.back();
+      }
+      last = now;
+    }
+    for (std::size_t k = 0; k < std::size(skins_mm); ++k) {
+      const std::string skin = std::to_string(int(skins_mm[k])) + "mm";
+      state.counters["rebuilds_" + skin + "_steps1-10"] = early[k];
+      state.counters["rebuilds_" + skin + "_steps3-32"] = later[k];
+    }
+  }
+}
+
 void internal_phase(benchmark::State& state, bool solve) {
   const auto n = std::size_t(state.range(0));
   detail::ParticleCollider pc = cloud(n);
@@ -325,6 +390,7 @@ BENCHMARK_CAPTURE(mesh_grid_phases, mesh_grid_broad_narrow, true)->Arg(100'000)-
 BENCHMARK(internal_world)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(internal_world_after_first)->Args({100'000, 1})->Args({100'000, 2})->Iterations(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(internal_world_steady)->Args({100'000, 1})->Args({100'000, 2})->Iterations(30)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(internal_motion)->Arg(100'000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(internal_hash)->Args({30'000, 1})->Args({30'000, 2})->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_grid, false)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(internal_phase, internal_solve, true)->Arg(100'000)->Unit(benchmark::kMillisecond);
