@@ -100,5 +100,80 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
   EXPECT_LT(near_aabb_count, 40 * int(kN) - 500);  // and some particles are beside the AABB
 }
 
+
+TEST(SimParticleBlocks, NearPlanesDecidesAsTheParticleTest) {
+  // near_planes() reads one coordinate for a plane whose normal is ±e_a (a ground, a wall) and
+  // all three otherwise; either way it must answer collide()'s own rejection test,
+  // n · (p - q) - r < 0 in double with Eigen, particle for particle: blocks around axis-aligned
+  // planes of either sign on each axis (one through an offset point), a tilted one, and two
+  // planes at once; particles exactly at the radius, at ±0, far away, and in some blocks an
+  // infinite or NaN coordinate off the plane's axis (the general sum is then NaN: not near).
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  Rng rng(17, 3);
+  const auto plane = [](Vec3 q, Vec3 nrm) {
+    detail::Collider c;
+    c.shape = detail::Collider::Shape::plane;
+    c.point = q;
+    c.normal = nrm;
+    return c;
+  };
+  std::vector<detail::Collider> planes;
+  for (int a = 0; a < 3; ++a)
+    for (double s : {1.0, -1.0}) {
+      Vec3 nrm = Vec3::Zero();
+      nrm[a] = s;
+      planes.push_back(plane(Vec3(0.25, -0.5, 0.125), nrm));
+    }
+  planes.push_back(plane(Vec3::Zero(), Vec3(-0.0, 0.0, 1.0)));  // a ground with a signed zero
+  planes.push_back(plane(Vec3(0.1, 0.2, 0.3), Vec3(0.36, 0.48, 0.8)));  // tilted (unit)
+  constexpr std::size_t kN = 300;
+  int near_count = 0, total = 0;
+  for (int round = 0; round < 48; ++round) {
+    const std::size_t first = std::size_t(round) % planes.size();
+    const std::size_t count = round % 5 == 4 ? 2 : 1;  // two planes: planes[first], planes[first + 1]
+    std::vector<detail::Collider> use(planes.begin() + std::ptrdiff_t(first),
+                                      planes.begin() + std::ptrdiff_t(std::min(first + count, planes.size())));
+    const bool spoil = round % 3 == 2;  // a block with infinite and NaN coordinates
+    std::vector<float> x(3 * kN), r(kN);
+    for (std::size_t k = 0; k < kN; ++k) {
+      for (int a = 0; a < 3; ++a) x[3 * k + std::size_t(a)] = float(rng.uniform(-0.2, 0.6));
+      r[k] = float(rng.uniform(0.0, 0.05));
+      if (k % 11 == 0) r[k] = 0.0f;
+      const detail::Collider& c = use.front();
+      int axis = -1;
+      for (int a = 0; a < 3; ++a)
+        if (std::abs(c.normal[a]) == 1.0) axis = a;
+      if (axis >= 0 && k % 7 == 1) {
+        // Exactly at the radius or on the plane (the boundary of "<"), or at ±0 on the axis.
+        const float q = float(c.point[axis]);
+        x[3 * k + std::size_t(axis)] = k % 3 == 0 ? q + float(c.normal[axis]) * r[k]
+                                      : k % 3 == 1 ? q : (k % 2 == 0 ? 0.0f : -0.0f);
+      }
+      if (spoil && k % 13 == 3) {
+        const std::size_t off = (std::size_t(axis >= 0 ? axis : 0) + 1 + k % 2) % 3;
+        x[3 * k + off] = k % 4 == 3 ? nan : (k % 2 == 0 ? inf : -inf);
+      }
+      if (spoil && k % 29 == 5 && axis >= 0) x[3 * k + std::size_t(axis)] = k % 2 == 0 ? -inf : nan;
+    }
+    const std::size_t len = round % 4 == 1 ? kN - 5 : kN;
+    std::vector<std::uint8_t> near(kN, 7);
+    detail::near_planes(x.data(), r.data(), len, use.data(), use.size(), near.data());
+    for (std::size_t k = 0; k < len; ++k) {
+      const Vec3 p1(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
+      bool expect = false;
+      for (const detail::Collider& c : use) expect = expect || c.normal.dot(p1 - c.point) - double(r[k]) < 0.0;
+      ASSERT_EQ(near[k] != 0, expect) << "round " << round << ", particle " << k << " at ("
+                                      << x[3 * k] << ", " << x[3 * k + 1] << ", " << x[3 * k + 2]
+                                      << "), r " << r[k];
+      near_count += expect ? 1 : 0;
+      ++total;
+    }
+  }
+  // Both answers are common (the check above is not one-sided).
+  EXPECT_GT(near_count, total / 10);
+  EXPECT_LT(near_count, total - total / 10);
+}
+
 }  // namespace
 }  // namespace simreel::sim

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "core/vector_clones.hpp"
 #include "particles/row_lanes.hpp"
@@ -18,11 +19,55 @@ namespace simreel::sim::detail {
 /// near[k] = 1 when particle k (x: n x 3 floats, r: n) ends the step closer than its radius to
 /// one of the planes: collide()'s rejection test, the same double arithmetic, in a loop the
 /// compiler vectorises.
+namespace {
+/// True when none of x[0, m) is infinite or NaN (one pass a compiler vectorises).
+SIMREEL_VECTOR_CLONES
+bool all_finite(const float* __restrict x, std::size_t m) {
+  unsigned bad = 0;
+  for (std::size_t k = 0; k < m; ++k)
+    bad |= unsigned(!(std::fabs(x[k]) <= std::numeric_limits<float>::max()));
+  return bad == 0;
+}
+
+/// near[k] |= 1 when s (x[3k + a] - q) - r[k] < 0: a plane whose normal is s e_a (s = ±1), for
+/// finite positions. There n · e = s e_a exactly (the other two products are ±0, and adding ±0
+/// to a number changes nothing, fused or not), so this is the general test's decision, with
+/// one coordinate read instead of three taken apart.
+template <int kAxis>
+SIMREEL_VECTOR_CLONES void near_axis_plane(const float* __restrict x, const float* __restrict r,
+                                           std::size_t n, double s, double q,
+                                           std::uint8_t* __restrict near) {
+  for (std::size_t k = 0; k < n; ++k)
+    near[k] |= std::uint8_t(s * (double(x[3 * k + kAxis]) - q) - double(r[k]) < 0.0);
+}
+
+/// The axis of a normal that is ±e_a exactly (the other two components ±0), else -1.
+int normal_axis(const Collider& c) {
+  const double* nv = c.normal.data();
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(nv[a]) == 1.0 && nv[(a + 1) % 3] == 0.0 && nv[(a + 2) % 3] == 0.0 &&
+        c.point.allFinite())  // (an infinite point coordinate makes the general sum NaN)
+      return a;
+  return -1;
+}
+}  // namespace
+
 SIMREEL_VECTOR_CLONES
 void near_planes(const float* __restrict x, const float* __restrict r, std::size_t n,
                  const Collider* planes, std::size_t count, std::uint8_t* __restrict near) {
   for (std::size_t k = 0; k < n; ++k) near[k] = 0;
+  // An axis-aligned plane (a ground, a wall) reads one coordinate, when the block is finite: an
+  // infinite or NaN coordinate off the axis makes the general sum NaN (0 inf), so "not near".
+  const int finite = count > 0 ? int(all_finite(x, 3 * n)) : 0;
   for (std::size_t c = 0; c < count; ++c) {
+    const int axis = finite != 0 ? normal_axis(planes[c]) : -1;
+    if (axis >= 0) {
+      const double s = planes[c].normal[axis], q = planes[c].point[axis];
+      if (axis == 0) near_axis_plane<0>(x, r, n, s, q, near);
+      if (axis == 1) near_axis_plane<1>(x, r, n, s, q, near);
+      if (axis == 2) near_axis_plane<2>(x, r, n, s, q, near);
+      continue;
+    }
     const double n0 = planes[c].normal[0], n1 = planes[c].normal[1], n2 = planes[c].normal[2];
     const double q0 = planes[c].point[0], q1 = planes[c].point[1], q2 = planes[c].point[2];
     for (std::size_t k = 0; k < n; ++k) {
