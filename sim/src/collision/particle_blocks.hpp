@@ -18,9 +18,12 @@
 
 namespace simreel::sim::detail {
 
-/// near[k] = 1 when particle k (x: n x 3 floats, r: n) ends the step closer than its radius to
-/// one of the planes: collide()'s rejection test, the same double arithmetic, in a loop the
-/// compiler vectorises.
+/// near[k] = 1 when particle k (x: n x 3 floats, m; r: n, m) ends the step closer than its
+/// radius to one of the planes: collide()'s rejection test n · (p - q) - r < 0, the same double
+/// arithmetic, in a loop the compiler vectorises. A plane whose normal is exactly ±e_a reads p_a
+/// alone when the block's positions are finite (the off-axis products are then ±0: the same
+/// decision; SimParticleBlocks.NearPlanesDecidesAsTheParticleTest). The fast rejection before
+/// Coutinho §3.4's swept-sphere test.
 void near_planes(const float* __restrict x, const float* __restrict r, std::size_t n,
                  const Collider* planes, std::size_t count, std::uint8_t* __restrict near);
 
