@@ -16,9 +16,6 @@
 
 namespace simreel::sim::detail {
 
-/// near[k] = 1 when particle k (x: n x 3 floats, r: n) ends the step closer than its radius to
-/// one of the planes: collide()'s rejection test, the same double arithmetic, in a loop the
-/// compiler vectorises.
 namespace {
 /// True when none of x[0, m) is infinite or NaN (one pass a compiler vectorises).
 SIMREEL_VECTOR_CLONES
@@ -52,15 +49,20 @@ int normal_axis(const Collider& c) {
 }
 }  // namespace
 
+/// near[k] = 1 when particle k (x: n x 3 floats, r: n) ends the step closer than its radius to
+/// one of the planes: collide()'s rejection test, the same double arithmetic, in a loop the
+/// compiler vectorises (see particle_blocks.hpp).
 SIMREEL_VECTOR_CLONES
 void near_planes(const float* __restrict x, const float* __restrict r, std::size_t n,
                  const Collider* planes, std::size_t count, std::uint8_t* __restrict near) {
   for (std::size_t k = 0; k < n; ++k) near[k] = 0;
   // An axis-aligned plane (a ground, a wall) reads one coordinate, when the block is finite: an
   // infinite or NaN coordinate off the axis makes the general sum NaN (0 inf), so "not near".
-  const int finite = count > 0 ? int(all_finite(x, 3 * n)) : 0;
+  int finite = -1;  // (checked once, at the first axis-aligned plane)
   for (std::size_t c = 0; c < count; ++c) {
-    const int axis = finite != 0 ? normal_axis(planes[c]) : -1;
+    int axis = normal_axis(planes[c]);
+    if (axis >= 0 && finite < 0) finite = int(all_finite(x, 3 * n));
+    if (finite == 0) axis = -1;
     if (axis >= 0) {
       const double s = planes[c].normal[axis], q = planes[c].point[axis];
       if (axis == 0) near_axis_plane<0>(x, r, n, s, q, near);
