@@ -25,7 +25,8 @@ void semi_implicit_linear_rows(std::size_t len, double h, double drag, double g0
 /// §2.3's viscous drag): a_i += (w_i k_d / m_i) (amplitude R u_i - v_i) for len particles, nothing
 /// where w_i = 0 (outside the region). w: weights; ux, uy, uz: the curl per particle (unit-free,
 /// one array per axis); q: R row-major (3 x 3); mass (kg); v, a: rows of 3 (m/s, m/s²).
-/// `lanes` as above.
+/// `lanes` as above, except that 0 picks the AVX2 form wherever the CPU has AVX2 (with AVX-512
+/// too: measured faster there than the AVX-512 clone).
 void add_noise_drag_rows(std::size_t len, const double* w, const double* ux, const double* uy,
                          const double* uz, const double* q, double amplitude, double drag,
                          const double* mass, const double* v, double* a, int lanes = 0);
