@@ -1,8 +1,9 @@
-// The row kernels' AVX2 forms (particles/row_lanes.hpp) give the compiler's clones' results bit
-// for bit, over lengths that leave every tail, with masses, weights and signs that reach every
-// select; and the semi-implicit step is exact for a constant acceleration (Coutinho §2.2). (On a
-// CPU without AVX2, lanes = 4 runs the clones: the comparisons then hold trivially, the checks
-// against the formulas do not.)
+// The row kernels' AVX2 and AVX-512 forms (particles/row_lanes.hpp) give the compiler's clones'
+// results bit for bit, over lengths that leave every tail, with masses, weights and signs that
+// reach every select; and the semi-implicit step is exact for a constant acceleration (Coutinho
+// §2.2). (On a CPU without AVX2, lanes = 4 and 8 run the clones, and without AVX-512 lanes = 8
+// runs the AVX2 form: the comparisons then hold trivially, the checks against the formulas do
+// not.)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,7 +28,7 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
   return a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
-const std::size_t kLengths[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 64, 255, 256};
+const std::size_t kLengths[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 15, 16, 17, 64, 255, 256};
 
 TEST(SimRowLanes, SemiImplicitLinearAvx2EqualsClonesBitForBit) {
   Rng rng(11);
@@ -39,14 +40,18 @@ TEST(SimRowLanes, SemiImplicitLinearAvx2EqualsClonesBitForBit) {
       std::vector<double> v0 = random_rows(rng, 3 * len, -20.0, 20.0);
       for (std::size_t c = 0; c < 3 * len; c += 7) v0[c] = -0.0;
       const std::vector<double> a = random_rows(rng, 3 * len, -30.0, 30.0);
-      std::vector<double> x1 = x0, v1 = v0, x4 = x0, v4 = v0;
+      std::vector<double> x1 = x0, v1 = v0, x4 = x0, v4 = v0, x8 = x0, v8 = v0;
       const double h = rng.uniform(1e-4, 0.05);
       detail::semi_implicit_linear_rows(len, h, drag, 0.3, -0.7, -9.81, m.data(), x1.data(),
                                         v1.data(), a.data(), 1);
       detail::semi_implicit_linear_rows(len, h, drag, 0.3, -0.7, -9.81, m.data(), x4.data(),
                                         v4.data(), a.data(), 4);
+      detail::semi_implicit_linear_rows(len, h, drag, 0.3, -0.7, -9.81, m.data(), x8.data(),
+                                        v8.data(), a.data(), 8);
       EXPECT_TRUE(same_bits(x1, x4)) << "len " << len << " drag " << drag;
       EXPECT_TRUE(same_bits(v1, v4)) << "len " << len << " drag " << drag;
+      EXPECT_TRUE(same_bits(x1, x8)) << "AVX-512, len " << len << " drag " << drag;
+      EXPECT_TRUE(same_bits(v1, v8)) << "AVX-512, len " << len << " drag " << drag;
       if (len > 0) {
         EXPECT_FALSE(same_bits(x0, x4)) << "nothing moved";
       }
@@ -57,7 +62,7 @@ TEST(SimRowLanes, SemiImplicitLinearAvx2EqualsClonesBitForBit) {
 TEST(SimRowLanes, SemiImplicitLinearIsExactForConstantAccelerationAtEachWidth) {
   // Without drag x' = x + h (v + h g) - (h² / 2) g = x + h v + (h² / 2) g: the parabola.
   const double g[3] = {0.5, -1.0, -9.81};
-  for (int lanes : {1, 4})
+  for (int lanes : {1, 4, 8})
     for (double h : {1e-3, 1.0 / 60, 0.1}) {
       const std::size_t len = 13;
       std::vector<double> m(len, 0.25), x(3 * len), v(3 * len), a(3 * len);
@@ -96,12 +101,15 @@ TEST(SimRowLanes, NoiseDragAvx2EqualsClonesBitForBit) {
       for (std::size_t k = 0; k < 3 * len; k += 4) v[k] = 0.0;  // u - v = 0 where amplitude = 0
       std::vector<double> a0 = random_rows(rng, 3 * len, -10.0, 10.0);
       for (std::size_t k = 0; k < 3 * len; k += 6) a0[k] = -0.0;  // -0 + (+0) = +0 outside
-      std::vector<double> a1 = a0, a4 = a0;
+      std::vector<double> a1 = a0, a4 = a0, a8 = a0;
       detail::add_noise_drag_rows(len, w.data(), ux.data(), uy.data(), uz.data(), q, amplitude,
                                   0.8, mass.data(), v.data(), a1.data(), 1);
       detail::add_noise_drag_rows(len, w.data(), ux.data(), uy.data(), uz.data(), q, amplitude,
                                   0.8, mass.data(), v.data(), a4.data(), 4);
+      detail::add_noise_drag_rows(len, w.data(), ux.data(), uy.data(), uz.data(), q, amplitude,
+                                  0.8, mass.data(), v.data(), a8.data(), 8);
       EXPECT_TRUE(same_bits(a1, a4)) << "len " << len << " amplitude " << amplitude;
+      EXPECT_TRUE(same_bits(a1, a8)) << "AVX-512, len " << len << " amplitude " << amplitude;
       // and the drag itself, per particle: (w k_d / m) (amplitude R u - v), none outside
       for (std::size_t k = 0; k < len; ++k)
         for (int r = 0; r < 3; ++r) {
