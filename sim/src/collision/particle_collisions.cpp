@@ -45,6 +45,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   x.resize(n);
   radius.resize(n);
   key_flat_.resize(n);
+  flat_.resize(n);
   any_asleep_ = false;
   // Members alike in restitution, friction and colliding (always so for one): the pair search
   // and the collider contacts take those values from `surface_` and fill_working() does not
@@ -81,10 +82,16 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1) reduction(|| : slept)
     for (std::ptrdiff_t ii = 0; ii < count; ++ii) {
       const std::size_t i = std::size_t(ii), k = base + i;
-      x[k] = Vec3(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
+      const float* p = &s.position[3 * i];
+      const float* u = &s.velocity[3 * i];
+      x[k] = Vec3(p[0], p[1], p[2]);
       radius[k] = s.radius[i];
-      key_flat_[k] = (std::uint64_t(m.system) << 40) | s.id[i];
-      slept = slept || (m.sleep && s.rest[4 * i + 3] >= kSleepTime);
+      const std::uint64_t key_k = (std::uint64_t(m.system) << 40) | s.id[i];
+      key_flat_[k] = key_k;
+      const bool asleep_k = m.sleep && s.rest[4 * i + 3] >= kSleepTime;
+      slept = slept || asleep_k;
+      flat_[k] = FlatParticle{{p[0], p[1], p[2]}, {u[0], u[1], u[2]}, s.mass[i], s.radius[i],
+                              s.age[i], std::uint8_t(asleep_k ? 1 : 0), key_k};
     }
     any_asleep_ = any_asleep_ || slept;
   }
@@ -206,34 +213,24 @@ struct WorkingColumns {
   // null: likewise (none sleeps)
 };
 
-/// One member's particle columns and surface parameters, likewise hoisted.
+/// One member's surface parameters, likewise hoisted.
 struct MemberColumns {
-  const float *position, *velocity, *mass, *radius, *age, *rest;
   double restitution, friction;
   std::uint8_t collides;
-  bool sleep;
   explicit MemberColumns(const ParticleGroupMember& m)
-      : position(m.store->position.data()),
-        velocity(m.store->velocity.data()),
-        mass(m.store->mass.data()),
-        radius(m.store->radius.data()),
-        age(m.store->age.data()),
-        rest(m.store->rest.data()),
-        restitution(m.restitution),
-        friction(m.friction),
-        collides(m.collide ? 1 : 0),
-        sleep(m.sleep) {}
+      : restitution(m.restitution), friction(m.friction), collides(m.collide ? 1 : 0) {}
 };
 
-/// Working entry q from particle i of member m (its warm-start key `key`), h (s) the step.
+/// Working entry q from the packed particle f of member m, h (s) the step.
 __attribute__((always_inline)) inline void fill_entry(const WorkingColumns& o, const MemberColumns& m,
-                                                      std::size_t q, std::size_t i, std::uint64_t key,
+                                                      std::size_t q,
+                                                      const ParticleCollider::FlatParticle& f,
                                                       double h) {
-  const Vec3 x(m.position[3 * i], m.position[3 * i + 1], m.position[3 * i + 2]);
-  const double inv_mass = 1.0 / double(m.mass[i]), radius = m.radius[i];
-  const std::uint8_t asleep = m.sleep && m.rest[4 * i + 3] >= kSleepTime ? 1 : 0;
+  const Vec3 x(f.x[0], f.x[1], f.x[2]);
+  const double inv_mass = 1.0 / double(f.mass), radius = f.radius;
+  const std::uint8_t asleep = f.asleep;
   o.x[q] = x;
-  o.v[q] = Vec3(m.velocity[3 * i], m.velocity[3 * i + 1], m.velocity[3 * i + 2]);
+  o.v[q] = Vec3(f.v[0], f.v[1], f.v[2]);
   o.inv_mass[q] = asleep != 0 ? 0.0 : inv_mass;
   o.radius[q] = radius;
   if (o.restitution != nullptr) {
@@ -241,8 +238,8 @@ __attribute__((always_inline)) inline void fill_entry(const WorkingColumns& o, c
     o.friction[q] = m.friction;
     o.collides[q] = m.collides;
   }
-  o.key[q] = key;
-  o.half_dt[q] = 0.5 * std::min(double(m.age[i]), h);
+  o.key[q] = f.key;
+  o.half_dt[q] = 0.5 * std::min(double(f.age), h);
   o.asleep[q] = asleep;
   if (o.inv_mass_awake != nullptr) o.inv_mass_awake[q] = inv_mass;
   if (o.sx != nullptr) {  // the pair search's sorted copies (build_grid(false) left them)
@@ -290,9 +287,9 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
                          grid ? sy_.data() : nullptr,
                          grid ? sz_.data() : nullptr};
   const std::uint32_t* perm = perm_.data();
-  const std::uint64_t* key_flat = key_flat_.data();
-  // Each working entry read straight from its particle (one pass, not a flat fill and then a
-  // permutation of every array); x and radius as the flat pass read them, in the new order.
+  const FlatParticle* flat = flat_.data();
+  // Each working entry read straight from its particle's packed line (one pass, not a flat fill
+  // and then a permutation of every array).
   const std::ptrdiff_t np = std::ptrdiff_t(n);
   if (members.size() == 1) {
     const MemberColumns m(members[0]);
@@ -302,25 +299,16 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
       const std::size_t q = std::size_t(qq);
       // The particles come in no order of their own: their lines are asked for some entries
       // ahead, so that the loads overlap instead of each missing in turn (a hint only).
-      if (q + kAhead < n) {
-        const std::size_t j = perm[q + kAhead];
-        __builtin_prefetch(m.position + 3 * j);
-        __builtin_prefetch(m.velocity + 3 * j);
-        __builtin_prefetch(m.mass + j);
-        __builtin_prefetch(m.radius + j);
-        __builtin_prefetch(m.age + j);
-        if (m.sleep) __builtin_prefetch(m.rest + 4 * j);
-        __builtin_prefetch(key_flat + j);
-      }
-      fill_entry(o, m, q, perm[q], key_flat[perm[q]], h);
+      if (q + kAhead < n) __builtin_prefetch(flat + perm[q + kAhead]);
+      fill_entry(o, m, q, flat[perm[q]], h);
     }
     return;
   }
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
   for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
     const std::size_t q = std::size_t(qq);
-    const auto [mi, i] = member_particle(std::uint32_t(q));
-    fill_entry(o, MemberColumns(members[mi]), q, i, key_flat[perm[q]], h);
+    const std::size_t mi = member_particle(std::uint32_t(q)).member;
+    fill_entry(o, MemberColumns(members[mi]), q, flat[perm[q]], h);
   }
 }
 

@@ -135,6 +135,17 @@ class ParticleCollider {
   };
   /// The particle of working index q after run().
   [[nodiscard]] MemberParticle member_particle(std::uint32_t q) const;
+  /// What fill_working() reads of one particle, packed by run()'s first pass (which reads the
+  /// stores in order): one cache line a particle for the gather in cell order, where the stores'
+  /// columns were six (position, velocity, mass, radius, age, key) and the gather was bound by
+  /// the lines in flight. The same floats as the stores', so the same bits.
+  struct alignas(64) FlatParticle {
+    float x[3], v[3];
+    float mass, radius, age;
+    std::uint8_t asleep;  ///< asleep all this step (the member lets it sleep, §3.6.3)
+    std::uint64_t key;    ///< key_flat_'s
+  };
+  static_assert(sizeof(FlatParticle) == 64, "a cache line a particle");
 
   // Flat working arrays, public for the solver test (set x, v, inv_mass, radius, e, mu, then
   // find_contacts() and solve()).
@@ -368,6 +379,7 @@ class ParticleCollider {
   void make_bands(std::size_t pair_count);
   // run(): values in flat (member) order kept across the reordering.
   std::vector<std::uint64_t> key_flat_;
+  std::vector<FlatParticle> flat_;
   std::vector<std::uint32_t> warm_first_;  ///< (flat particle) first cache entry with its key
   std::vector<double> half_dt_;            ///< (sorted) min(age, h) / 2
   std::vector<std::size_t> member_base_;  ///< run(): flat index of each member's first particle
