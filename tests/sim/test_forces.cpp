@@ -477,6 +477,27 @@ TEST(SimForces, BatchedCurlIsBitIdenticalToTheCurlOfSample) {
   }
 }
 
+TEST(SimForces, CurlNoiseFormsGiveTheSameBits) {
+  // GradientNoise::curl()'s AVX-512 form (sixteen points a register, lanes 16, on CPUs that have
+  // it) and the compiler's clones (lanes 1) must give the same bits at every length, the masked
+  // tail of each chunk of 64 included: points over a few cells either side of zero, integer
+  // coordinates and ±0 among them.
+  detail::GradientNoise noise(5);
+  Rng rng(29);
+  for (std::size_t n : {0, 1, 7, 8, 9, 15, 16, 17, 31, 33, 63, 64, 65, 100, 257}) {
+    std::vector<double> px(n), py(n), pz(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      px[k] = rng.uniform(-4, 4);
+      py[k] = k % 5 == 0 ? std::floor(rng.uniform(-4, 4)) : rng.uniform(-4, 4);
+      pz[k] = k % 9 == 0 ? (k % 2 == 0 ? 0.0 : -0.0) : rng.uniform(-4, 4);
+    }
+    std::vector<double> a(3 * n + 1, 7.0), b(3 * n + 1, 7.0);  // (+1: nothing past the end)
+    noise.curl(n, px.data(), py.data(), pz.data(), a.data(), a.data() + n, a.data() + 2 * n, 1);
+    noise.curl(n, px.data(), py.data(), pz.data(), b.data(), b.data() + n, b.data() + 2 * n, 16);
+    ASSERT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << "n = " << n;
+  }
+}
+
 TEST(SimForces, NoiseGradientIsTheDerivativeOfTheNoise) {
   // Single precision: central differences over 2e-3 (truncation ~1e-6, rounding ~5e-5).
   detail::GradientNoise noise(3);

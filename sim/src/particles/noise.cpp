@@ -2,10 +2,15 @@
 // (Bridson et al. 2007).
 #include "particles/noise.hpp"
 
+#include <array>
 #include <cmath>
 
 #include "core/vector_clones.hpp"
 #include "simreel/sim/random.hpp"
+
+#if SIMREEL_HAS_VECTOR_CLONES
+#include <immintrin.h>
+#endif
 
 namespace simreel::sim::detail {
 
@@ -132,19 +137,18 @@ inline double floor_lane(double p) {
   return p == 0.0 ? p : r;
 }
 
-constexpr std::size_t kChunk = 64;  ///< points per pass of the two vectorised loops
+constexpr std::size_t kChunk = 64;  ///< points per pass of the vectorised loops
 
-/// curl() for up to kChunk points; false (and nothing written) when a coordinate is not below
-/// 2^30 in magnitude (NaN included): the 32-bit cells would overflow, the caller takes the
-/// scalar path. Two loops: the lattice in double (four lanes), the noise in float (eight).
+/// The lattice of up to kChunk points (cells times the primes, offsets in float); false when a
+/// coordinate is not below 2^30 in magnitude (NaN included): the 32-bit cells would overflow,
+/// the caller takes the scalar path (what is written then goes unused). In double, four or eight
+/// lanes.
 SIMREEL_VECTOR_CLONES
-bool curl_chunk(std::size_t n, const std::uint32_t* __restrict seed, const double* __restrict px,
-                const double* __restrict py, const double* __restrict pz, double* __restrict ux,
-                double* __restrict uy, double* __restrict uz) {
+bool lattice_chunk(std::size_t n, const double* __restrict px, const double* __restrict py,
+                   const double* __restrict pz, std::uint32_t* __restrict cx,
+                   std::uint32_t* __restrict cy, std::uint32_t* __restrict cz,
+                   float* __restrict fx, float* __restrict fy, float* __restrict fz) {
   constexpr double kLimit = 1073741824.0;  // 2^30
-  alignas(64) std::uint32_t cx[kChunk], cy[kChunk], cz[kChunk];
-  alignas(64) float fx[kChunk], fy[kChunk], fz[kChunk];
-  alignas(64) float ox[kChunk], oy[kChunk], oz[kChunk];
   int bad = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const double x = px[k], y = py[k], z = pz[k];
@@ -160,9 +164,19 @@ bool curl_chunk(std::size_t n, const std::uint32_t* __restrict seed, const doubl
     fy[k] = float(ys - fly);
     fz[k] = float(zs - flz);
   }
-  if (bad) return false;
-  const std::uint32_t s0 = seed[0], s1 = seed[1], s2 = seed[2];
-  const std::uint32_t s[3] = {s0, s1, s2};
+  return bad == 0;
+}
+
+/// curl_at() of kChunk-or-fewer lattice points into ux, uy, uz (widened to double), in float
+/// lanes the compiler vectorises (eight).
+SIMREEL_VECTOR_CLONES
+void curl_floats(std::size_t n, const std::uint32_t* __restrict seed,
+                 const std::uint32_t* __restrict cx, const std::uint32_t* __restrict cy,
+                 const std::uint32_t* __restrict cz, const float* __restrict fx,
+                 const float* __restrict fy, const float* __restrict fz, double* __restrict ux,
+                 double* __restrict uy, double* __restrict uz) {
+  alignas(64) float ox[kChunk], oy[kChunk], oz[kChunk];
+  const std::uint32_t s[3] = {seed[0], seed[1], seed[2]};
   for (std::size_t k = 0; k < n; ++k) {
     const Lattice l{cx[k], cy[k], cz[k], fx[k], fy[k], fz[k]};
     curl_at(s, l, ox[k], oy[k], oz[k]);
@@ -172,8 +186,151 @@ bool curl_chunk(std::size_t n, const std::uint32_t* __restrict seed, const doubl
     uy[k] = oy[k];
     uz[k] = oz[k];
   }
-  return true;
 }
+
+#if SIMREEL_HAS_VECTOR_CLONES
+/// Table of a gradient component by row (0..15), as floats: grad_component(2 row, table).
+constexpr std::array<float, 16> component_row(std::uint32_t table) {
+  std::array<float, 16> r{};
+  for (std::uint32_t h = 0; h < 16; ++h) r[h] = float(int((table >> (2 * h)) & 3u) - 1);
+  return r;
+}
+constexpr std::array<float, 16> kRowX = component_row(kGradX), kRowY = component_row(kGradY),
+                                kRowZ = component_row(kGradZ);
+
+#define SIMREEL_AVX512 __attribute__((target("avx512f"), always_inline)) inline
+SIMREEL_AVX512 __m512 mul(__m512 a, __m512 b) { return _mm512_mul_ps(a, b); }
+SIMREEL_AVX512 __m512 add(__m512 a, __m512 b) { return _mm512_add_ps(a, b); }
+SIMREEL_AVX512 __m512 sub(__m512 a, __m512 b) { return _mm512_sub_ps(a, b); }
+
+/// One corner of a cell in sixteen lanes: its gradient (g0, g1, g2) and ramp value v.
+struct Corner16 {
+  __m512 g0, g1, g2, v;
+};
+
+/// The corner with hashed coordinates (hx, hy, hz) and offsets (ox, oy, oz) = f - c: its row the
+/// top 4 bits of ((hx ^ hy ^ hz) kHashMul), the ramp g . (f - c) in potential()'s order.
+SIMREEL_AVX512 Corner16 corner16(__m512i hx, __m512i hy, __m512i hz, __m512 ox, __m512 oy,
+                                 __m512 oz, __m512 tx, __m512 ty, __m512 tz) {
+  // (The masked forms with every lane set: GCC 12's unmasked ones pass an undefined register
+  // through and warn that it may be used uninitialized.)
+  constexpr __mmask16 kAll = 0xffff;
+  const __m512i hash = _mm512_mullo_epi32(_mm512_xor_si512(_mm512_xor_si512(hx, hy), hz),
+                                          _mm512_set1_epi32(int(kHashMul)));
+  const __m512i row = _mm512_mask_srli_epi32(hash, kAll, hash, 28);
+  Corner16 c;
+  c.g0 = _mm512_mask_permutexvar_ps(tx, kAll, row, tx);
+  c.g1 = _mm512_mask_permutexvar_ps(ty, kAll, row, ty);
+  c.g2 = _mm512_mask_permutexvar_ps(tz, kAll, row, tz);
+  c.v = add(add(mul(c.g0, ox), mul(c.g1, oy)), mul(c.g2, oz));
+  return c;
+}
+
+/// potential()'s trilinear blend of one gradient component over the corners a..h.
+SIMREEL_AVX512 __m512 blend16(__m512 x, __m512 y, __m512 z, __m512 ga, __m512 gb, __m512 gc,
+                              __m512 gd, __m512 ge, __m512 gf, __m512 gg, __m512 gh) {
+  const __m512 gx00 = add(ga, mul(x, sub(gb, ga))), gx10 = add(gc, mul(x, sub(gd, gc)));
+  const __m512 gx01 = add(ge, mul(x, sub(gf, ge))), gx11 = add(gg, mul(x, sub(gh, gg)));
+  const __m512 gy0 = add(gx00, mul(y, sub(gx10, gx00))), gy1 = add(gx01, mul(y, sub(gx11, gx01)));
+  return add(gy0, mul(z, sub(gy1, gy0)));
+}
+
+/// The lower (half 0) or upper (half 1) eight floats of v. (The masked extract: GCC 12's plain
+/// one, and the cast that uses it, pass an undefined register through and warn that it may be
+/// used uninitialized.)
+template <int kHalf>
+SIMREEL_AVX512 __m256 half8(__m512 v) {
+  return _mm256_castpd_ps(_mm512_maskz_extractf64x4_pd(0xf, _mm512_castps_pd(v), kHalf));
+}
+
+/// potential() for sixteen points in AVX-512 lanes: the same float operations in the same order
+/// (no contraction), each corner's row the top 4 bits of its hash (what potential()'s 2-bit
+/// shift of bits 27-31 selects) and its gradient components three permutes of 16-entry tables
+/// (the scalar form's variable shift, mask, subtract and convert, three times a corner).
+SIMREEL_AVX512 void potential16(
+    __m512i seed, __m512i lx0, __m512i ly0, __m512i lz0, __m512 f0, __m512 f1, __m512 f2,
+    __m512 tx, __m512 ty, __m512 tz, __m512& g0, __m512& g1, __m512& g2) {
+  const __m512 c6 = _mm512_set1_ps(6.0f), c15 = _mm512_set1_ps(15.0f), c10 = _mm512_set1_ps(10.0f);
+  const __m512 c30 = _mm512_set1_ps(30.0f), c2 = _mm512_set1_ps(2.0f), one = _mm512_set1_ps(1.0f);
+  // x = f0 f0 f0 (f0 (f0 6 - 15) + 10); dux = 30 f0 f0 (f0 (f0 - 2) + 1)
+  const __m512 x = mul(mul(mul(f0, f0), f0), add(mul(f0, sub(mul(f0, c6), c15)), c10));
+  const __m512 y = mul(mul(mul(f1, f1), f1), add(mul(f1, sub(mul(f1, c6), c15)), c10));
+  const __m512 z = mul(mul(mul(f2, f2), f2), add(mul(f2, sub(mul(f2, c6), c15)), c10));
+  const __m512 dux = mul(mul(mul(c30, f0), f0), add(mul(f0, sub(f0, c2)), one));
+  const __m512 duy = mul(mul(mul(c30, f1), f1), add(mul(f1, sub(f1, c2)), one));
+  const __m512 duz = mul(mul(mul(c30, f2), f2), add(mul(f2, sub(f2, c2)), one));
+  const __m512i x0 = _mm512_xor_si512(lx0, seed),
+                x1 = _mm512_xor_si512(_mm512_add_epi32(lx0, _mm512_set1_epi32(int(kPrimeX))), seed);
+  const __m512i y0 = ly0, y1 = _mm512_add_epi32(ly0, _mm512_set1_epi32(int(kPrimeY)));
+  const __m512i z0 = lz0, z1 = _mm512_add_epi32(lz0, _mm512_set1_epi32(int(kPrimeZ)));
+  const __m512 fm0 = sub(f0, one), fm1 = sub(f1, one), fm2 = sub(f2, one);
+  const Corner16 a = corner16(x0, y0, z0, f0, f1, f2, tx, ty, tz),
+                 b = corner16(x1, y0, z0, fm0, f1, f2, tx, ty, tz),
+                 c = corner16(x0, y1, z0, f0, fm1, f2, tx, ty, tz),
+                 d = corner16(x1, y1, z0, fm0, fm1, f2, tx, ty, tz),
+                 e = corner16(x0, y0, z1, f0, f1, fm2, tx, ty, tz),
+                 f = corner16(x1, y0, z1, fm0, f1, fm2, tx, ty, tz),
+                 g = corner16(x0, y1, z1, f0, fm1, fm2, tx, ty, tz),
+                 h = corner16(x1, y1, z1, fm0, fm1, fm2, tx, ty, tz);
+  const __m512 k1 = sub(b.v, a.v), k2 = sub(c.v, a.v), k3 = sub(e.v, a.v);
+  const __m512 k4 = add(sub(sub(a.v, b.v), c.v), d.v), k5 = add(sub(sub(a.v, c.v), e.v), g.v),
+               k6 = add(sub(sub(a.v, b.v), e.v), f.v);
+  const __m512 neg_a = _mm512_castsi512_ps(
+      _mm512_xor_si512(_mm512_castps_si512(a.v), _mm512_set1_epi32(int(0x80000000u))));
+  const __m512 k7 =
+      add(sub(sub(add(sub(add(add(neg_a, b.v), c.v), d.v), e.v), f.v), g.v), h.v);
+  const __m512 out0 = blend16(x, y, z, a.g0, b.g0, c.g0, d.g0, e.g0, f.g0, g.g0, h.g0);
+  const __m512 out1 = blend16(x, y, z, a.g1, b.g1, c.g1, d.g1, e.g1, f.g1, g.g1, h.g1);
+  const __m512 out2 = blend16(x, y, z, a.g2, b.g2, c.g2, d.g2, e.g2, f.g2, g.g2, h.g2);
+  g0 = add(out0, mul(dux, add(add(add(k1, mul(k4, y)), mul(k6, z)), mul(mul(k7, y), z))));
+  g1 = add(out1, mul(duy, add(add(add(k2, mul(k4, x)), mul(k5, z)), mul(mul(k7, x), z))));
+  g2 = add(out2, mul(duz, add(add(add(k3, mul(k5, y)), mul(k6, x)), mul(mul(k7, x), y))));
+}
+
+/// curl_floats() sixteen points at a time in AVX-512 (potential16()), the last ones under a
+/// mask; the same bits.
+__attribute__((target("avx512f")))
+void curl_floats_avx512(std::size_t n, const std::uint32_t* __restrict seed,
+                        const std::uint32_t* __restrict cx, const std::uint32_t* __restrict cy,
+                        const std::uint32_t* __restrict cz, const float* __restrict fx,
+                        const float* __restrict fy, const float* __restrict fz,
+                        double* __restrict ux, double* __restrict uy, double* __restrict uz) {
+  const __m512 tx = _mm512_loadu_ps(kRowX.data()), ty = _mm512_loadu_ps(kRowY.data()),
+               tz = _mm512_loadu_ps(kRowZ.data());
+  const __m512i s0 = _mm512_set1_epi32(int(seed[0])), s1 = _mm512_set1_epi32(int(seed[1])),
+                s2 = _mm512_set1_epi32(int(seed[2]));
+  for (std::size_t k = 0; k < n; k += 16) {
+    const __mmask16 m = n - k >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - k)) - 1u);
+    const __m512i lx = _mm512_maskz_loadu_epi32(m, cx + k), ly = _mm512_maskz_loadu_epi32(m, cy + k),
+                  lz = _mm512_maskz_loadu_epi32(m, cz + k);
+    const __m512 f0 = _mm512_maskz_loadu_ps(m, fx + k), f1 = _mm512_maskz_loadu_ps(m, fy + k),
+                 f2 = _mm512_maskz_loadu_ps(m, fz + k);
+    __m512 a0, a1, a2, b0, b1, b2, c0, c1, c2;
+    potential16(s0, lx, ly, lz, f0, f1, f2, tx, ty, tz, a0, a1, a2);
+    potential16(s1, lx, ly, lz, f0, f1, f2, tx, ty, tz, b0, b1, b2);
+    potential16(s2, lx, ly, lz, f0, f1, f2, tx, ty, tz, c0, c1, c2);
+    const __m512 vx = _mm512_sub_ps(c1, b2), vy = _mm512_sub_ps(a2, c0), vz = _mm512_sub_ps(b0, a1);
+    const __mmask8 lo = __mmask8(m & 0xff), hi = __mmask8(m >> 8);
+    _mm512_mask_storeu_pd(ux + k, lo, _mm512_maskz_cvtps_pd(0xff, half8<0>(vx)));
+    _mm512_mask_storeu_pd(uy + k, lo, _mm512_maskz_cvtps_pd(0xff, half8<0>(vy)));
+    _mm512_mask_storeu_pd(uz + k, lo, _mm512_maskz_cvtps_pd(0xff, half8<0>(vz)));
+    if (hi != 0) {
+      _mm512_mask_storeu_pd(ux + k + 8, hi, _mm512_maskz_cvtps_pd(0xff, half8<1>(vx)));
+      _mm512_mask_storeu_pd(uy + k + 8, hi, _mm512_maskz_cvtps_pd(0xff, half8<1>(vy)));
+      _mm512_mask_storeu_pd(uz + k + 8, hi, _mm512_maskz_cvtps_pd(0xff, half8<1>(vz)));
+    }
+  }
+}
+
+#undef SIMREEL_AVX512
+
+/// The CPU runs curl_floats_avx512() (checked once).
+bool has_avx512f() {
+  __builtin_cpu_init();
+  static const bool yes = __builtin_cpu_supports("avx512f");
+  return yes;
+}
+#endif
 
 }  // namespace
 
@@ -185,10 +342,26 @@ double GradientNoise::sample(int c, const Vec3& p, Vec3& grad) const {
 }
 
 void GradientNoise::curl(std::size_t n, const double* px, const double* py, const double* pz,
-                         double* ux, double* uy, double* uz) const {
+                         double* ux, double* uy, double* uz, int lanes) const {
+#if SIMREEL_HAS_VECTOR_CLONES
+  const bool wide = lanes >= 16 && has_avx512f();
+#else
+  (void)lanes;
+#endif
+  alignas(64) std::uint32_t cx[kChunk], cy[kChunk], cz[kChunk];
+  alignas(64) float fx[kChunk], fy[kChunk], fz[kChunk];
   for (std::size_t b = 0; b < n; b += kChunk) {
     const std::size_t len = std::min(kChunk, n - b);
-    if (curl_chunk(len, seed_, px + b, py + b, pz + b, ux + b, uy + b, uz + b)) continue;
+    if (lattice_chunk(len, px + b, py + b, pz + b, cx, cy, cz, fx, fy, fz)) {
+#if SIMREEL_HAS_VECTOR_CLONES
+      if (wide) {
+        curl_floats_avx512(len, seed_, cx, cy, cz, fx, fy, fz, ux + b, uy + b, uz + b);
+        continue;
+      }
+#endif
+      curl_floats(len, seed_, cx, cy, cz, fx, fy, fz, ux + b, uy + b, uz + b);
+      continue;
+    }
     for (std::size_t k = b; k < b + len; ++k) {
       float x, y, z;
       curl_at(seed_, lattice_of(Vec3(px[k], py[k], pz[k])), x, y, z);

@@ -24,8 +24,12 @@ class GradientNoise {
   /// 2007): u = curl ψ with ψ = (N0(p), N1(p), N2(p)), all derivatives analytic, so div u = 0
   /// up to rounding. Bit for bit the curl of sample()'s gradients, in a loop the compiler
   /// vectorises; per unit of p (the caller scales by amplitude).
+  /// `lanes`: the widest form to run, as the CPU allows: 16 (AVX-512F: sixteen points a
+  /// register, each corner's gradient picked by three permutes), else the compiler's clones
+  /// (AVX2 or AVX-512 eight lanes, or scalar); every form gives the same bits (the tests compare
+  /// them).
   void curl(std::size_t n, const double* px, const double* py, const double* pz, double* ux,
-            double* uy, double* uz) const;
+            double* uy, double* uz, int lanes = 16) const;
 
  private:
   std::uint32_t seed_[3];
