@@ -26,6 +26,13 @@
 #endif
 
 #if SIMREEL_HAS_VECTOR_CLONES
+/// True where the CPU runs AVX-512F, the target of the 512-bit hand-written forms (row_lanes.cpp,
+/// noise.cpp); callers keep the answer in a static.
+inline bool cpu_has_avx512f() {
+  __builtin_cpu_init();  // (may run before the constructors that would do it)
+  return __builtin_cpu_supports("avx512f");
+}
+
 /// True where the CPU runs AVX-512F with AVX-512VL, the target of the hand-written forms beside
 /// scalar ones (pair_forces.cpp, particle_pairs.cpp); callers keep the answer in a static.
 inline bool cpu_has_avx512vl() {

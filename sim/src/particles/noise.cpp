@@ -326,8 +326,7 @@ void curl_floats_avx512(std::size_t n, const std::uint32_t* __restrict seed,
 
 /// The CPU runs curl_floats_avx512() (checked once).
 bool has_avx512f() {
-  __builtin_cpu_init();
-  static const bool yes = __builtin_cpu_supports("avx512f");
+  static const bool yes = cpu_has_avx512f();
   return yes;
 }
 #endif

@@ -366,7 +366,7 @@ bool row_lanes_avx2() {
 
 bool row_lanes_avx512() {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("avx512f"));
+  static const bool yes = cpu_has_avx512f();
   return yes;
 #else
   return false;
