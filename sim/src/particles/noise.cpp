@@ -28,14 +28,38 @@ constexpr std::uint32_t kPrimeX = 501125321u, kPrimeY = 1136930381u, kPrimeZ = 1
 constexpr std::uint32_t kHashMul = 0x27d4eb2du;
 
 /// Gradient component of table row h (0..15): the 12 cube-edge directions of Perlin (2002),
-/// rows 12..15 repeating four of them. Each component is stored as 2 bits per row (value + 1)
-/// in one constant, so the lookup is a shift by s = 2 h and a mask.
+/// rows 12..15 repeating four of them.
 /// Rows: (1,1,0) (-1,1,0) (1,-1,0) (-1,-1,0) (1,0,1) (-1,0,1) (1,0,-1) (-1,0,-1) (0,1,1)
 /// (0,-1,1) (0,1,-1) (0,-1,-1) (1,1,0) (-1,1,0) (0,-1,1) (0,-1,-1).
+/// Written as value + 1, 2 bits a row, row h at bits 2h (the readable form, checked below).
 constexpr std::uint32_t kGradX = 0x52552222u, kGradY = 0x0A22550Au, kGradZ = 0x250A0A55u;
-inline float grad_component(std::uint32_t s, std::uint32_t table) {
-  return float(int((table >> s) & 3u) - 1);
+
+/// The same table packed for the lookup: row h's component as a 2-bit two's complement number
+/// (-1 is 11, 0 is 00, 1 is 01) at bits 31 - 2h and 30 - 2h, so that a shift left by s = 2h
+/// brings it to the top and an arithmetic shift right by 30 sign-extends it. Two integer
+/// instructions a component in the compiler's vector lanes, not three (shift, mask, subtract).
+constexpr std::uint32_t top_first(std::uint32_t plus_one) {
+  std::uint32_t r = 0;
+  for (std::uint32_t h = 0; h < 16; ++h)
+    r |= ((((plus_one >> (2 * h)) & 3u) - 1u) & 3u) << (30 - 2 * h);
+  return r;
 }
+constexpr std::uint32_t kTopX = top_first(kGradX), kTopY = top_first(kGradY),
+                        kTopZ = top_first(kGradZ);
+inline float grad_component(std::uint32_t s, std::uint32_t table) {
+  return float(std::int32_t(table << s) >> 30);
+}
+constexpr bool tables_agree() {
+  for (std::uint32_t h = 0; h < 16; ++h)
+    for (std::uint32_t t : {0u, 1u, 2u}) {
+      const std::uint32_t plus_one = t == 0 ? kGradX : t == 1 ? kGradY : kGradZ;
+      const std::uint32_t top = t == 0 ? kTopX : t == 1 ? kTopY : kTopZ;
+      if (std::int32_t(top << (2 * h)) >> 30 != std::int32_t((plus_one >> (2 * h)) & 3u) - 1)
+        return false;
+    }
+  return true;
+}
+static_assert(tables_agree(), "the packed gradient tables must hold the rows above");
 
 /// The cell, fade and corner offsets of one point, shared by the three potentials.
 struct Lattice {
@@ -63,9 +87,9 @@ __attribute__((always_inline)) inline float potential(std::uint32_t seed, const 
   // one basic block.
 #define SIMREEL_CORNER(name, hx, hy, hz, cx, cy, cz)                                     \
   const std::uint32_t h##name = (((hx ^ hy ^ hz) * kHashMul) >> 27) & 30u; /* 2 row */   \
-  const float g##name##0 = grad_component(h##name, kGradX);                             \
-  const float g##name##1 = grad_component(h##name, kGradY);                             \
-  const float g##name##2 = grad_component(h##name, kGradZ);                             \
+  const float g##name##0 = grad_component(h##name, kTopX);                              \
+  const float g##name##1 = grad_component(h##name, kTopY);                              \
+  const float g##name##2 = grad_component(h##name, kTopZ);                              \
   const float v##name = g##name##0 * (f0 - cx) + g##name##1 * (f1 - cy) + g##name##2 * (f2 - cz);
   SIMREEL_CORNER(a, x0, y0, z0, 0.0f, 0.0f, 0.0f)
   SIMREEL_CORNER(b, x1, y0, z0, 1.0f, 0.0f, 0.0f)
@@ -189,7 +213,7 @@ void curl_floats(std::size_t n, const std::uint32_t* __restrict seed,
 }
 
 #if SIMREEL_HAS_VECTOR_CLONES
-/// Table of a gradient component by row (0..15), as floats: grad_component(2 row, table).
+/// Table of a gradient component by row (0..15), as floats: the rows of kGradX, kGradY or kGradZ.
 constexpr std::array<float, 16> component_row(std::uint32_t table) {
   std::array<float, 16> r{};
   for (std::uint32_t h = 0; h < 16; ++h) r[h] = float(int((table >> (2 * h)) & 3u) - 1);
