@@ -51,11 +51,13 @@ int simulate_command(const RunOptions& o, const SimulateExports& exports) {
     out.buf.reserve(1 << 20);
     out.buf += header;
   };
+  // The handlers first: a signal that came after a temporary was created but before they were
+  // in place would end the program by default and leave the temporary behind.
+  std::signal(SIGINT, on_simulate_signal);
+  std::signal(SIGTERM, on_simulate_signal);
   open(particles, exports.particles, "frame,time,system,id,x,y,z,vx,vy,vz\n");
   open(bodies, exports.bodies, "frame,time,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n");
   open(joints, exports.joints, "frame,time,joint,anchor_error,fx,fy,fz,force,angle,twist,broken\n");
-  std::signal(SIGINT, on_simulate_signal);
-  std::signal(SIGTERM, on_simulate_signal);
   auto put_float = [](std::string& buf, double v) {
     char tmpbuf[32];
     auto res = std::to_chars(tmpbuf, tmpbuf + sizeof tmpbuf, v);

@@ -105,9 +105,16 @@ AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
   tmp_ = dir / name;
   // "e" (glibc: O_CLOEXEC): a child spawned meanwhile (ffmpeg, another sink's) must not keep
   // the temporary open.
-  file_ = std::fopen(tmp_.c_str(), "wbe");
-  if (file_ == nullptr) fail(path_, std::strerror(errno));
+  // Registered before it exists: a signal from here on removes it (unlinking a name not yet
+  // created is harmless), so none can come between the open and the registration and leave it.
   slot_ = register_temporary(tmp_);
+  file_ = std::fopen(tmp_.c_str(), "wbe");
+  if (file_ == nullptr) {
+    const int err = errno;
+    unregister_temporary(slot_);
+    slot_ = -1;
+    fail(path_, std::strerror(err));
+  }
 }
 
 AtomicFile::~AtomicFile() {
