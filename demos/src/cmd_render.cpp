@@ -55,9 +55,7 @@ extern "C" void on_stop_signal(int signal) {
     g_stop_signal = signal;
     return;
   }
-  render::remove_temporaries_now();
-  ::signal(signal, SIG_DFL);
-  ::raise(signal);
+  render::stop_by_signal(signal);
 }
 
 /// SIGINT/SIGTERM set a flag that the frame loop reads between frames; a second one ends the
@@ -70,8 +68,12 @@ class StopSignals {
     action.sa_handler = on_stop_signal;
     sigemptyset(&action.sa_mask);
     action.sa_flags = SA_RESTART;
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
+    // Over main()'s hard-stop handler, restored afterwards; a signal the parent set to be
+    // ignored (a background job) stays ignored.
+    sigaction(SIGINT, nullptr, &old_int_);
+    sigaction(SIGTERM, nullptr, &old_term_);
+    if (old_int_.sa_handler != SIG_IGN) sigaction(SIGINT, &action, nullptr);
+    if (old_term_.sa_handler != SIG_IGN) sigaction(SIGTERM, &action, nullptr);
   }
   ~StopSignals() {
     sigaction(SIGINT, &old_int_, nullptr);

@@ -1,7 +1,6 @@
 // `simreel simulate`: run a scene without rendering and export particle and cloth state, body
 // poses and joint readings as CSV.
 #include <charconv>
-#include <csignal>
 #include <iostream>
 #include <memory>
 #include <utility>
@@ -13,18 +12,6 @@
 #include "simreel/render/atomic_file.hpp"
 
 namespace simreel::app {
-
-namespace {
-
-/// Ctrl-C or SIGTERM during an export: remove the CSV's temporary (async-signal-safe), then end
-/// by the signal as usual.
-extern "C" void on_simulate_signal(int signal) {
-  render::remove_temporaries_now();
-  ::signal(signal, SIG_DFL);
-  ::raise(signal);
-}
-
-}  // namespace
 
 int simulate_command(const RunOptions& o, const SimulateExports& exports) {
   if (exports.particles.empty() && exports.bodies.empty() && exports.joints.empty())
@@ -51,10 +38,8 @@ int simulate_command(const RunOptions& o, const SimulateExports& exports) {
     out.buf.reserve(1 << 20);
     out.buf += header;
   };
-  // The handlers first: a signal that came after a temporary was created but before they were
-  // in place would end the program by default and leave the temporary behind.
-  std::signal(SIGINT, on_simulate_signal);
-  std::signal(SIGTERM, on_simulate_signal);
+  // A Ctrl-C or SIGTERM from here on removes the temporaries: main() installed that handler
+  // (render::remove_temporaries_on_signals) before any command ran.
   open(particles, exports.particles, "frame,time,system,id,x,y,z,vx,vy,vz\n");
   open(bodies, exports.bodies, "frame,time,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n");
   open(joints, exports.joints, "frame,time,joint,anchor_error,fx,fy,fz,force,angle,twist,broken\n");

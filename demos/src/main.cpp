@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "effect_scene.hpp"
 #include "json_reader.hpp"
+#include "simreel/render/atomic_file.hpp"
 #include "simreel/render/context.hpp"
 #include "simreel/render/image.hpp"
 #include "simreel/sim/world.hpp"
@@ -34,6 +35,9 @@ void add_run_options(CLI::App* cmd, simreel::app::RunOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before anything can create a temporary: a signal in any command (bake's state files, a
+  // golden, a report) removes the temporaries and ffmpeg children, then ends the program.
+  simreel::render::remove_temporaries_on_signals();
   CLI::App app{"simreel: physics animations without a display"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("simreel ") + SIMREEL_VERSION);

@@ -76,6 +76,31 @@ void remove_temporaries_now() noexcept {
     if (g_temp_state[i].load() == 2) ::unlink(g_temp_path[i]);
 }
 
+void stop_by_signal(int signal) noexcept {
+  remove_temporaries_now();
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  ::sigaction(signal, &dfl, nullptr);
+  // Pending while this handler runs (the signal is blocked in it); delivered on return.
+  ::raise(signal);
+}
+
+namespace {
+extern "C" void on_signal_stop(int signal) { stop_by_signal(signal); }
+}  // namespace
+
+void remove_temporaries_on_signals() noexcept {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    if (::sigaction(signal, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;
+    struct sigaction action {};
+    action.sa_handler = on_signal_stop;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(signal, &action, nullptr);
+  }
+}
+
 std::string make_parent_directories(const fs::path& path) {
   const fs::path dir = path.parent_path();
   if (dir.empty()) return "";

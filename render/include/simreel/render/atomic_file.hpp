@@ -55,6 +55,16 @@ class AtomicFile {
 /// registered child (ffmpeg writing a video's temporary) and unlinks every AtomicFile temporary
 /// not yet committed or discarded. Async-signal-safe; the caller then re-raises the signal.
 void remove_temporaries_now() noexcept;
+/// Ends the program by `signal` after remove_temporaries_now(): restores the signal's default
+/// action and re-raises it, so the exit status still names the signal (130 in a shell for
+/// SIGINT). Async-signal-safe; for a signal handler's hard stop.
+void stop_by_signal(int signal) noexcept;
+/// Installs stop_by_signal as the handler of SIGINT, SIGTERM and SIGHUP, so that a program
+/// interrupted anywhere, in any command, leaves no temporary and no ffmpeg child behind. A
+/// signal the parent set to be ignored (nohup, a background job) stays ignored. Commands that
+/// stop more gently (render's first Ctrl-C) install their own handlers over it and restore it.
+/// Call once at start-up, before any AtomicFile exists.
+void remove_temporaries_on_signals() noexcept;
 /// Registers a child process that leads its own process group (killed by
 /// remove_temporaries_now); unregister it once reaped. Never throws; at most 16 at once.
 void register_child(pid_t pid) noexcept;
