@@ -1,5 +1,6 @@
 // `simreel sweep`: render every combination of a few scene values (and seeds) in parallel child
 // processes and lay the results out in one labelled contact sheet, like Houdini's Wedge.
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -7,18 +8,22 @@
 #include <fcntl.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <limits>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include "commands.hpp"
 #include "json_reader.hpp"
 #include "run_options.hpp"
+#include "simreel/render/atomic_file.hpp"
 #include "simreel/render/image.hpp"
 #include "simreel/render/text_overlay.hpp"
 
@@ -125,7 +130,49 @@ struct TempFolder {
   TempFolder& operator=(const TempFolder&) = delete;
 };
 
-/// Starts `args` (argv[0] = this program) with stdout and stderr into `log`; returns its pid.
+// A signal to the sweep is passed on to every running child, which stops as `render` does (the
+// first finishes its frame, a second stops at once and removes its temporaries); the sweep starts
+// no more, waits for them, removes its scratch folder and then ends by the signal. The children
+// lead their own process groups, so a Ctrl-C at the terminal reaches each once, through the
+// sweep; before, a SIGTERM to the sweep alone left them running and the scratch folder behind.
+volatile std::sig_atomic_t g_sweep_signal = 0;
+std::atomic<pid_t> g_sweep_children[kMaxVariants];  // by variant index; 0 when not running
+
+extern "C" void on_sweep_signal(int signal) {
+  g_sweep_signal = signal;
+  for (auto& child : g_sweep_children) {
+    const pid_t pid = child.load();
+    if (pid > 0) ::kill(pid, signal);
+  }
+}
+
+/// on_sweep_signal for SIGINT, SIGTERM and SIGHUP while it lives (not over a signal the parent
+/// ignores); without SA_RESTART, so that waitpid returns at the signal.
+class SweepSignals {
+ public:
+  SweepSignals() {
+    g_sweep_signal = 0;
+    struct sigaction action {};
+    action.sa_handler = on_sweep_signal;
+    sigemptyset(&action.sa_mask);
+    for (int i = 0; i < 3; ++i) {
+      sigaction(kSignals[i], nullptr, &old_[i]);
+      if (old_[i].sa_handler != SIG_IGN) sigaction(kSignals[i], &action, nullptr);
+    }
+  }
+  ~SweepSignals() {
+    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &old_[i], nullptr);
+  }
+  SweepSignals(const SweepSignals&) = delete;
+  SweepSignals& operator=(const SweepSignals&) = delete;
+
+ private:
+  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+  struct sigaction old_[3] {};
+};
+
+/// Starts `args` (argv[0] = this program) with stdout and stderr into `log`, leading its own
+/// process group; returns its pid.
 pid_t spawn_child(const std::vector<std::string>& args, const fs::path& log) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -144,8 +191,13 @@ pid_t spawn_child(const std::vector<std::string>& args, const fs::path& log) {
     if (v.rfind("OMP_NUM_THREADS=", 0) != 0 && v.rfind("LP_NUM_THREADS=", 0) != 0) envp.push_back(*e);
   }
   envp.push_back(nullptr);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
   pid_t pid = -1;
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, argv.data(), envp.data());
+  const int rc = posix_spawn(&pid, "/proc/self/exe", &actions, &attributes, argv.data(), envp.data());
+  posix_spawnattr_destroy(&attributes);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) throw render::IoError("cannot start a simreel child process: " + std::string(std::strerror(rc)));
   return pid;
@@ -304,6 +356,8 @@ int sweep_command(const SweepOptions& o) {
     end = scene.frames;
   }
 
+  // Before the scratch folder exists, so that no signal can leave it behind.
+  std::optional<SweepSignals> signals(std::in_place);
   const TempFolder temp;
   std::vector<int> codes(variants.size(), -1);
   std::map<pid_t, std::size_t> running;
@@ -313,8 +367,8 @@ int sweep_command(const SweepOptions& o) {
   const std::string frames = std::to_string(first) + ":" + std::to_string(end);
   std::cout << "sweep: " << variants.size() << " variants of " << o.scene << ", frames " << frames << ", " << jobs
             << " at a time\n";
-  while (next < variants.size() || !running.empty()) {
-    while (next < variants.size() && int(running.size()) < jobs) {
+  while ((next < variants.size() && g_sweep_signal == 0) || !running.empty()) {
+    while (g_sweep_signal == 0 && next < variants.size() && int(running.size()) < jobs) {
       const Variant& v = variants[next];
       std::vector<std::string> args = {"simreel", "render", o.scene, "-q", "--threads", "1", "--frames", frames,
                                        "--contact-sheet", cell_path(next).string(),
@@ -329,7 +383,11 @@ int sweep_command(const SweepOptions& o) {
       if (o.memory_limit) args.insert(args.end(), {"--memory-limit", *o.memory_limit});
       if (!o.output_dir.empty()) args.insert(args.end(), {"-o", (fs::path(o.output_dir) / (v.name + ".mp4")).string()});
       if (o.hash) args.insert(args.end(), {"--hash", (fs::path(o.output_dir) / (v.name + ".json")).string()});
-      running[spawn_child(args, log_path(next))] = next;
+      const pid_t child = spawn_child(args, log_path(next));
+      running[child] = next;
+      g_sweep_children[next].store(child);
+      // A signal that came between the check above and the line before did not reach it.
+      if (const int signal = g_sweep_signal; signal != 0) ::kill(child, signal);
       ++next;
     }
     int status = 0;
@@ -342,9 +400,20 @@ int sweep_command(const SweepOptions& o) {
     if (it == running.end()) continue;
     const std::size_t i = it->second;
     running.erase(it);
+    g_sweep_children[i].store(0);
     codes[i] = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    std::cout << (codes[i] == 0 ? "done " : "FAILED ") << variants[i].name << " (" << variants[i].label << ")\n"
+    std::cout << (codes[i] == 0 ? "done " : g_sweep_signal != 0 ? "stopped " : "FAILED ") << variants[i].name << " ("
+              << variants[i].label << ")\n"
               << std::flush;
+  }
+  signals.reset();
+  if (const int signal = g_sweep_signal; signal != 0) {
+    const auto done = std::count(codes.begin(), codes.end(), 0);
+    std::cerr << "simreel: sweep interrupted by signal " << signal << ": " << done << " of " << variants.size()
+              << " variants finished; no sheet written\n";
+    std::error_code ec;
+    fs::remove_all(temp.path, ec);
+    render::stop_by_signal(signal);
   }
   int worst = 0;
   for (std::size_t i = 0; i < variants.size(); ++i) {

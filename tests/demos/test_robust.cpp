@@ -68,11 +68,12 @@ std::string temporaries_under(const fs::path& dir) {
   return found;
 }
 
-/// Runs `simreel args...` and sends it SIGINT the moment a temporary (".tmp-") is created in
+/// Runs `simreel args...` (with `env`, "NAME=VALUE" each, added) and sends it SIGINT the moment a temporary (".tmp-") is created in
 /// `dir` or in a folder created under it: inotify wakes the test at the creation, so the signal
 /// lands inside the write's window nearly every time. A child that creates none in 20 s is
 /// killed and the test fails instead of hanging. Returns the child's wait status.
-int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs::path& dir) {
+int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs::path& dir,
+                                 const std::vector<std::string>& env = {}) {
   fs::create_directories(dir);
   const int watch = ::inotify_init1(IN_CLOEXEC);
   EXPECT_GE(watch, 0);
@@ -81,6 +82,7 @@ int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs:
   if (pid == 0) {
     (void)!std::freopen("/dev/null", "w", stdout);
     (void)!std::freopen("/dev/null", "w", stderr);
+    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
     std::vector<char*> argv{const_cast<char*>(SIMREEL_BIN)};
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
@@ -435,6 +437,24 @@ TEST(Robust, SimulateStoppedByAnErrorOrASignalLeavesNoTemporary) {
   }
 }
 
+/// The pids of running processes whose command line mentions `text`.
+std::vector<pid_t> processes_mentioning(const std::string& text) {
+  std::vector<pid_t> found;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string cmdline;
+    try {
+      cmdline = simreel::test::slurp(e.path() / "cmdline");
+    } catch (...) {
+      continue;
+    }
+    const std::string stat = fs::exists(e.path() / "stat") ? simreel::test::slurp(e.path() / "stat") : "";
+    if (has(cmdline, text) && !has(stat, ") Z")) found.push_back(pid_t(std::stol(name)));
+  }
+  return found;
+}
+
 // Every command, not only those with their own handlers (render, simulate): bake writes a state
 // file per frame through write_file_atomic (temporary, fsync, rename), and a Ctrl-C inside that
 // window ended the program by the default action and left the temporary in the cache.
@@ -452,4 +472,33 @@ TEST(Robust, BakeInterruptedWhileWritingAFrameLeavesNoTemporary) {
   const auto r = run_simreel("bake " + (d / "long.json").string() + " -q --frames 3 --resume --cache " +
                              (d / "sig0" / "cache").string());
   EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// A sweep's children lead their own process groups, so the sweep passes a signal on: they stop,
+// the sweep waits for them, removes its scratch folder and ends by the signal. Before, the sweep
+// died alone and left its children rendering and its scratch folder in $TMPDIR.
+TEST(Robust, SweepInterruptedStopsItsChildrenAndLeavesNothingBehind) {
+  TempDir d;
+  fs::create_directories(d / "bin");
+  fs::create_directories(d / "tmp");
+  // A stand-in ffmpeg, so that the children render every frame of a long range quickly.
+  write_file(d / "bin" / "ffmpeg", "#!/bin/sh\nfor last; do :; done\ncat > \"$last\"\n");
+  fs::permissions(d / "bin" / "ffmpeg", fs::perms::owner_all);
+  const fs::path scene = d / "s.json";
+  write_file(scene, R"({"frames": 1000000, "emitters": [{"name": "a", "rate": 50}]})");
+  const int status = interrupt_at_first_temporary(
+      {"sweep", scene.string(), "--vary", "/emitters/0/rate=10,20,30", "--jobs", "2", "--size", "32x32",
+       "--contact-sheet", (d / "sheet.png").string(), "-o", (d / "out").string()},
+      d / "out", {"PATH=" + (d / "bin").string() + ":/usr/bin:/bin", "TMPDIR=" + (d / "tmp").string()});
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  auto left = processes_mentioning(scene.string());
+  for (int i = 0; i < 50 && !left.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    left = processes_mentioning(scene.string());
+  }
+  EXPECT_TRUE(left.empty()) << left.size() << " children still run, e.g. " << left.front();
+  for (const pid_t pid : left) ::kill(pid, SIGKILL);
+  EXPECT_TRUE(fs::is_empty(d / "tmp")) << fs::directory_iterator(d / "tmp")->path();
+  EXPECT_EQ(temporaries_under(d / "out"), "");
+  EXPECT_FALSE(fs::exists(d / "sheet.png"));
 }
