@@ -2,6 +2,7 @@
 // reads, clean errors from outputs and imports, no temporaries left behind.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <poll.h>
 #include <sys/inotify.h>
 #include <sys/stat.h>
@@ -10,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <limits>
@@ -17,6 +19,7 @@
 #include <thread>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "cli_util.hpp"
@@ -26,6 +29,8 @@
 #include "scene.hpp"
 #include "simreel/sim/ranges.hpp"
 #include "simreel/sim/world.hpp"
+
+extern char** environ;
 
 using simreel::app::json;
 using simreel::app::SceneError;
@@ -78,17 +83,29 @@ int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs:
   const int watch = ::inotify_init1(IN_CLOEXEC);
   EXPECT_GE(watch, 0);
   std::map<int, fs::path> folders{{::inotify_add_watch(watch, dir.c_str(), IN_CREATE), dir}};
+  // Built before the fork: the child of a threaded process should only exec.
+  std::vector<char*> argv{const_cast<char*>(SIMREEL_BIN)};
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  std::vector<char*> envp;
+  for (const auto& e : env) envp.push_back(const_cast<char*>(e.c_str()));
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string_view v(*e);
+    const bool replaced = std::any_of(env.begin(), env.end(), [&](const std::string& mine) {
+      return v.substr(0, v.find('=') + 1) == std::string_view(mine).substr(0, mine.find('=') + 1);
+    });
+    if (!replaced) envp.push_back(*e);
+  }
+  envp.push_back(nullptr);
+  const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
   const pid_t pid = ::fork();
   if (pid == 0) {
-    (void)!std::freopen("/dev/null", "w", stdout);
-    (void)!std::freopen("/dev/null", "w", stderr);
-    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
-    std::vector<char*> argv{const_cast<char*>(SIMREEL_BIN)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(SIMREEL_BIN, argv.data());
+    ::dup2(null_fd, STDOUT_FILENO);
+    ::dup2(null_fd, STDERR_FILENO);
+    ::execve(SIMREEL_BIN, argv.data(), envp.data());
     ::_exit(127);
   }
+  ::close(null_fd);
   EXPECT_GE(pid, 0);
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   bool created = false;
