@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <optional>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -15,6 +16,7 @@
 #include "golden.hpp"
 #include "json_reader.hpp"
 #include "run_options.hpp"
+#include "signal_scope.hpp"
 #include "scene_player.hpp"
 #include "sim_cache.hpp"
 #include "simreel/render/atomic_file.hpp"
@@ -63,29 +65,13 @@ extern "C" void on_stop_signal(int signal) {
 class StopSignals {
  public:
   StopSignals() {
-    g_stop_signal = 0;
-    struct sigaction action {};
-    action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESTART;
-    // Over main()'s hard-stop handler, restored afterwards; a signal the parent set to be
-    // ignored (a background job) stays ignored.
-    sigaction(SIGINT, nullptr, &old_int_);
-    sigaction(SIGTERM, nullptr, &old_term_);
-    if (old_int_.sa_handler != SIG_IGN) sigaction(SIGINT, &action, nullptr);
-    if (old_term_.sa_handler != SIG_IGN) sigaction(SIGTERM, &action, nullptr);
+    g_stop_signal = 0;  // before the handler is in, so that no signal is lost
+    scope_.emplace(on_stop_signal, std::initializer_list<int>{SIGINT, SIGTERM}, true);
   }
-  ~StopSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
   [[nodiscard]] static int received() { return g_stop_signal; }
 
  private:
-  struct sigaction old_int_ {};
-  struct sigaction old_term_ {};
+  std::optional<SignalScope> scope_;
 };
 
 std::string size_text(const Scene& scene) {

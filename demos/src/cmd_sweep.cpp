@@ -23,6 +23,7 @@
 #include "commands.hpp"
 #include "json_reader.hpp"
 #include "run_options.hpp"
+#include "signal_scope.hpp"
 #include "simreel/render/atomic_file.hpp"
 #include "simreel/render/image.hpp"
 #include "simreel/render/text_overlay.hpp"
@@ -145,31 +146,6 @@ extern "C" void on_sweep_signal(int signal) {
     if (pid > 0) ::kill(pid, signal);
   }
 }
-
-/// on_sweep_signal for SIGINT, SIGTERM and SIGHUP while it lives (not over a signal the parent
-/// ignores); without SA_RESTART, so that waitpid returns at the signal.
-class SweepSignals {
- public:
-  SweepSignals() {
-    g_sweep_signal = 0;
-    struct sigaction action {};
-    action.sa_handler = on_sweep_signal;
-    sigemptyset(&action.sa_mask);
-    for (int i = 0; i < 3; ++i) {
-      sigaction(kSignals[i], nullptr, &old_[i]);
-      if (old_[i].sa_handler != SIG_IGN) sigaction(kSignals[i], &action, nullptr);
-    }
-  }
-  ~SweepSignals() {
-    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &old_[i], nullptr);
-  }
-  SweepSignals(const SweepSignals&) = delete;
-  SweepSignals& operator=(const SweepSignals&) = delete;
-
- private:
-  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
-  struct sigaction old_[3] {};
-};
 
 /// Starts `args` (argv[0] = this program) with stdout and stderr into `log`, leading its own
 /// process group; returns its pid.
@@ -357,7 +333,10 @@ int sweep_command(const SweepOptions& o) {
   }
 
   // Before the scratch folder exists, so that no signal can leave it behind.
-  std::optional<SweepSignals> signals(std::in_place);
+  // Without SA_RESTART, so that waitpid returns at the signal.
+  g_sweep_signal = 0;
+  std::optional<SignalScope> signals(std::in_place, on_sweep_signal, std::initializer_list<int>{SIGINT, SIGTERM, SIGHUP},
+                                     false);
   const TempFolder temp;
   std::vector<int> codes(variants.size(), -1);
   std::map<pid_t, std::size_t> running;
