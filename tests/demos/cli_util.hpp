@@ -1,4 +1,6 @@
 #pragma once
+
+#include <signal.h>
 // Runs the simreel program as a user would and captures exit code, stdout and stderr.
 #include <sys/wait.h>
 #include <unistd.h>
@@ -37,6 +39,24 @@ inline std::string slurp(const std::filesystem::path& p) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+/// For a forked child before it execs simreel: SIGINT, SIGTERM and SIGHUP at their default
+/// actions and unblocked, as a Ctrl-C at a terminal finds them. simreel keeps a signal that its
+/// parent ignores, and a test run started as a background job of a script inherits SIGINT
+/// ignored: without this, a test that interrupts simreel would wait for it forever.
+/// Async-signal-safe.
+inline void default_signals_for_child() noexcept {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int s : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction dfl {};
+    dfl.sa_handler = SIG_DFL;
+    sigemptyset(&dfl.sa_mask);
+    sigaction(s, &dfl, nullptr);
+    sigaddset(&set, s);
+  }
+  sigprocmask(SIG_UNBLOCK, &set, nullptr);
 }
 
 /// A fresh temporary directory, removed by the destructor.

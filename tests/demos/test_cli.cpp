@@ -363,6 +363,7 @@ TEST(Cli, InterruptClosesTheVideoAndExits130) {
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
+    simreel::test::default_signals_for_child();
     const std::string out = (d / "err.txt").string();
     freopen("/dev/null", "w", stdout);
     freopen(out.c_str(), "w", stderr);

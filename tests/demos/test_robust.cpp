@@ -100,6 +100,7 @@ int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs:
   const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
   const pid_t pid = ::fork();
   if (pid == 0) {
+    simreel::test::default_signals_for_child();
     ::dup2(null_fd, STDOUT_FILENO);
     ::dup2(null_fd, STDERR_FILENO);
     ::execve(SIMREEL_BIN, argv.data(), envp.data());
@@ -363,6 +364,7 @@ TEST(Robust, SecondInterruptEndsFfmpegAndRemovesTheTemporaries) {
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
+    simreel::test::default_signals_for_child();
     const std::string path = (d / "bin").string() + ":/usr/bin:/bin";
     ::setenv("PATH", path.c_str(), 1);
     (void)!std::freopen("/dev/null", "w", stdout);
