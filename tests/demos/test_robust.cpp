@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
 #include <thread>
@@ -82,7 +83,16 @@ int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs:
   fs::create_directories(dir);
   const int watch = ::inotify_init1(IN_CLOEXEC);
   EXPECT_GE(watch, 0);
-  std::map<int, fs::path> folders{{::inotify_add_watch(watch, dir.c_str(), IN_CREATE), dir}};
+  std::map<int, fs::path> folders;
+  // A folder and the folders already in it: one can be made before the watch on its parent
+  // is in place (bake makes cache/ and then cache/state/ at once), and its event is then lost.
+  std::function<void(const fs::path&)> watch_tree = [&](const fs::path& folder) {
+    folders[::inotify_add_watch(watch, folder.c_str(), IN_CREATE)] = folder;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(folder, ec))
+      if (e.is_directory(ec)) watch_tree(e.path());
+  };
+  watch_tree(dir);
   // Built before the fork: the child of a threaded process should only exec.
   std::vector<char*> argv{const_cast<char*>(SIMREEL_BIN)};
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -119,8 +129,7 @@ int interrupt_at_first_temporary(const std::vector<std::string>& args, const fs:
       const auto* e = reinterpret_cast<const inotify_event*>(buf + at);
       const std::string name = e->len > 0 ? e->name : "";
       if ((e->mask & IN_ISDIR) != 0) {
-        const fs::path sub = folders[e->wd] / name;
-        folders[::inotify_add_watch(watch, sub.c_str(), IN_CREATE)] = sub;
+        watch_tree(folders[e->wd] / name);
       } else if (has(name, ".tmp-")) {
         created = true;
       }
