@@ -12,8 +12,10 @@
 #include <cstdio>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <new>
+#include <sstream>
 #include <string>
 
 namespace simreel::assets {
@@ -96,6 +98,23 @@ class AddressSpaceBudget {
   bool active_ = false;
 };
 
+/// Throws AssetError naming `file` and the first vertex of `scene` with a coordinate that is NaN
+/// or infinite (a float beyond 3.4e38 reads as infinite).
+void refuse_non_finite(const aiScene& scene, const std::string& file) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& am = *scene.mMeshes[m];
+    for (unsigned v = 0; v < am.mNumVertices; ++v) {
+      const aiVector3D& p = am.mVertices[v];
+      if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) continue;
+      std::ostringstream msg;
+      msg << file << ": cannot import mesh: a vertex at (" << p.x << ", " << p.y << ", " << p.z
+          << ") (mesh " << m << ", vertex " << v << " as imported), expected finite coordinates "
+          << "(at most 3.4e38 in size: they are read as 32-bit floats)";
+      throw AssetError(msg.str());
+    }
+  }
+}
+
 }  // namespace
 
 /// Checks the file and reads it with `importer` (the steps of load_mesh; with `keep_groups`, the
@@ -119,22 +138,32 @@ static const aiScene* import_scene(Assimp::Importer& importer, const std::filesy
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // ValidateDataStructure first: a malformed file (assimp's own corpus has some) becomes an error
   // instead of a crash or an assertion in the later steps.
+  // The vertices are checked as the file gives them, before the post-processing: joining
+  // identical vertices compares positions, and a NaN one was merged into some other vertex (an
+  // OBJ "v 1 1 nan" silently became a copy of a neighbour) instead of being refused.
   const aiScene* scene = nullptr;
-  try {
-    const AddressSpaceBudget budget(kMaxMeshImportBytes);
-    scene = importer.ReadFile(file, aiProcess_ValidateDataStructure | aiProcess_Triangulate |
-                                        aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
-                                        aiProcess_SortByPType | aiProcess_PreTransformVertices);
-  } catch (const std::bad_alloc&) {
-    throw AssetError(file + ": cannot import mesh: needs more than " + std::to_string(kMaxMeshImportBytes >> 20) +
-                     " MiB of memory (the mesh import memory limit)");
-  }
-  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
+  const auto refuse_broken = [&] {
+    if (scene && !(scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) && scene->mRootNode) return;
     std::string reason = importer.GetErrorString();
     std::replace(reason.begin(), reason.end(), '\n', ' ');
     if (reason.empty()) reason = "unknown assimp error";
     throw AssetError(file + ": cannot import mesh: " + reason);
+  };
+  try {
+    const AddressSpaceBudget budget(kMaxMeshImportBytes);
+    scene = importer.ReadFile(file, aiProcess_ValidateDataStructure);
+    refuse_broken();
+    refuse_non_finite(*scene, file);
+    scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                         aiProcess_GenSmoothNormals | aiProcess_SortByPType |
+                                         aiProcess_PreTransformVertices);
+  } catch (const std::bad_alloc&) {
+    throw AssetError(file + ": cannot import mesh: needs more than " + std::to_string(kMaxMeshImportBytes >> 20) +
+                     " MiB of memory (the mesh import memory limit)");
   }
+  refuse_broken();
+  // Node transforms can take finite positions beyond float's range.
+  refuse_non_finite(*scene, file);
   return scene;
 }
 

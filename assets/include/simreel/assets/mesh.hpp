@@ -55,8 +55,9 @@ inline constexpr std::uint64_t kMaxMeshImportBytes = 4ull << 30;
 /// (x, y, z) -> (x, -z, y) (+90 degrees about x). OBJ, STL and PLY carry no up axis and are taken
 /// as written, i.e. z up.
 /// @throws AssetError naming the file when it is missing, not a regular file, unreadable,
-///         unsupported, broken (assimp's data-structure validation), beyond the limits above or
-///         has no triangles.
+///         unsupported, broken (assimp's data-structure validation), beyond the limits above,
+///         has a vertex coordinate that is NaN or infinite as a float (checked before identical
+///         vertices are joined, and again after the node transforms) or has no triangles.
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
 /// A named part of a mesh file: an OBJ object or group ("o name", "g name"), a glTF node or
