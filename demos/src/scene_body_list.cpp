@@ -242,7 +242,7 @@ void shape(ObjectReader& r, const std::string& type_key, sim::BodyType body_type
         return;
       }
       asset = mesh_file(r, "mesh");
-      if (!asset) return;
+      if (!asset || !scale_keeps_mesh_finite(r, scale, asset->positions)) return;
       for (const auto& p : asset->positions) verts.emplace_back(p.x() * scale[0], p.y() * scale[1], p.z() * scale[2]);
     } else if (type == "convex_hull") {
       if (!r.has("points")) {

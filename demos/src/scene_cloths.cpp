@@ -42,6 +42,7 @@ double cloth_mesh(ObjectReader& r, sim::ClothMesh& mesh, std::filesystem::path& 
     r.error_at(r.pointer("mesh"), e.what());
     return 0.0;
   }
+  if (!scale_keeps_mesh_finite(r, scale, m.positions)) return 0.0;
   std::map<std::array<float, 3>, std::uint32_t> weld;
   std::vector<std::uint32_t> index(m.positions.size());
   for (std::size_t i = 0; i < m.positions.size(); ++i) {

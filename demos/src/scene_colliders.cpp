@@ -133,18 +133,20 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
       const std::filesystem::path path = std::filesystem::path(file).parent_path() / name;
       try {
         auto mesh = std::make_shared<assets::TriangleMesh>(assets::load_mesh(path));
-        c.mesh.vertices.reserve(mesh->positions.size());
-        for (const auto& p : mesh->positions)
-          c.mesh.vertices.emplace_back(p.x() * c.mesh_scale[0], p.y() * c.mesh_scale[1], p.z() * c.mesh_scale[2]);
-        c.mesh.triangles = mesh->triangles;
-        c.mesh_asset = std::move(mesh);
-        // The engine's own checks (finite vertices, some non-degenerate triangle), reported here
-        // with the file and pointer instead of later by build_world with neither.
-        try {
-          sim::World probe;
-          (void)probe.add_mesh(c.mesh);
-        } catch (const std::invalid_argument& e) {
-          r.error_at(r.pointer("file"), path.string() + ": " + e.what());
+        if (scale_keeps_mesh_finite(r, c.mesh_scale, mesh->positions)) {
+          c.mesh.vertices.reserve(mesh->positions.size());
+          for (const auto& p : mesh->positions)
+            c.mesh.vertices.emplace_back(p.x() * c.mesh_scale[0], p.y() * c.mesh_scale[1], p.z() * c.mesh_scale[2]);
+          c.mesh.triangles = mesh->triangles;
+          c.mesh_asset = std::move(mesh);
+          // The engine's own checks (finite vertices, some non-degenerate triangle), reported here
+          // with the file and pointer instead of later by build_world with neither.
+          try {
+            sim::World probe;
+            (void)probe.add_mesh(c.mesh);
+          } catch (const std::invalid_argument& e) {
+            r.error_at(r.pointer("file"), path.string() + ": " + e.what());
+          }
         }
       } catch (const assets::AssetError& e) {
         r.error_at(r.pointer("file"), e.what());

@@ -61,6 +61,16 @@ sim::KeyframePath keyframe_path(ObjectReader& r, const std::string& key);
 /// A mesh file's "scale": one number for all axes or [sx, sy, sz], each > 0 (default 1).
 std::array<double, 3> mesh_scale(ObjectReader& r);
 
+/// The largest coordinate (m) a scaled mesh vertex may have: beyond it the renderer's and the
+/// particles' 32-bit floats are infinite (a mesh scaled by 1e300 was accepted and vanished from
+/// the frames while still colliding).
+inline constexpr double kMaxScaledCoordinate = 3e38;
+
+/// False, with an error at r's "scale", when `scale` takes some vertex of `positions` (the mesh
+/// file's, m) beyond kMaxScaledCoordinate on some axis.
+bool scale_keeps_mesh_finite(ObjectReader& r, const std::array<double, 3>& scale,
+                             const std::vector<Eigen::Vector3f>& positions);
+
 /// Calls each(object, pointer, index) for every element of the array r[key]; reports non-arrays
 /// and non-object elements.
 template <class F>

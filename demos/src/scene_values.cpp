@@ -1,4 +1,5 @@
 // Value readers shared by the scene loader's readers: rotations, distributions, keyframe paths.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -129,6 +130,21 @@ std::array<double, 3> mesh_scale(ObjectReader& r) {
   if (sj == nullptr) return {1, 1, 1};
   const auto k = r.numbers("scale", {1, 1, 1}, 3, 0.0, kInf, true);
   return {k[0], k[1], k[2]};
+}
+
+bool scale_keeps_mesh_finite(ObjectReader& r, const std::array<double, 3>& scale,
+                             const std::vector<Eigen::Vector3f>& positions) {
+  double reach = 0.0;
+  for (const auto& p : positions)
+    for (int k = 0; k < 3; ++k) reach = std::max(reach, std::abs(double(p[k]) * scale[std::size_t(k)]));
+  if (reach <= kMaxScaledCoordinate) return true;
+  const json* sj = r.get("scale");
+  std::ostringstream m;
+  m << "expected a scale that keeps the mesh within +-" << kMaxScaledCoordinate
+    << " m (its vertices are drawn as 32-bit floats), found " << (sj != nullptr ? describe(*sj) : "1")
+    << ": a vertex reaches " << reach << " m";
+  r.error_at(r.pointer("scale"), m.str());
+  return false;
 }
 
 }  // namespace simreel::app::scene_read

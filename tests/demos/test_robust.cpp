@@ -293,6 +293,37 @@ TEST(Robust, DegenerateMeshNamesTheFileAndPointer) {
   EXPECT_TRUE(has(r.err, "flat.obj")) << r.err;
 }
 
+// A mesh scaled past +-3e38 m was accepted: the engine's doubles held it, the renderer's floats
+// made it infinite, and it vanished from the frames while particles still hit it. Each mesh
+// reader (collider, static body mesh, dynamic body hull, cloth) refuses it at its "scale"; the
+// largest scale that keeps the 1 m tetrahedron finite is accepted. A NaN vertex in the file is
+// refused at the file's pointer.
+TEST(Robust, MeshScaledBeyondFloatRangeIsRefusedAtItsScale) {
+  TempDir d;
+  write_file(d / "tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  write_file(d / "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 nan\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  struct Case {
+    std::string json, expect;
+  };
+  const Case cases[] = {
+      {R"({"colliders": [{"type": "mesh", "file": "tet.obj", "scale": 1e300}]})", "/colliders/0/scale: expected a scale"},
+      {R"({"colliders": [{"type": "mesh", "file": "tet.obj", "scale": [1, 1e39, 1]}]})", "/colliders/0/scale: expected a scale"},
+      {R"({"bodies": [{"type": "static", "shape": "mesh", "mesh": "tet.obj", "scale": 1e300}]})", "/bodies/0/scale: expected a scale"},
+      {R"({"bodies": [{"shape": "convex_hull", "mesh": "tet.obj", "scale": 1e300}]})", "/bodies/0/scale: expected a scale"},
+      {R"({"cloths": [{"mesh": "tet.obj", "scale": 1e300}]})", "/cloths/0/scale: expected a scale"},
+      {R"({"colliders": [{"type": "mesh", "file": "nan.obj"}]})", "/colliders/0/file: "},
+  };
+  for (const Case& c : cases) {
+    write_file(d / "s.json", c.json);
+    const auto r = run_simreel("validate " + (d / "s.json").string());
+    EXPECT_EQ(r.code, 2) << c.json << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, c.expect)) << c.json << "\n" << r.err;
+  }
+  write_file(d / "s.json", R"({"colliders": [{"type": "mesh", "file": "tet.obj", "scale": 2.9e38}]})");
+  const auto r = run_simreel("validate " + (d / "s.json").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
 TEST(Robust, OutputsUnderAFileNameTheOutputAndTheFile) {
   TempDir d;
   write_file(d / "f", "x");
