@@ -61,11 +61,16 @@ HashRecord read_hash_record(const fs::path& path) {
   if (!doc.is_object()) throw SceneError(file + ": expected a JSON object, found " + describe(doc));
   ObjectReader top(doc, "", file, errors);
   HashRecord r;
+  // Each value's own check comes first; a follow-up error ("missing", "found nothing") is only
+  // for a value that was absent or of the right type, not a second message about the same one.
+  const auto clean_since = [&](std::size_t before) { return errors.size() == before; };
+  std::size_t before = errors.size();
   const long long format = top.integer("simreel_hashes", -1, 1, kHashFormat);
-  if (format < 0) top.error_at("/simreel_hashes", "missing: expected 1 or 2 (a file written by `simreel render --hash`)");
+  if (format < 0 && clean_since(before)) top.error_at("/simreel_hashes", "missing: expected 1 or 2 (a file written by `simreel render --hash`)");
   r.format = int(std::max(1LL, format));
+  before = errors.size();
   r.scene = top.string("scene", "");
-  if (r.scene.empty()) top.error_at("/scene", "expected the scene path, found nothing");
+  if (r.scene.empty() && clean_since(before)) top.error_at("/scene", "expected the scene path, found nothing");
   if (const nlohmann::json* set = top.get("set")) {
     if (!set->is_array()) {
       top.error("set", "an array of \"POINTER=VALUE\" strings", *set);
@@ -80,19 +85,21 @@ HashRecord read_hash_record(const fs::path& path) {
     }
   }
   r.seed = top.integer("seed", 0, 0, std::numeric_limits<long long>::max());
+  before = errors.size();
   const std::string size = top.string("size", "");
   if (const auto wh = parse_pair(size, 'x', 16, 8192)) {
     r.width = int(wh->first);
     r.height = int(wh->second);
-  } else {
+  } else if (clean_since(before)) {
     top.error_at("/size", "expected \"WIDTHxHEIGHT\" with each in [16, 8192], found \"" + size + "\"");
   }
   r.fps = top.number("fps", 30.0, 0.0, 1000.0, true);
+  before = errors.size();
   const std::string frames = top.string("frames", "");
   if (const auto fe = parse_pair(frames, ':', 0, kMaxFrames); fe && fe->first < fe->second) {
     r.first = int(fe->first);
     r.end = int(fe->second);
-  } else {
+  } else if (clean_since(before)) {
     top.error_at("/frames", "expected \"FIRST:END\" with 0 <= FIRST < END <= " + std::to_string(kMaxFrames) +
                                 ", found \"" + frames + "\"");
   }
@@ -129,18 +136,23 @@ HashRecord read_hash_record(const fs::path& path) {
         }
         ObjectReader e((*hashes)[i], ptr, file, errors);
         FrameHashes f;
+        before = errors.size();
         f.frame = int(e.integer("frame", -1, 0, 100000000));
+        if (f.frame < 0 && clean_since(before)) e.error_at(ptr + "/frame", "missing: expected the frame number");
         if (f.frame >= 0 && errors.empty() && !is_hashed_frame(r, f.frame)) {
           e.error_at(ptr + "/frame", "frame " + std::to_string(f.frame) + " is not one the record hashes (frames " +
                                          range_text(r) + " every " + std::to_string(r.every) + ")");
         }
         for (auto [key, slot] : {std::pair{"phash", &f.phash}, std::pair{"dhash", &f.dhash},
                                  std::pair{"chash", &f.chash}}) {
+          before = errors.size();
           const std::string hex = e.string(key, "");
+          if (!clean_since(before)) continue;
           try {
             *slot = render::parse_hash(hex);
           } catch (const std::invalid_argument&) {
-            e.error_at(ptr + "/" + key, "expected 16 hex digits, found \"" + hex + "\"");
+            e.error_at(ptr + "/" + key, hex.empty() ? std::string("missing: expected 16 hex digits")
+                                                    : "expected 16 hex digits, found \"" + hex + "\"");
           }
         }
         e.finish();

@@ -187,6 +187,38 @@ TEST(Robust, GoldenFramesAndSizeParsedWithoutOverflow) {
   }
 }
 
+TEST(Robust, GoldenKeyOfTheWrongTypeGetsOneErrorAndAHashEntryNeedsItsFrame) {
+  // A number where the golden wants a string was reported twice ("expected a string, found 64"
+  // and then "found \"\""), and "simreel_hashes": 3 as out of range and then as "missing". An
+  // entry of "hashes" with no "frame" was taken as frame -1, which no render produces.
+  TempDir d;
+  const auto errors_of = [&](const std::string& text) {
+    write_file(d / "g.json", text);
+    try {
+      (void)app::read_hash_record(d / "g.json");
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const auto count = [](const std::string& s, const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+    return n;
+  };
+  const std::string hex = R"("phash": "bbcc132bcc934c33", "dhash": "f0f0f0f0f0f0f0f0", "chash": "0000aaaa0000aaaa")";
+  std::string err = errors_of(R"({"simreel_hashes": 3, "scene": 5, "size": 64, "frames": 4, "hashes": [{"frame": 0, "phash": 1, "dhash": "f0f0f0f0f0f0f0f0"}]})");
+  for (const char* key : {"/simreel_hashes:", "/scene:", "/size:", "/frames:", "/hashes/0/phash:", "/hashes/0/chash:"})
+    EXPECT_EQ(count(err, key), 1u) << key << " in:\n" << err;
+  EXPECT_TRUE(has(err, "/size: expected a string, found 64")) << err;
+  EXPECT_TRUE(has(err, "/hashes/0/chash: missing")) << err;
+  err = errors_of(R"({"simreel_hashes": 2, "scene": "s.json", "size": "64x36", "frames": "0:4", "hashes": [{)" + hex + "}]}");
+  EXPECT_TRUE(has(err, "/hashes/0/frame: missing")) << err;
+  EXPECT_EQ(errors_of(R"({"simreel_hashes": 2, "scene": "s.json", "size": "64x36", "frames": "0:4", "hashes": [{"frame": 3, )" +
+                      hex + "}]}"),
+            "");
+}
+
 TEST(Robust, IntegerKeysNeverOverflowTheCast) {
   // double(LLONG_MAX) == 2^63: accepted before, then cast to long long (undefined behaviour).
   EXPECT_TRUE(has(loader_error(R"({"seed": 9223372036854775808.0})"), "/seed")) << "2^63";
