@@ -299,11 +299,7 @@ int check_command(const CheckOptions& o) {
     std::error_code ec;
     if (!fs::is_directory(root, ec)) throw SceneError("--root " + root + ": expected a folder");
   }
-  if (!o.report_dir.empty()) {
-    std::error_code ec;
-    if (fs::exists(o.report_dir, ec) && !fs::is_directory(o.report_dir, ec))
-      throw SceneError("--report " + o.report_dir + ": is a file, expected a folder");
-  }
+  check_outputs({{"--junit", o.junit, false}, {"--report", o.report_dir, true}});
   const std::vector<fs::path> goldens = collect_goldens(o.goldens);
   const bool several = goldens.size() > 1;
   std::vector<GoldenOutcome> outcomes;

@@ -120,6 +120,13 @@ int render_command(const RenderOptions& o) {
   }
   if (!o.contact_sheet.empty() && lower(fs::path(o.contact_sheet).extension().string()) != ".png")
     throw SceneError("--contact-sheet " + o.contact_sheet + ": expected a .png file");
+  {
+    std::vector<OutputPath> checked;
+    for (const auto& out : outputs) checked.push_back({"-o", out, !is_video_path(fs::path(out))});
+    checked.push_back({"--contact-sheet", o.contact_sheet, false});
+    checked.push_back({"--hash", o.hash_file, false});
+    check_outputs(checked);
+  }
   const auto [sheet_cols, sheet_rows] = parse_grid(o.sheet_grid);
   if (o.hash_every < 1) throw SceneError("--hash-every " + std::to_string(o.hash_every) + ": expected an integer >= 1");
   if (!o.bitrate.empty() && o.bitrate.find_first_not_of("0123456789.kKM") != std::string::npos)

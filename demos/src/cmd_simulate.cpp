@@ -16,6 +16,9 @@ namespace simreel::app {
 int simulate_command(const RunOptions& o, const SimulateExports& exports) {
   if (exports.particles.empty() && exports.bodies.empty() && exports.joints.empty())
     throw SceneError("simulate: expected at least one of --export, --export-bodies, --export-joints, found none");
+  check_outputs({{"--export", exports.particles, false},
+                 {"--export-bodies", exports.bodies, false},
+                 {"--export-joints", exports.joints, false}});
   int first = 0;
   const Scene scene = prepare_scene(o, &first);
   SceneWorld sw = build_world(scene);

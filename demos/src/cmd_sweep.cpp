@@ -256,8 +256,7 @@ int sweep_command(const SweepOptions& o) {
     throw SceneError("--vary: expected at least one --vary POINTER=V1,V2,... (or --seeds 1,2,3)");
   if (o.strip < 1 || o.strip > 16) throw SceneError("--strip " + std::to_string(o.strip) + ": expected 1..16 frames per variant");
   if (o.hash && o.output_dir.empty()) throw SceneError("--hash: expected -o DIR too (the goldens go there, one per variant)");
-  if (!o.output_dir.empty() && fs::exists(o.output_dir) && !fs::is_directory(o.output_dir))
-    throw SceneError("-o " + o.output_dir + ": is a file, expected a folder (each variant's video goes there)");
+  check_outputs({{"--contact-sheet", o.contact_sheet, false}, {"-o", o.output_dir, true}});
   const int jobs = o.jobs ? *o.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
   if (jobs < 1 || jobs > 256) throw SceneError("--jobs " + std::to_string(jobs) + ": expected 1..256");
 

@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
+
+#include "simreel/render/atomic_file.hpp"
 
 #include <stdexcept>
 
@@ -20,6 +23,29 @@ std::pair<int, int> parse_frames(const std::string& text) {
   }
   throw SceneError("--frames " + text + ": expected a count N in [1, " + std::to_string(kMaxFrames) +
                    "] or a range A:B with 0 <= A < B <= " + std::to_string(kMaxFrames));
+}
+
+void check_outputs(const std::vector<OutputPath>& outputs) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<fs::path, const OutputPath*>> seen;
+  for (const OutputPath& out : outputs) {
+    if (out.path.empty()) continue;
+    std::error_code ec;
+    if (out.folder) {
+      if (const std::string kind = render::file_kind(out.path); !kind.empty() && kind != "a directory")
+        throw SceneError(out.option + " " + out.path + ": is " + kind + ", expected a folder or a new name");
+    } else if (const std::string why = render::unreplaceable_output(out.path); !why.empty()) {
+      throw SceneError(out.option + " " + out.path + ": " + why);
+    }
+    // Same path however spelled ("a.gif", "./a.gif", a link to it).
+    fs::path key = fs::weakly_canonical(fs::absolute(out.path, ec), ec);
+    if (ec) key = fs::absolute(out.path).lexically_normal();
+    for (const auto& [other, first] : seen)
+      if (other == key)
+        throw SceneError(out.option + " " + out.path + ": the same path as " + first->option + " " + first->path +
+                         "; expected a different name for each output");
+    seen.emplace_back(key, &out);
+  }
 }
 
 namespace {

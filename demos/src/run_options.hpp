@@ -38,6 +38,21 @@ std::uint64_t memory_limit(const std::optional<std::string>& option);
 /// @throws SceneError naming the largest items' keys when the estimate exceeds the budget.
 void check_memory(const Scene& scene, const RunOptions& o);
 
+/// One output a command will write: the option that names it ("-o", "--hash"), the path, and
+/// whether it is a folder (PNG frames, a report) rather than a file.
+struct OutputPath {
+  std::string option;
+  std::string path;
+  bool folder = false;
+};
+
+/// Usage check of a command's outputs before anything runs: a file must be a name the atomic
+/// write can replace (render::unreplaceable_output: not a directory, device, FIFO or socket), a
+/// folder must not be a file or device, and no two outputs may name the same path (two writers
+/// racing to rename over one name). Empty paths are skipped.
+/// @throws SceneError (exit 2) naming the option and the path.
+void check_outputs(const std::vector<OutputPath>& outputs);
+
 /// Loads the scene with its --set overrides, then applies --frames, --fps, --seed, --size and
 /// --backend. `first` receives the first frame to output (frames before it are simulated only).
 /// @throws SceneError (exit 2) naming the option or the scene key.

@@ -372,6 +372,35 @@ TEST(Robust, OutputsUnderAFileNameTheOutputAndTheFile) {
   EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator()), 1) << "nothing but f";
 }
 
+TEST(Robust, AnOutputThatIsADeviceFifoOrFolderOrNamedTwiceExits2BeforeRunning) {
+  // The atomic rename would replace a FIFO or device (as root, `--hash /dev/full` turned
+  // /dev/full into a JSON file), and two outputs of one name raced to rename over it.
+  TempDir d;
+  const std::string fifo = (d / "pipe").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  fs::create_directory(d / "folder");
+  const std::string scene = "demos/scenes/smoke.json", quick = " --frames 2 --size 32x18 -q";
+  const std::string png = (d / "png").string(), folder = (d / "folder").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"render " + scene + quick + " -o " + png + " --hash " + fifo, "--hash " + fifo + ": is a FIFO"},
+      {"render " + scene + quick + " -o " + png + " --hash " + folder, "is a directory, expected a regular file"},
+      {"render " + scene + quick + " -o " + fifo, "-o " + fifo + ": is a FIFO, expected a folder"},
+      {"render " + scene + quick + " -o " + png + ".gif -o " + png + "/../png.gif", "the same path as -o"},
+      {"simulate " + scene + " --frames 2 --export " + fifo, "--export " + fifo + ": is a FIFO"},
+      {"simulate " + scene + " --frames 2 --export " + png + ".csv --export-joints " + png + ".csv", "the same path"},
+      {"check tests/golden/smoke.json --junit " + folder + ".xml --report " + fifo, "--report " + fifo + ": is a FIFO"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const auto r = run_simreel(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, expected)) << args << "\n" << r.err;
+  }
+  EXPECT_EQ(fs::status(fifo).type(), fs::file_type::fifo);
+  EXPECT_TRUE(fs::is_directory(folder));
+  EXPECT_FALSE(fs::exists(png + ".gif"));
+  EXPECT_FALSE(fs::exists(png + ".csv"));
+}
+
 TEST(Robust, FfmpegThatFailsButExitsZeroMakesRenderExit1WithNoVideo) {
   TempDir d;
   fs::create_directories(d / "bin");

@@ -6,6 +6,7 @@
 #include <iterator>
 #include <string>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "render_test_util.hpp"
@@ -98,6 +99,38 @@ TEST(RenderAtomicFile, ExistingFileIsReplacedOnlyAtCommit) {
   }  // not committed: the previous file stays
   EXPECT_EQ(read_all(path), "new content, longer than the old");
   EXPECT_EQ(dir.entries(), 1);
+}
+
+TEST(RenderAtomicFile, AFifoOrFolderIsRefusedAndLeftAsItWas) {
+  // The rename over the final name replaced whatever was there: as root, `--hash /dev/full`
+  // turned the device into a JSON file. A FIFO stands in for the device here.
+  const test::TempDir dir("atomic-special");
+  const fs::path fifo = dir.path() / "pipe.csv";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    AtomicFile f(fifo);
+    ADD_FAILURE() << "a FIFO was accepted as the final name";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("pipe.csv: is a FIFO, expected a regular file"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(fs::status(fifo).type(), fs::file_type::fifo);
+  fs::create_directory(dir.path() / "folder");
+  EXPECT_THROW(write_file_atomic(dir.path() / "folder", "x"), IoError);
+  EXPECT_TRUE(fs::is_directory(dir.path() / "folder"));
+  EXPECT_EQ(dir.entries(), 2);  // no temporary left
+  EXPECT_EQ(unreplaceable_output(dir.path() / "new.json"), "");
+  EXPECT_EQ(file_kind(dir.path() / "folder"), "a directory");
+}
+
+TEST(RenderAtomicFile, ALinkToAFileIsWrittenThroughAndKept) {
+  const test::TempDir dir("atomic-link");
+  const fs::path real = dir.path() / "real.json", link = dir.path() / "link.json";
+  write_file_atomic(real, "old");
+  fs::create_symlink("real.json", link);
+  write_file_atomic(link, "new");
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+  EXPECT_EQ(read_all(real), "new");
+  EXPECT_EQ(dir.entries(), 2);
 }
 
 TEST(RenderAtomicFile, CommitTwiceThrows) {

@@ -117,12 +117,46 @@ std::string make_parent_directories(const fs::path& path) {
   return "cannot create directory " + dir.string() + ": " + ec.message();
 }
 
-AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
-  const fs::path dir = path_.parent_path();
-  if (const std::string problem = make_parent_directories(path_); !problem.empty()) fail(path_, problem);
+std::string file_kind(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  switch (st.type()) {
+    case fs::file_type::none:
+    case fs::file_type::not_found: return "";
+    case fs::file_type::regular: return "a regular file";
+    case fs::file_type::directory: return "a directory";
+    case fs::file_type::character: return "a character device";
+    case fs::file_type::block: return "a block device";
+    case fs::file_type::fifo: return "a FIFO";
+    case fs::file_type::socket: return "a socket";
+    default: return "not a regular file";
+  }
+}
+
+std::string unreplaceable_output(const fs::path& path) {
+  const std::string kind = file_kind(path);
+  if (kind.empty() || kind == "a regular file") return "";
+  // Renaming the finished temporary over it would replace the device or FIFO itself (as root,
+  // `--hash /dev/full` turned /dev/full into a JSON file), not write into it.
+  return "is " + kind + ", expected a regular file or a new name";
+}
+
+AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)), target_(path_) {
+  if (const std::string problem = unreplaceable_output(path_); !problem.empty()) fail(path_, problem);
+  {
+    // A link to a regular file: replace the file, keep the link (a rename over the link would
+    // turn it into a copy and leave the file it named stale).
+    std::error_code ec;
+    if (fs::is_symlink(fs::symlink_status(path_, ec)) && fs::is_regular_file(path_, ec)) {
+      const fs::path real = fs::canonical(path_, ec);
+      if (!ec) target_ = real;
+    }
+  }
+  const fs::path dir = target_.parent_path();
+  if (const std::string problem = make_parent_directories(target_); !problem.empty()) fail(path_, problem);
   // Built piecewise: GCC 12 warns falsely on "." + string&&.
   std::string name = ".";
-  name += path_.filename().string();
+  name += target_.filename().string();
   name += ".tmp-";
   name += std::to_string(long(::getpid()));
   name += "-";
@@ -169,7 +203,7 @@ void AtomicFile::commit() {
   }
   std::error_code ec;
   if (error.empty()) {
-    fs::rename(tmp_, path_, ec);
+    fs::rename(tmp_, target_, ec);
     if (ec) error = ec.message();
   }
   if (error.empty()) {

@@ -20,8 +20,9 @@ namespace simreel::render {
 class AtomicFile {
  public:
   /// Creates the parent directory if missing and opens the temporary for writing (close-on-exec,
-  /// so child processes such as ffmpeg do not inherit it).
-  /// @throws IoError naming `path` and the system's reason.
+  /// so child processes such as ffmpeg do not inherit it). A `path` that is a symbolic link to a
+  /// regular file is written through: the file it names is replaced and the link kept.
+  /// @throws IoError naming `path` and the system's reason, or unreplaceable_output()'s.
   explicit AtomicFile(std::filesystem::path path);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
@@ -45,6 +46,7 @@ class AtomicFile {
 
  private:
   std::filesystem::path path_;
+  std::filesystem::path target_;  ///< what the rename replaces: path_, or the file its links name
   std::filesystem::path tmp_;
   std::FILE* file_ = nullptr;
   bool done_ = false;
@@ -74,6 +76,17 @@ void unregister_child(pid_t pid) noexcept;
 /// component that is a file where a directory is needed ("out/a.csv is a file, expected a
 /// directory"). Never throws.
 std::string make_parent_directories(const std::filesystem::path& path);
+
+/// What is at `path` (following symbolic links), for messages: "a regular file", "a directory",
+/// "a character device", "a block device", "a FIFO", "a socket", "not a regular file"; "" when
+/// nothing is there. Never throws.
+std::string file_kind(const std::filesystem::path& path);
+
+/// Why `path` cannot be an AtomicFile's final name, or "" when it can (absent, or a regular file,
+/// directly or through symbolic links). The rename would replace whatever is there, so a
+/// directory, a device (/dev/null, /dev/stdout's terminal or pipe), a FIFO or a socket is refused:
+/// "is a character device, expected a regular file or a new name". Never throws.
+std::string unreplaceable_output(const std::filesystem::path& path);
 
 /// Writes `bytes` to `path` atomically (AtomicFile). @throws IoError naming the path.
 void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
