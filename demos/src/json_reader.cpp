@@ -487,8 +487,12 @@ std::vector<double> ObjectReader::numbers(const std::string& key, std::vector<do
 }
 
 std::array<double, 3> ObjectReader::vec3(const std::string& key, std::array<double, 3> fallback) {
-  auto v = numbers(key, {fallback[0], fallback[1], fallback[2]}, 3, -std::numeric_limits<double>::infinity(),
-                   std::numeric_limits<double>::infinity());
+  return vec3(key, fallback, -kMaxVectorComponent, kMaxVectorComponent);
+}
+
+std::array<double, 3> ObjectReader::vec3(const std::string& key, std::array<double, 3> fallback, double min,
+                                         double max) {
+  auto v = numbers(key, {fallback[0], fallback[1], fallback[2]}, 3, min, max);
   return {v[0], v[1], v[2]};
 }
 

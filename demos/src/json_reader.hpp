@@ -57,6 +57,10 @@ inline constexpr std::uintmax_t kMaxJsonBytes = 64ull << 20;
 /// most `limit` bytes. @throws SceneError "FILE: cannot read WHAT: why".
 std::string read_regular_file(const std::filesystem::path& path, const std::string& what, std::uintmax_t limit);
 
+/// The largest magnitude of a 3-vector's component in a scene (ObjectReader::vec3): below the
+/// largest float, 3.4e38.
+inline constexpr double kMaxVectorComponent = 3e38;
+
 /// The most frames a run may have: the scene's "frames", --frames N or A:B, and a golden's
 /// "frames" end (one cap for every way of giving a frame count).
 inline constexpr long long kMaxFrames = 1'000'000;
@@ -141,7 +145,11 @@ class ObjectReader {
   /// A string that must be one of `choices`.
   std::string choice(const std::string& key, const std::string& fallback,
                      const std::vector<std::string>& choices);
+  /// Three numbers, each within +-kMaxVectorComponent: every 3-vector of a scene ends up in 32-bit
+  /// floats (the renderer's vertices and uniforms, the particle store), where 1e39 is infinite.
   std::array<double, 3> vec3(const std::string& key, std::array<double, 3> fallback);
+  /// The same with each component in [min, max].
+  std::array<double, 3> vec3(const std::string& key, std::array<double, 3> fallback, double min, double max);
   /// The same with a range shared with the engine's validation (simreel/sim/ranges.hpp), so the
   /// loader and the engine reject the same values; messages are those of the overloads above.
   double number(const std::string& key, double fallback, const sim::Range& range) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -98,6 +99,17 @@ Scene scene_from_json(const json& doc, const std::string& file) {
                          emitter_pointers[b] + "), found \"" + scene.emitters[a].system.name + "\"");
         break;
       }
+  // A particle born beyond the world's bound is reported as diverged at the first step (exit 1,
+  // after the run began); a position out there is a bad scene, said here.
+  for (std::size_t a = 0; a < scene.emitters.size(); ++a) {
+    const sim::Vec3& at = scene.emitters[a].system.emitter.transform.translation;
+    if (scene.emitters[a].follow_camera || at.cwiseAbs().maxCoeff() <= scene.world.max_distance) continue;
+    std::ostringstream m;
+    m << file << ": " << emitter_pointers[a] << "/position: expected each coordinate within +-"
+      << scene.world.max_distance << " m (simulation.max_distance), found [" << at.x() << ", " << at.y() << ", "
+      << at.z() << "]";
+    errors.push_back(m.str());
+  }
   // Sub-emitters name the emitter their particles are born in.
   for (const auto& e : scene.emitters)
     for (const auto& se : e.sub_emitters) check_system_name(scene, se.emitter, se.pointer + "/emitter", errors);

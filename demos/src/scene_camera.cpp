@@ -2,12 +2,25 @@
 // "render", "camera", "light".
 #include "scene_read.hpp"
 
+#include <sstream>
+
 namespace simreel::app::scene_read {
 
 namespace {
 
+/// A camera point beyond the world's bound (simulation.max_distance, on each coordinate) sees
+/// nothing of a scene the engine keeps inside it; 1e300 was infinite as a float and drew an
+/// empty frame with no error.
+void inside_world(ObjectReader& s, const std::string& key, const Eigen::Vector3f& p, double reach) {
+  if (!s.has(key) || (p.cwiseAbs().maxCoeff() <= reach)) return;
+  std::ostringstream m;
+  m << "expected each coordinate within +-" << reach << " m (simulation.max_distance), found [" << p.x() << ", "
+    << p.y() << ", " << p.z() << "]";
+  s.error_at(s.pointer(key), m.str());
+}
+
 /// camera.path (keyframes) or camera.orbit; see README "camera".
-void camera_motion(ObjectReader& s, const render::Camera& base, render::CameraMotion& motion) {
+void camera_motion(ObjectReader& s, const render::Camera& base, render::CameraMotion& motion, double reach) {
   if (s.has("path") && s.has("orbit")) s.error_at(s.pointer(), "expected either \"path\" or \"orbit\", not both");
   if (const json* keys = s.get("path")) {
     if (!keys->is_array() || keys->empty()) {
@@ -27,6 +40,8 @@ void camera_motion(ObjectReader& s, const render::Camera& base, render::CameraMo
       key.time = k.number("time", 0.0, 0.0, kInf);
       key.position = to_vec3f(k.vec3("position", {base.position.x(), base.position.y(), base.position.z()}));
       key.target = to_vec3f(k.vec3("target", {base.target.x(), base.target.y(), base.target.z()}));
+      inside_world(k, "position", key.position, reach);
+      inside_world(k, "target", key.target, reach);
       key.fov_deg = float(k.number("fov_deg", base.fov_deg, 1.0, 170.0));
       if ((key.target - key.position).norm() < 1e-6f)
         k.error_at(k.pointer("target"), "expected a target different from the position");
@@ -41,8 +56,9 @@ void camera_motion(ObjectReader& s, const render::Camera& base, render::CameraMo
     ObjectReader o(*oj, s.pointer("orbit"), s.file(), s.errors());
     render::CameraOrbit orbit;
     orbit.center = to_vec3f(o.vec3("center", {base.target.x(), base.target.y(), base.target.z()}));
-    orbit.radius = float(o.number("radius", orbit.radius, 0.0, kInf, true));
-    orbit.height = float(o.number("height", orbit.height));
+    inside_world(o, "center", orbit.center, reach);
+    orbit.radius = float(o.number("radius", orbit.radius, 0.0, reach, true));
+    orbit.height = float(o.number("height", orbit.height, -reach, reach));
     orbit.period_s = float(o.number("period_s", orbit.period_s, 0.0, kInf, true));
     orbit.start_deg = float(o.number("start_deg", orbit.start_deg));
     o.finish();
@@ -98,11 +114,15 @@ void camera(ObjectReader& r, Scene& scene) {
     const auto& c = scene.camera;
     scene.camera.position = to_vec3f(s.vec3("position", {c.position.x(), c.position.y(), c.position.z()}));
     scene.camera.target = to_vec3f(s.vec3("target", {c.target.x(), c.target.y(), c.target.z()}));
+    inside_world(s, "position", scene.camera.position, scene.world.max_distance);
+    inside_world(s, "target", scene.camera.target, scene.world.max_distance);
     scene.camera.up = to_vec3f(s.vec3("up", {0, 0, 1}));
+    // Looking along "up" is drawn (look_at picks a perpendicular), but a zero "up" is no direction.
+    if (scene.camera.up.norm() < 1e-6f) s.error_at(s.pointer("up"), "expected a non-zero up direction");
     scene.camera.fov_deg = float(s.number("fov_deg", c.fov_deg, 1.0, 170.0));
     if ((scene.camera.target - scene.camera.position).norm() < 1e-6f)
       s.error_at(s.pointer("target"), "expected a target different from the camera position");
-    camera_motion(s, scene.camera, scene.camera_motion);
+    camera_motion(s, scene.camera, scene.camera_motion, scene.world.max_distance);
     s.finish();
   }
   scene.camera_motion.base = scene.camera;
@@ -115,10 +135,13 @@ void light(ObjectReader& r, Scene& scene) {
   const auto& l = scene.light;
   scene.light.direction = to_vec3f(s.vec3("direction", {l.direction.x(), l.direction.y(), l.direction.z()}));
   if (scene.light.direction.norm() < 1e-6f) s.error_at(s.pointer("direction"), "expected a non-zero direction");
-  scene.light.color = to_vec3f(s.vec3("color", {l.color.x(), l.color.y(), l.color.z()}));
-  scene.light.ambient = to_vec3f(s.vec3("ambient", {l.ambient.x(), l.ambient.y(), l.ambient.z()}));
+  // Intensities: 1 is full, above it over-exposes (HDR before tone mapping); a negative light
+  // darkened the sky to garbage and 1e300 became infinite in the shader.
+  const double most = kMaxLightIntensity;
+  scene.light.color = to_vec3f(s.vec3("color", {l.color.x(), l.color.y(), l.color.z()}, 0.0, most));
+  scene.light.ambient = to_vec3f(s.vec3("ambient", {l.ambient.x(), l.ambient.y(), l.ambient.z()}, 0.0, most));
   const auto& g = l.ground_ambient;
-  scene.light.ground_ambient = to_vec3f(s.vec3("ground_ambient", {g.x(), g.y(), g.z()}));
+  scene.light.ground_ambient = to_vec3f(s.vec3("ground_ambient", {g.x(), g.y(), g.z()}, 0.0, most));
   s.finish();
 }
 

@@ -66,6 +66,9 @@ std::array<double, 3> mesh_scale(ObjectReader& r);
 /// the frames while still colliding).
 inline constexpr double kMaxScaledCoordinate = 3e38;
 
+/// The largest light "color", "ambient" or "ground_ambient" component (1 is full intensity).
+inline constexpr double kMaxLightIntensity = 1000.0;
+
 /// False, with an error at r's "scale", when `scale` takes some vertex of `positions` (the mesh
 /// file's, m) beyond kMaxScaledCoordinate on some axis.
 bool scale_keeps_mesh_finite(ObjectReader& r, const std::array<double, 3>& scale,

@@ -219,6 +219,32 @@ TEST(Robust, GoldenKeyOfTheWrongTypeGetsOneErrorAndAHashEntryNeedsItsFrame) {
             "");
 }
 
+TEST(Robust, VectorsFitInFloatsAndPlacedThingsInsideTheWorld) {
+  // Each was accepted before: a camera at 1e300 m drew an empty frame (infinite as a float), one
+  // at 1e30 m saw nothing, a zero "up" was taken silently, a light of 1e300 or -1 drew garbage,
+  // and an emitter at 1e20 m ran and then failed at its first step as "diverged" (exit 1).
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {R"({"camera": {"position": [1e300, 0, 1]}})", "/camera/position/0: expected an array of 3 numbers each in [-3e+38, 3e+38]"},
+      {R"({"camera": {"position": [1e30, 0, 1]}})", "/camera/position: expected each coordinate within +-1e+06 m (simulation.max_distance)"},
+      {R"({"camera": {"target": [0, -2e6, 1]}})", "/camera/target: expected each coordinate within +-1e+06 m"},
+      {R"({"camera": {"path": [{"time": 0, "position": [5e6, 0, 1]}]}})", "/camera/path/0/position: expected each coordinate"},
+      {R"({"camera": {"orbit": {"radius": 1e300}}})", "/camera/orbit/radius: expected a number in (0, 1000000]"},
+      {R"({"camera": {"up": [0, 0, 0]}})", "/camera/up: expected a non-zero up direction"},
+      {R"({"light": {"color": [1e300, 1, 1]}})", "/light/color/0: expected an array of 3 numbers each in [0, 1000]"},
+      {R"({"light": {"ambient": [0.3, -1, 0.3]}})", "/light/ambient/1: expected an array of 3 numbers each in [0, 1000]"},
+      {R"({"emitters": [{"position": [0, 1e20, 0]}]})", "/emitters/0/position: expected each coordinate within +-1e+06 m"},
+      {R"({"colliders": [{"type": "sphere", "radius": 1, "position": [0, 0, -1e39]}]})", "/colliders/0/position/2: expected"},
+      {R"({"simulation": {"gravity": [0, 0, 1e300]}})", "/simulation/gravity/2: expected"},
+  };
+  for (const auto& [doc, expected] : bad) EXPECT_TRUE(has(loader_error(doc), expected)) << doc << "\n" << loader_error(doc);
+  // Inside: a larger world admits a farther camera and emitter; light above 1 over-exposes but
+  // is allowed; looking straight down along "up" is drawn with a chosen perpendicular.
+  EXPECT_EQ(loader_error(R"({"simulation": {"max_distance": 1e9}, "camera": {"position": [1e8, 0, 1]},
+                             "emitters": [{"position": [0, 1e8, 0]}]})"),
+            "");
+  EXPECT_EQ(loader_error(R"({"light": {"color": [3, 3, 3]}, "camera": {"position": [0, 0, 10], "target": [0, 0, 0]}})"), "");
+}
+
 TEST(Robust, IntegerKeysNeverOverflowTheCast) {
   // double(LLONG_MAX) == 2^63: accepted before, then cast to long long (undefined behaviour).
   EXPECT_TRUE(has(loader_error(R"({"seed": 9223372036854775808.0})"), "/seed")) << "2^63";
