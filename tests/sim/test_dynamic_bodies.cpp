@@ -274,6 +274,32 @@ TEST(DynamicBodies, CompoundBodyFrameIsNotItsCentreOfMass) {
   EXPECT_GT((w.pose(h).translation - Vec3(0.5, 0.0, 0.0)).norm(), 0.1);
 }
 
+TEST(DynamicBodies, VelocityBeforeTheFirstStepIsTheInitialOneAndContinuous) {
+  // World::velocity() read zero until the first advance(), so a state export's first row said a
+  // body launched at 0.5 m/s spinning at 2 rad/s stood still. The compound body of the test
+  // above: its origin's velocity v(t) = v_com + ω × (origin - com) is continuous, so a step of
+  // h changes it by about |ω|² |R c| h (the centripetal acceleration), at each of three h.
+  for (const double h : {1.0 / 60.0, 1.0 / 240.0, 1.0 / 960.0}) {
+    World w(def_with_step(h));
+    BodyDef b;
+    b.type = BodyType::dynamic;
+    b.gravity = Vec3::Zero();
+    b.shapes.push_back(ShapeDef::sphere(0.1));
+    b.shapes.push_back(ShapeDef::sphere(0.2, Transform{{1.0, 0.0, 0.0}, Quat::Identity()}));
+    b.angular_velocity = {0.0, 0.0, 2.0};
+    b.linear_velocity = Vec3(0.5, 0.0, 0.0);
+    const BodyHandle bh = w.add_body(b);
+    const auto [v0, w0] = w.velocity(bh);
+    EXPECT_EQ(v0, b.linear_velocity);
+    EXPECT_EQ(w0, b.angular_velocity);
+    w.advance(h);
+    const auto [v1, w1] = w.velocity(bh);
+    EXPECT_LT((w1 - w0).norm(), 1e-12);
+    const double centripetal = 4.0 * 8.0 / 9.0;  // |ω|² |R c| (m/s²)
+    EXPECT_NEAR((v1 - v0).norm(), centripetal * h, 0.01 * centripetal * h) << "h = " << h;
+  }
+}
+
 TEST(DynamicBodies, MassOverridesTheDensities) {
   // A heavier box on a light one changes nothing in free fall, but BodyDef::mass is validated.
   World w;

@@ -191,6 +191,10 @@ BodyHandle add(WorldState& w, const BodyDef& def, const Names& names) {
     r.angular_drag = def.angular_damping * mass.inertia.trace() / 3.0;
     b.rigid = std::uint32_t(add_body(w.dyn.rigid, r));
     ++w.dyn.dynamic_count;
+    // What World::velocity() reports before the first step (the stage sets it after each):
+    // zero here made a state export's first row read 0 for a body launched at 1 m/s.
+    b.velocity = def.linear_velocity;
+    b.angular_velocity = def.angular_velocity;
     for (std::uint32_t k = b.first_shape; k < b.first_shape + b.shape_count; ++k)
       w.shapes[k].follow(b.pose, def.linear_velocity, def.angular_velocity);
   } else {
