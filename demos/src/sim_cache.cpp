@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -149,37 +150,46 @@ void write_manifest(const fs::path& dir, const CacheManifest& m) {
 
 CacheManifest read_manifest(const fs::path& dir) {
   const fs::path p = manifest_path(dir);
-  bool ok = false;
-  const std::string text = read_all(p, ok);
-  if (!ok) throw SceneError(p.string() + ": no cache manifest (expected a folder written by `simreel bake`)");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw SceneError(p.string() + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(p, ec)))
+    throw SceneError(p.string() + ": no cache manifest (expected a folder written by `simreel bake`)");
+  // A regular file of bounded size (a FIFO here blocked the read forever), parsed with line and
+  // column in its errors; each key checked for its type and range like a scene's, so a hand-edited
+  // "frames": 1e12 or "seed": -1 is named, not cast into a wrong number.
+  const nlohmann::json j = parse_json_file(p, "cache manifest");
+  const std::string file = p.string();
+  if (!j.is_object()) throw SceneError(file + ": expected a JSON object, found " + describe(j));
+  std::vector<std::string> errors;
+  ObjectReader r(j, "", file, errors);
+  for (const char* key : {"simreel_cache", "simreel_version", "state_format", "scene", "scene_hash", "overrides",
+                          "seed", "fps", "frames", "complete", "ply"})
+    if (!r.has(key)) r.error_at(std::string("/") + key, "missing");
+  if (!errors.empty()) throw SceneError(errors);
+  if (const long long f = r.integer("simreel_cache", kCacheFormat, 0, std::numeric_limits<int>::max());
+      errors.empty() && f != kCacheFormat)
+    throw SceneError(file + ": /simreel_cache: format " + std::to_string(f) + ", this build reads " +
+                     std::to_string(kCacheFormat));
   CacheManifest m;
-  auto field = [&](const char* key) -> const nlohmann::json& {
-    if (!j.is_object() || !j.contains(key)) throw SceneError(p.string() + ": /" + key + ": missing");
-    return j[key];
-  };
-  try {
-    if (const int f = field("simreel_cache").get<int>(); f != kCacheFormat)
-      throw SceneError(p.string() + ": /simreel_cache: format " + std::to_string(f) + ", this build reads " +
-                       std::to_string(kCacheFormat));
-    m.id.simreel_version = field("simreel_version").get<std::string>();
-    m.id.state_format = field("state_format").get<std::uint32_t>();
-    m.scene = field("scene").get<std::string>();
-    m.id.scene_hash = field("scene_hash").get<std::string>();
-    m.id.overrides = field("overrides").get<std::vector<std::string>>();
-    m.id.seed = field("seed").get<std::uint64_t>();
-    m.id.fps = field("fps").get<double>();
-    m.frames = field("frames").get<int>();
-    m.complete = field("complete").get<bool>();
-    m.ply = field("ply").get<bool>();
-  } catch (const nlohmann::json::exception& e) {
-    throw SceneError(p.string() + ": a key has the wrong type (" + std::string(e.what()) + ")");
+  m.id.simreel_version = r.string("simreel_version", "");
+  m.id.state_format = std::uint32_t(r.integer("state_format", 0, 0, std::numeric_limits<std::uint32_t>::max()));
+  m.scene = r.string("scene", "");
+  m.id.scene_hash = r.string("scene_hash", "");
+  if (const nlohmann::json* o = r.get("overrides"); o != nullptr && !o->is_array()) {
+    r.error("overrides", "an array of \"POINTER=VALUE\" strings", *o);
+  } else if (o != nullptr) {
+    for (std::size_t i = 0; i < o->size(); ++i) {
+      if ((*o)[i].is_string())
+        m.id.overrides.push_back((*o)[i].get<std::string>());
+      else
+        r.error_at("/overrides/" + std::to_string(i), "expected a \"POINTER=VALUE\" string, found " + describe((*o)[i]));
+    }
   }
+  m.id.seed = std::uint64_t(r.integer("seed", 0, 0, std::numeric_limits<long long>::max()));
+  m.id.fps = r.number("fps", 30.0, 0.0, 1000.0, true);
+  m.frames = int(r.integer("frames", 1, 1, kMaxFrames));
+  m.complete = r.boolean("complete", false);
+  m.ply = r.boolean("ply", false);
+  if (!errors.empty()) throw SceneError(errors);
   return m;
 }
 
@@ -227,30 +237,56 @@ void write_frame(const fs::path& dir, int frame, std::uint64_t key, const std::s
   render::write_file_atomic(frame_path(dir, frame), scratch);
 }
 
+namespace {
+
+/// Why the frame file `p` cannot be read ("" when it is a regular file, whose size goes to `size`).
+/// A FIFO in its place blocked `render --cache` and `bake --resume` forever.
+std::string frame_file_problem(const fs::path& p, int frame, std::uint64_t& size) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(p, ec);
+  if (!fs::exists(st)) return p.string() + ": missing (frame " + std::to_string(frame) + " is not in the cache)";
+  if (!fs::is_regular_file(st))
+    return p.string() + ": not a regular file (a device, FIFO, socket or folder), expected a cache frame";
+  size = fs::file_size(p, ec);
+  if (ec) return p.string() + ": cannot read: " + ec.message();
+  return {};
+}
+
+}  // namespace
+
 std::string read_frame(const fs::path& dir, int frame, std::uint64_t key, std::string& state) {
   const fs::path p = frame_path(dir, frame);
-  bool ok = false;
-  std::string bytes = read_all(p, ok);
-  if (!ok) return p.string() + ": missing (frame " + std::to_string(frame) + " is not in the cache)";
-  if (std::string e = check_header(p, bytes.data(), bytes.size(), frame, key); !e.empty()) return e;
+  std::uint64_t size = 0;
+  if (std::string e = frame_file_problem(p, frame, size); !e.empty()) return e;
+  std::ifstream in(p, std::ios::binary);
+  if (!in) return p.string() + ": cannot read (permission denied or unreadable)";
+  char h[kHeaderBytes] = {};
+  in.read(h, kHeaderBytes);
+  if (std::string e = check_header(p, h, size, frame, key); !e.empty()) return e;
+  // The header and the file's size agree on the payload's length: read that much, no more.
+  std::string bytes(std::size_t(size - kHeaderBytes), '\0');
+  in.read(bytes.data(), std::streamsize(bytes.size()));
+  if (std::size_t(in.gcount()) != bytes.size())
+    return p.string() + ": truncated while read (" + std::to_string(kHeaderBytes + std::size_t(in.gcount())) +
+           " of " + std::to_string(size) + " bytes)";
   Fnv f;
-  f.bytes(bytes.data() + kHeaderBytes, bytes.size() - kHeaderBytes);
-  if (f.h != get<std::uint64_t>(bytes.data() + 40))
-    return p.string() + ": corrupt (checksum " + hex16(f.h) + ", the header says " +
-           hex16(get<std::uint64_t>(bytes.data() + 40)) + ")";
-  state.assign(bytes, kHeaderBytes);
+  f.bytes(bytes.data(), bytes.size());
+  if (f.h != get<std::uint64_t>(h + 40))
+    return p.string() + ": corrupt (checksum " + hex16(f.h) + ", the header says " + hex16(get<std::uint64_t>(h + 40)) +
+           ")";
+  state = std::move(bytes);
   return {};
 }
 
 std::string check_frame_header(const fs::path& dir, int frame, std::uint64_t key) {
   const fs::path p = frame_path(dir, frame);
+  std::uint64_t size = 0;
+  if (std::string e = frame_file_problem(p, frame, size); !e.empty()) return e;
   std::ifstream in(p, std::ios::binary);
-  if (!in) return p.string() + ": missing (frame " + std::to_string(frame) + " is not in the cache)";
+  if (!in) return p.string() + ": cannot read (permission denied or unreadable)";
   char h[kHeaderBytes] = {};
   in.read(h, kHeaderBytes);
-  std::error_code ec;
-  const auto size = fs::file_size(p, ec);
-  return check_header(p, h, ec ? 0 : size, frame, key);
+  return check_header(p, h, size, frame, key);
 }
 
 void remove_stale_temporaries(const fs::path& dir) {

@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "cli_util.hpp"
@@ -411,6 +413,54 @@ TEST_F(CacheRefused, TruncatedOrCorruptFrame) {
                   (tmp / "out").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("frame_00003.state: missing"), std::string::npos) << r.err;
+}
+
+TEST_F(CacheRefused, HandEditedManifestOrAFifoFrameIsNamedNotCastOrWaitedOn) {
+  // "frames": 1e12 was cast to int ("the cache holds frames 0..-727379969"), "seed": -1 read as
+  // 2^64 - 1, a string gave nlohmann's message without the key, and a FIFO in place of the
+  // manifest or a frame blocked `render --cache` and `bake --resume` forever.
+  TempDir tmp;
+  const std::string c = (tmp / "c").string();
+  const std::string manifest = slurp(fs::path(cache()) / "manifest.json");
+  const auto with = [&](const std::string& key, const std::string& value) {
+    fs::remove_all(tmp / "c");
+    fs::copy(cache(), tmp / "c", fs::copy_options::recursive);
+    std::string m = manifest;
+    const auto at = m.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << key;
+    const auto from = at + key.size() + 4, to = m.find_first_of(",\n", from);
+    m.replace(from, to - from, value);
+    simreel::test::write_file(tmp / "c" / "manifest.json", m);
+  };
+  const std::string render_args = "render " + scene_ + " --frames 2:6 --size 64x36 -q --cache " + c + " -o " +
+                                  (tmp / "out").string();
+  const std::string resume_args = "bake " + scene_ + " --frames 6 -q --resume --cache " + c;
+  for (const auto& [key, value, expected] :
+       {std::tuple<std::string, std::string, std::string>{"frames", "1000000000000", "/frames: expected an integer in [1, 1000000], found 1000000000000"},
+        {"frames", "0", "/frames: expected an integer in [1, 1000000], found 0"},
+        {"seed", "-1", "/seed: expected an integer in [0, 9223372036854775807], found -1"},
+        {"fps", "\"30\"", "/fps: expected a number in (0, 1000], found \"30\" (string)"},
+        {"overrides", "[1]", "/overrides/0: expected a \"POINTER=VALUE\" string, found 1"}}) {
+    for (const std::string& args : {render_args, resume_args}) {
+      with(key, value);
+      const auto r = run_simreel(args, "timeout 60");
+      EXPECT_EQ(r.code, 2) << key << "=" << value << ": " << args << "\n" << r.err;
+      EXPECT_NE(r.err.find("manifest.json: " + expected), std::string::npos) << r.err;
+    }
+  }
+  for (const fs::path& part : {fs::path("manifest.json"), fs::path("state") / "frame_00003.state"}) {
+    for (const std::string& args : {render_args, resume_args}) {
+      fs::remove_all(tmp / "c");
+      fs::copy(cache(), tmp / "c", fs::copy_options::recursive);
+      fs::remove(tmp / "c" / part);
+      ASSERT_EQ(::mkfifo((tmp / "c" / part).c_str(), 0600), 0);
+      const auto r = run_simreel(args, "timeout 60");
+      EXPECT_NE(r.code, 124) << "waited on the FIFO " << part << ": " << args;
+      EXPECT_NE(r.code, 0) << part << ": " << args;
+      EXPECT_NE(r.err.find(part.filename().string() + ": "), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find("FIFO"), std::string::npos) << r.err;
+    }
+  }
 }
 
 TEST_F(CacheRefused, ResumeOfAnotherBakeIsRefused) {
