@@ -257,7 +257,7 @@ int sweep_command(const SweepOptions& o) {
   if (o.strip < 1 || o.strip > 16) throw SceneError("--strip " + std::to_string(o.strip) + ": expected 1..16 frames per variant");
   if (o.hash && o.output_dir.empty()) throw SceneError("--hash: expected -o DIR too (the goldens go there, one per variant)");
   check_outputs({{"--contact-sheet", o.contact_sheet, false}, {"-o", o.output_dir, true}});
-  const int jobs = o.jobs ? *o.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
+  int jobs = o.jobs ? *o.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
   if (jobs < 1 || jobs > 256) throw SceneError("--jobs " + std::to_string(jobs) + ": expected 1..256");
 
   std::vector<Axis> axes;
@@ -290,6 +290,7 @@ int sweep_command(const SweepOptions& o) {
 
   // Every combination, the last axis fastest; each is checked here before anything renders.
   std::vector<Variant> variants;
+  std::uint64_t most_bytes = 0;  // the largest variant's memory estimate
   for (std::size_t n = 0; n < count; ++n) {
     Variant v;
     std::size_t rest = n;
@@ -315,13 +316,24 @@ int sweep_command(const SweepOptions& o) {
     if (v.seed) run.seed = v.seed;
     run.renders = true;
     try {
-      prepare_scene(run);
+      most_bytes = std::max(most_bytes, estimate_memory(prepare_scene(run), true).bytes);
     } catch (const SceneError& e) {
       std::vector<std::string> messages;
       for (const auto& m : e.messages()) messages.push_back("variant " + v.label + ": " + m);
       throw SceneError(messages);
     }
     variants.push_back(std::move(v));
+  }
+  // Each variant fits the memory budget alone (prepare_scene checked it); `jobs` of them at once
+  // must fit it together, or a wide sweep of large frames runs the machine out of memory.
+  std::string lowered;
+  if (const std::uint64_t budget = memory_limit(o.memory_limit);
+      most_bytes > 0 && std::uint64_t(jobs) * most_bytes > budget) {
+    const int fit = int(std::max<std::uint64_t>(1, budget / most_bytes));
+    lowered = " (--jobs " + std::to_string(jobs) + " lowered: a variant needs about " +
+              std::to_string((most_bytes + (1u << 20) - 1) >> 20) + " MiB of the " + std::to_string(budget >> 20) +
+              " MiB memory budget)";
+    jobs = fit;
   }
   int first = 0, end = 0;
   {
@@ -344,7 +356,7 @@ int sweep_command(const SweepOptions& o) {
   auto log_path = [&](std::size_t i) { return temp.path / ("log_" + std::to_string(i) + ".txt"); };
   const std::string frames = std::to_string(first) + ":" + std::to_string(end);
   std::cout << "sweep: " << variants.size() << " variants of " << o.scene << ", frames " << frames << ", " << jobs
-            << " at a time\n";
+            << " at a time" << lowered << "\n";
   while ((next < variants.size() && g_sweep_signal == 0) || !running.empty()) {
     while (g_sweep_signal == 0 && next < variants.size() && int(running.size()) < jobs) {
       const Variant& v = variants[next];

@@ -215,6 +215,29 @@ TEST(Workflow, SweepRendersEveryCombinationIntoOneLabelledSheet) {
   EXPECT_EQ(slurp(d / "sheet1.png"), slurp(d / "sheet.png"));
 }
 
+TEST(Workflow, SweepRunsNoMoreVariantsAtOnceThanTheMemoryBudgetHolds) {
+  // Each variant was checked against the budget alone, and --jobs (default: the cores) of them
+  // then ran together: 16 variants of 4K frames on a 16-core machine needed 16 budgets' worth.
+  TempDir d;
+  write_file(d / "jet.json", kGoldenScene);
+  const std::string scene = (d / "jet.json").string(), size = " --frames 0:1 --size 64x48";
+  // One variant's estimate, from the message of a budget it does not fit.
+  const auto probe = run_simreel("render " + scene + size + " -q --memory-limit 1 -o " + (d / "p").string());
+  ASSERT_EQ(probe.code, 2) << probe.err;
+  const auto at = probe.err.find("needs about ");
+  ASSERT_NE(at, std::string::npos) << probe.err;
+  const long mib = std::stol(probe.err.substr(at + 12));
+  ASSERT_GT(mib, 0);
+  for (const auto& [budget_mib, expected] : {std::pair{mib * 3 / 2, std::string("1 at a time (--jobs 3 lowered")},
+                                            std::pair{mib * 5 / 2, std::string("2 at a time (--jobs 3 lowered")},
+                                            std::pair{mib * 4, std::string("3 at a time\n")}}) {
+    const auto r = run_simreel("sweep " + scene + size + " --vary /emitters/0/rate=50,100,200 --jobs 3 --memory-limit " +
+                               std::to_string(budget_mib) + "M --contact-sheet " + (d / "s.png").string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(has(r.out, expected)) << budget_mib << " MiB for " << mib << " MiB a variant:\n" << r.out;
+  }
+}
+
 TEST(Workflow, SweepErrorsExit2BeforeRendering) {
   TempDir d;
   write_file(d / "jet.json", kGoldenScene);
