@@ -129,8 +129,8 @@ int render_command(const RenderOptions& o) {
   }
   const auto [sheet_cols, sheet_rows] = parse_grid(o.sheet_grid);
   if (o.hash_every < 1) throw SceneError("--hash-every " + std::to_string(o.hash_every) + ": expected an integer >= 1");
-  if (!o.bitrate.empty() && o.bitrate.find_first_not_of("0123456789.kKM") != std::string::npos)
-    throw SceneError("--bitrate " + o.bitrate + ": expected a number with an optional k or M suffix, e.g. 4M");
+  if (!o.bitrate.empty() && !render::video_bitrate(o.bitrate))
+    throw SceneError("--bitrate " + o.bitrate + ": expected a number with an optional k or M suffix in [1k, 10000M], e.g. 4M");
 
   // A cache must be the bake of this very scene (file bytes, overrides, seed, fps, build) and
   // hold every frame of the range: checked before anything is written.

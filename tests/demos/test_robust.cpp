@@ -427,6 +427,20 @@ TEST(Robust, AnOutputThatIsADeviceFifoOrFolderOrNamedTwiceExits2BeforeRunning) {
   EXPECT_FALSE(fs::exists(png + ".csv"));
 }
 
+TEST(Robust, BitrateOutsideItsRangeOrMalformedExits2BeforeRunning) {
+  // "--bitrate 0k" rendered (ffmpeg took a zero target as none) and "1.2.3M" passed the option's
+  // character check, then failed in the video writer with exit 1 after the simulation began.
+  TempDir d;
+  for (const std::string rate : {"0k", "1.2.3M", "99999M", "500"}) {
+    const auto r = run_simreel("render demos/scenes/smoke.json --frames 2 --size 32x18 -q -o " + (d / "v.mp4").string() +
+                               " --bitrate " + rate);
+    EXPECT_EQ(r.code, 2) << rate << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, "--bitrate " + rate + ": expected a number with an optional k or M suffix in [1k, 10000M]"))
+        << r.err;
+    EXPECT_FALSE(fs::exists(d / "v.mp4"));
+  }
+}
+
 TEST(Robust, FfmpegThatFailsButExitsZeroMakesRenderExit1WithNoVideo) {
   TempDir d;
   fs::create_directories(d / "bin");

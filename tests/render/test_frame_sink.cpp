@@ -311,6 +311,14 @@ TEST(RenderVideo, BitrateReplacesCrfAndIsChecked) {
   const auto large = encode("crf0.mp4", VideoOptions{30.0, 0, ""});
   EXPECT_LT(small * 3, large);
   EXPECT_THROW((void)make_video(dir.path() / "x.mp4", 16, 16, VideoOptions{30.0, 18, "fast"}), IoError);
+  // "0k" went to ffmpeg, which reads a zero target as none (the file came out at constant
+  // quality); the rate is bounded to [1 kbit/s, 10 Gbit/s].
+  EXPECT_THROW((void)make_video(dir.path() / "x.mp4", 16, 16, VideoOptions{30.0, 18, "0k"}), IoError);
+  EXPECT_EQ(video_bitrate("2.5M"), 2.5e6);
+  EXPECT_EQ(video_bitrate("800k"), 8e5);
+  EXPECT_EQ(video_bitrate("1000"), 1e3);
+  for (const char* bad : {"0k", "999", "10001M", "1.2.3M", "4G", "", "M", "-1M", "4M "})
+    EXPECT_FALSE(video_bitrate(bad).has_value()) << bad;
 }
 
 // ---------------------------------------------------------------------------------------------

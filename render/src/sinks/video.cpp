@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <cstdlib>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -72,7 +73,7 @@ std::string lower_extension(const fs::path& path) {
 }
 
 /// "4M", "800k", "1500000", "2.5M": digits with at most one point, then an optional k or M.
-bool valid_bitrate(const std::string& text) {
+bool bitrate_syntax(const std::string& text) {
   std::size_t i = 0;
   bool digit = false;
   bool point = false;
@@ -90,6 +91,19 @@ bool valid_bitrate(const std::string& text) {
   if (i == text.size()) return true;
   return i + 1 == text.size() && (text[i] == 'k' || text[i] == 'K' || text[i] == 'M');
 }
+
+}  // namespace
+
+std::optional<double> video_bitrate(const std::string& text) {
+  if (!bitrate_syntax(text)) return std::nullopt;
+  const char last = text.back();
+  const double scale = last == 'M' ? 1e6 : (last == 'k' || last == 'K') ? 1e3 : 1.0;
+  const double bits = std::strtod(text.c_str(), nullptr) * scale;
+  if (!(bits >= 1e3 && bits <= 1e10)) return std::nullopt;
+  return bits;
+}
+
+namespace {
 
 std::uint64_t big_endian(const unsigned char* p, int n) {
   std::uint64_t v = 0;
@@ -160,8 +174,8 @@ class VideoSink final : public FrameSink {
     if (options.crf < 0 || options.crf > max_crf) {
       fail("crf must be in 0.." + std::to_string(max_crf));
     }
-    if (!options.bitrate.empty() && !valid_bitrate(options.bitrate)) {
-      fail("bitrate \"" + options.bitrate + "\" is not a number with an optional k or M suffix");
+    if (!options.bitrate.empty() && !video_bitrate(options.bitrate)) {
+      fail("bitrate \"" + options.bitrate + "\" is not a number with an optional k or M suffix in [1k, 10000M]");
     }
     const fs::path ffmpeg = find_on_path("ffmpeg");
     if (ffmpeg.empty()) fail("ffmpeg not found on PATH");

@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -57,6 +58,11 @@ struct VideoOptions {
   bool alpha = false;
 };
 
+/// The bits per second of a VideoOptions::bitrate ("4M" = 4e6, "800k", "1500000", "2.5M"), or
+/// nothing when it is not digits with at most one point and an optional k, K or M suffix, or lies
+/// outside [1 kbit/s, 10 Gbit/s] ("0k" was handed to ffmpeg, which took it as no target at all).
+std::optional<double> video_bitrate(const std::string& text);
+
 /// A video through `ffmpeg` fed raw RGBA frames on a pipe, chosen by the extension
 /// (case-insensitive):
 ///  - .mp4:  H.264 (libx264, preset veryfast), yuv420p, odd sizes padded to even, faststart;
@@ -69,7 +75,7 @@ struct VideoOptions {
 /// the video properly. ffmpeg's stderr is captured and its last lines end any IoError that
 /// write() or finish() raise. @throws IoError with one line if ffmpeg cannot be found or
 /// started, lacks the encoder, the extension is not one of the above or `bitrate` is not a
-/// number with an optional k/M suffix, e.g. "cannot encode out/x.mp4: ffmpeg not found on PATH".
+/// number with an optional k/M suffix in [1k, 10000M] (video_bitrate), e.g. "cannot encode out/x.mp4: ffmpeg not found on PATH".
 std::unique_ptr<FrameSink> make_video(const std::filesystem::path& path, int width, int height,
                                       const VideoOptions& options);
 
