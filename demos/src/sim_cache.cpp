@@ -254,15 +254,27 @@ std::string frame_file_problem(const fs::path& p, int frame, std::uint64_t& size
 
 }  // namespace
 
+namespace {
+
+/// Opens frame `frame`'s file, reads its header into `h` and checks it against the file's size
+/// (`size`) and the manifest's `key`; "" when it is good, `in` then placed at the payload.
+std::string open_frame(const fs::path& p, int frame, std::uint64_t key, std::ifstream& in,
+                       char (&h)[kHeaderBytes], std::uint64_t& size) {
+  if (std::string e = frame_file_problem(p, frame, size); !e.empty()) return e;
+  in.open(p, std::ios::binary);
+  if (!in) return p.string() + ": cannot read (permission denied or unreadable)";
+  in.read(h, kHeaderBytes);
+  return check_header(p, h, size, frame, key);
+}
+
+}  // namespace
+
 std::string read_frame(const fs::path& dir, int frame, std::uint64_t key, std::string& state) {
   const fs::path p = frame_path(dir, frame);
-  std::uint64_t size = 0;
-  if (std::string e = frame_file_problem(p, frame, size); !e.empty()) return e;
-  std::ifstream in(p, std::ios::binary);
-  if (!in) return p.string() + ": cannot read (permission denied or unreadable)";
+  std::ifstream in;
   char h[kHeaderBytes] = {};
-  in.read(h, kHeaderBytes);
-  if (std::string e = check_header(p, h, size, frame, key); !e.empty()) return e;
+  std::uint64_t size = 0;
+  if (std::string e = open_frame(p, frame, key, in, h, size); !e.empty()) return e;
   // The header and the file's size agree on the payload's length: read that much, no more.
   std::string bytes(std::size_t(size - kHeaderBytes), '\0');
   in.read(bytes.data(), std::streamsize(bytes.size()));
@@ -279,14 +291,10 @@ std::string read_frame(const fs::path& dir, int frame, std::uint64_t key, std::s
 }
 
 std::string check_frame_header(const fs::path& dir, int frame, std::uint64_t key) {
-  const fs::path p = frame_path(dir, frame);
-  std::uint64_t size = 0;
-  if (std::string e = frame_file_problem(p, frame, size); !e.empty()) return e;
-  std::ifstream in(p, std::ios::binary);
-  if (!in) return p.string() + ": cannot read (permission denied or unreadable)";
+  std::ifstream in;
   char h[kHeaderBytes] = {};
-  in.read(h, kHeaderBytes);
-  return check_header(p, h, size, frame, key);
+  std::uint64_t size = 0;
+  return open_frame(frame_path(dir, frame), frame, key, in, h, size);
 }
 
 void remove_stale_temporaries(const fs::path& dir) {

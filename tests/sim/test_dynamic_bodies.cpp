@@ -248,11 +248,9 @@ TEST(DynamicBodies, HeadOnSpheresConserveMomentum) {
   EXPECT_NEAR(va.y(), 0.0, 1e-12);
 }
 
-TEST(DynamicBodies, CompoundBodyFrameIsNotItsCentreOfMass) {
-  // Two spheres at (0,0,0) and (1,0,0) with masses 1:8 (radii 0.1 and 0.2): the centre of mass
-  // is 8/9 m along the body's x. Spinning in free space, the centre of mass moves straight while
-  // the reported body origin circles it.
-  World w(def_with_step(1.0 / 240.0));
+/// Two spheres at (0,0,0) and (1,0,0) with masses 1:8 (radii 0.1 and 0.2), no gravity, the body
+/// origin moving at (0.5, 0, 0) m/s and spinning at 2 rad/s about z.
+BodyDef spinning_dumbbell() {
   BodyDef b;
   b.type = BodyType::dynamic;
   b.gravity = Vec3::Zero();
@@ -260,6 +258,15 @@ TEST(DynamicBodies, CompoundBodyFrameIsNotItsCentreOfMass) {
   b.shapes.push_back(ShapeDef::sphere(0.2, Transform{{1.0, 0.0, 0.0}, Quat::Identity()}));
   b.angular_velocity = {0.0, 0.0, 2.0};
   b.linear_velocity = Vec3(0.5, 0.0, 0.0);
+  return b;
+}
+
+TEST(DynamicBodies, CompoundBodyFrameIsNotItsCentreOfMass) {
+  // Two spheres at (0,0,0) and (1,0,0) with masses 1:8 (radii 0.1 and 0.2): the centre of mass
+  // is 8/9 m along the body's x. Spinning in free space, the centre of mass moves straight while
+  // the reported body origin circles it.
+  World w(def_with_step(1.0 / 240.0));
+  const BodyDef b = spinning_dumbbell();
   const BodyHandle h = w.add_body(b);
   const Vec3 c(8.0 / 9.0, 0.0, 0.0);
   const auto com = [&] {
@@ -281,13 +288,7 @@ TEST(DynamicBodies, VelocityBeforeTheFirstStepIsTheInitialOneAndContinuous) {
   // h changes it by about |ω|² |R c| h (the centripetal acceleration), at each of three h.
   for (const double h : {1.0 / 60.0, 1.0 / 240.0, 1.0 / 960.0}) {
     World w(def_with_step(h));
-    BodyDef b;
-    b.type = BodyType::dynamic;
-    b.gravity = Vec3::Zero();
-    b.shapes.push_back(ShapeDef::sphere(0.1));
-    b.shapes.push_back(ShapeDef::sphere(0.2, Transform{{1.0, 0.0, 0.0}, Quat::Identity()}));
-    b.angular_velocity = {0.0, 0.0, 2.0};
-    b.linear_velocity = Vec3(0.5, 0.0, 0.0);
+    const BodyDef b = spinning_dumbbell();
     const BodyHandle bh = w.add_body(b);
     const auto [v0, w0] = w.velocity(bh);
     EXPECT_EQ(v0, b.linear_velocity);
