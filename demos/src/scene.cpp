@@ -110,6 +110,22 @@ Scene scene_from_json(const json& doc, const std::string& file) {
       << at.z() << "]";
     errors.push_back(m.str());
   }
+  // Likewise a particle born faster than simulation.max_speed, or larger than the world: the
+  // largest draw (a uniform one's max, else the mean) is compared with the bound.
+  for (std::size_t a = 0; a < scene.emitters.size(); ++a) {
+    const sim::EmitterDef& em = scene.emitters[a].system.emitter;
+    const auto beyond = [&](const sim::Distribution& d, double bound, const char* key, const char* unit,
+                            const char* bound_key) {
+      const double top = d.uniform ? d.max : d.mean;
+      if (top <= bound) return;
+      std::ostringstream m;
+      m << file << ": " << emitter_pointers[a] << "/" << key << ": expected " << (d.uniform ? "a max" : "a mean")
+        << " of at most " << bound << " " << unit << " (" << bound_key << "), found " << top;
+      errors.push_back(m.str());
+    };
+    beyond(em.start_speed, scene.world.max_speed, "start_speed", "m/s", "simulation.max_speed");
+    beyond(em.radius, scene.world.max_distance, "particle_radius", "m", "simulation.max_distance");
+  }
   // Sub-emitters name the emitter their particles are born in.
   for (const auto& e : scene.emitters)
     for (const auto& se : e.sub_emitters) check_system_name(scene, se.emitter, se.pointer + "/emitter", errors);

@@ -158,9 +158,9 @@ EmitterScene emitter(const json& j, const std::string& ptr, const std::string& f
   em.lifetime = distribution(r, "lifetime", em.lifetime, 0.0, kInf, "s");
   em.start_speed = distribution(r, "start_speed", em.start_speed, 0.0, kInf, "m/s");
   em.spread_deg = distribution(r, "spread_deg", em.spread_deg, 0.0, 180.0, "degrees");
-  em.mass = distribution(r, "mass", em.mass, 0.0, kInf, "kg");
+  em.mass = distribution(r, "mass", em.mass, 0.0, sim::ranges::kParticleFloatMax, "kg");
   if (em.mass.mean <= 0.0) r.error_at(r.pointer("mass"), "expected a mean mass > 0 kg");
-  em.radius = distribution(r, "particle_radius", em.radius, 0.0, kInf, "m");
+  em.radius = distribution(r, "particle_radius", em.radius, 0.0, sim::ranges::kParticleFloatMax, "m");
   if (em.radius.mean <= 0.0) r.error_at(r.pointer("particle_radius"), "expected a mean radius > 0 m");
   em.max_particles = std::size_t(r.integer("max_particles", 100000, ranges::kEmitterMaxParticles));
 

@@ -245,6 +245,36 @@ TEST(Robust, VectorsFitInFloatsAndPlacedThingsInsideTheWorld) {
   EXPECT_EQ(loader_error(R"({"light": {"color": [3, 3, 3]}, "camera": {"position": [0, 0, 10], "target": [0, 0, 0]}})"), "");
 }
 
+TEST(Robust, ParticlesAreBornInsideTheWorldsBoundsAndFitInFloats) {
+  // Each ran before and stopped at its first step as "diverged" (exit 1) with a message about a
+  // particle, not the key: a mass or radius beyond a float's range is born infinite, a particle
+  // faster than simulation.max_speed or larger than simulation.max_distance is out of bounds.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {R"({"emitters": [{"mass": 1e300}]})", "/emitters/0/mass: expected a number in [0, 3"},
+      {R"({"emitters": [{"mass": {"mean": 1e39, "deviation": 1}}]})", "/emitters/0/mass/mean: expected a number in [0, 3"},
+      {R"({"emitters": [{"particle_radius": 1e300}]})", "/emitters/0/particle_radius: expected a number in [0, 3"},
+      {R"({"emitters": [{"particle_radius": 1e30}]})",
+       "/emitters/0/particle_radius: expected a mean of at most 1e+06 m (simulation.max_distance), found 1e+30"},
+      {R"({"emitters": [{"start_speed": 1e300}]})",
+       "/emitters/0/start_speed: expected a mean of at most 10000 m/s (simulation.max_speed), found 1e+300"},
+      {R"({"emitters": [{"start_speed": {"min": 1, "max": 2e4}}]})",
+       "/emitters/0/start_speed: expected a max of at most 10000 m/s (simulation.max_speed), found 20000"},
+  };
+  for (const auto& [doc, expected] : bad) EXPECT_TRUE(has(loader_error(doc), expected)) << doc << "\n" << loader_error(doc);
+  // At the bounds, and beyond the defaults where the world is made larger and faster.
+  EXPECT_EQ(loader_error(R"({"emitters": [{"start_speed": 1e4, "particle_radius": 1e6}]})"), "");
+  EXPECT_EQ(loader_error(R"({"simulation": {"max_speed": 1e6, "max_distance": 1e9},
+                             "emitters": [{"start_speed": 1e5, "particle_radius": 1e7, "mass": 3e38}]})"),
+            "");
+  // The engine refuses what the loader refuses, for callers of the library.
+  for (bool radius : {false, true}) {
+    sim::World world;
+    sim::ParticleSystemDef def;
+    (radius ? def.emitter.radius : def.emitter.mass).mean = 1e300;
+    EXPECT_THROW((void)world.add_particle_system(def), std::invalid_argument) << (radius ? "radius" : "mass");
+  }
+}
+
 TEST(Robust, IntegerKeysNeverOverflowTheCast) {
   // double(LLONG_MAX) == 2^63: accepted before, then cast to long long (undefined behaviour).
   EXPECT_TRUE(has(loader_error(R"({"seed": 9223372036854775808.0})"), "/seed")) << "2^63";

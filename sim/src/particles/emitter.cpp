@@ -8,6 +8,7 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "core/validate.hpp"
 
@@ -480,6 +481,16 @@ void validate(const ParticleSystemDef& def) {
            sys + (e.mass.uniform ? ": emitter.mass.max" : ": emitter.mass.mean"));
   positive(e.radius.uniform ? e.radius.max : e.radius.mean,
            sys + (e.radius.uniform ? ": emitter.radius.max" : ": emitter.radius.mean"));
+  // Stored as floats: a larger mass or radius would be born infinite.
+  for (const auto& [d, what] : {std::pair{&e.mass, ": emitter.mass"}, std::pair{&e.radius, ": emitter.radius"}}) {
+    const double top = d->uniform ? d->max : d->mean;
+    if (top > ranges::kParticleFloatMax) {
+      std::ostringstream m;
+      m << sys << what << (d->uniform ? ".max" : ".mean") << " must be <= " << ranges::kParticleFloatMax
+        << " (got " << top << ")";
+      fail(m.str());
+    }
+  }
   if (e.color_over_lifetime.empty())
     fail(sys + ": emitter.color_over_lifetime needs at least one key");
   for (std::size_t k = 0; k < e.color_over_lifetime.size(); ++k) {

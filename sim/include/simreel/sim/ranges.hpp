@@ -65,6 +65,10 @@ inline constexpr Range kKeyframeTime = kNonNegative;    ///< (s) scene time of a
 // Emitters (EmitterDef; §3.8 emission, §3.9.1 particle systems).
 inline constexpr Range kEmitterRate{0.0, 1e9};          ///< (particles/s)
 inline constexpr IntRange kEmitterMaxParticles{1, 50'000'000};  ///< live particles per system
+/// (kg, m) the largest mass and radius a particle may be born with: both are stored as 32-bit
+/// floats, and a larger value becomes infinite (the particle is then reported as diverged at its
+/// first step).
+inline constexpr double kParticleFloatMax = 3e38;
 inline constexpr Range kEmitterSize = kPositive;        ///< (m) disk_radius, quad_size, sphere_radius, box_size, cube_size
 inline constexpr Range kEmitterInheritVelocity = kUnit; ///< fraction of the emitter's path velocity
 inline constexpr Range kEmitterColorDeviation = kNonNegative;  ///< deviation of each RGB channel
