@@ -110,21 +110,42 @@ Scene scene_from_json(const json& doc, const std::string& file) {
       << at.z() << "]";
     errors.push_back(m.str());
   }
-  // Likewise a particle born faster than simulation.max_speed, or larger than the world: the
-  // largest draw (a uniform one's max, else the mean) is compared with the bound.
+  // Likewise a particle born faster than simulation.max_speed, or larger than the world, or an
+  // emitter shape reaching beyond it: a draw's largest likely value (a uniform one's max, else
+  // the mean plus 5 deviations up to the max) is compared with the bound.
   for (std::size_t a = 0; a < scene.emitters.size(); ++a) {
-    const sim::EmitterDef& em = scene.emitters[a].system.emitter;
-    const auto beyond = [&](const sim::Distribution& d, double bound, const char* key, const char* unit,
-                            const char* bound_key) {
-      const double top = d.uniform ? d.max : d.mean;
-      if (top <= bound) return;
+    const sim::ParticleSystemDef& sys = scene.emitters[a].system;
+    const sim::EmitterDef& em = sys.emitter;
+    const auto over = [&](const std::string& key, double value, double bound, const char* unit,
+                          const char* bound_key, const char* what) {
+      if (value <= bound) return;
       std::ostringstream m;
-      m << file << ": " << emitter_pointers[a] << "/" << key << ": expected " << (d.uniform ? "a max" : "a mean")
-        << " of at most " << bound << " " << unit << " (" << bound_key << "), found " << top;
+      m << file << ": " << emitter_pointers[a] << "/" << key << ": expected " << what << " of at most " << bound
+        << " " << unit << " (" << bound_key << "), found " << value;
       errors.push_back(m.str());
     };
-    beyond(em.start_speed, scene.world.max_speed, "start_speed", "m/s", "simulation.max_speed");
-    beyond(em.radius, scene.world.max_distance, "particle_radius", "m", "simulation.max_distance");
+    const auto beyond = [&](const sim::Distribution& d, double bound, const char* key, const char* unit,
+                            const char* bound_key) {
+      if (d.uniform) return over(key, d.max, bound, unit, bound_key, "a max");
+      over(key, std::min(d.max, d.mean + 5.0 * d.deviation), bound, unit, bound_key,
+           d.deviation > 0.0 ? "a mean + 5 deviations (or max)" : "a mean");
+    };
+    const double reach = scene.world.max_distance, fastest = scene.world.max_speed;
+    beyond(em.start_speed, fastest, "start_speed", "m/s", "simulation.max_speed");
+    beyond(em.radius, reach, "particle_radius", "m", "simulation.max_distance");
+    const char* world = "simulation.max_distance";
+    over("disk_radius", em.disk_radius, reach, "m", world, "a radius");
+    over("sphere_radius", em.sphere_radius, reach, "m", world, "a radius");
+    over("cube_size", em.cube_size, reach, "m", world, "a size");
+    for (std::size_t k = 0; k < 2; ++k) over("quad_size/" + std::to_string(k), em.quad_size[k], reach, "m", world, "a size");
+    for (std::size_t k = 0; k < 3; ++k) over("box_size/" + std::to_string(k), em.box_size[k], reach, "m", world, "a size");
+    for (std::size_t i = 0; i < sys.initial_particles.size(); ++i) {
+      const sim::InitialParticle& q = sys.initial_particles[i];
+      const std::string at = "initial_particles/" + std::to_string(i) + "/";
+      over(at + "position", q.position.cwiseAbs().maxCoeff(), reach, "m", world, "each coordinate");
+      over(at + "velocity", q.velocity.cwiseAbs().maxCoeff(), fastest, "m/s", "simulation.max_speed", "each component");
+      over(at + "radius", q.radius, reach, "m", world, "a radius");
+    }
   }
   // Sub-emitters name the emitter their particles are born in.
   for (const auto& e : scene.emitters)

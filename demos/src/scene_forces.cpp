@@ -29,8 +29,8 @@ void particle_forces(ObjectReader& r, sim::ParticleSystemDef& s) {
     if (!o.has("position")) o.error_at(p, "expected a \"position\" [x, y, z] (m)");
     q.position = to_vec(o.vec3("position", {0, 0, 0}));
     q.velocity = to_vec(o.vec3("velocity", {0, 0, 0}));
-    q.mass = o.number("mass", s.emitter.mass.mean, 0.0, kInf, true);
-    q.radius = o.number("radius", s.emitter.radius.mean, 0.0, kInf, true);
+    q.mass = o.number("mass", s.emitter.mass.mean, ranges::kParticleMassMin, ranges::kParticleFloatMax);
+    q.radius = o.number("radius", s.emitter.radius.mean, ranges::kParticleRadiusMin, ranges::kParticleFloatMax);
     q.charge = o.number("charge", 0.0);
     o.finish();
     s.initial_particles.push_back(q);

@@ -259,6 +259,28 @@ TEST(Robust, ParticlesAreBornInsideTheWorldsBoundsAndFitInFloats) {
        "/emitters/0/start_speed: expected a mean of at most 10000 m/s (simulation.max_speed), found 1e+300"},
       {R"({"emitters": [{"start_speed": {"min": 1, "max": 2e4}}]})",
        "/emitters/0/start_speed: expected a max of at most 10000 m/s (simulation.max_speed), found 20000"},
+      {R"({"emitters": [{"start_speed": {"mean": 3, "deviation": 1e300}}]})",
+       "/emitters/0/start_speed: expected a mean + 5 deviations (or max) of at most 10000 m/s (simulation.max_speed), found 1e+300"},
+      {R"({"emitters": [{"particle_radius": {"mean": 0.01, "deviation": 1e300}}]})",
+       "/emitters/0/particle_radius: expected a mean + 5 deviations (or max) of at most 1e+06 m"},
+      {R"({"emitters": [{"shape": "disk", "disk_radius": 1e300}]})",
+       "/emitters/0/disk_radius: expected a radius of at most 1e+06 m (simulation.max_distance), found 1e+300"},
+      {R"({"emitters": [{"shape": "quad", "quad_size": [1, 1e7]}]})", "/emitters/0/quad_size/1: expected a size of at most 1e+06 m"},
+      {R"({"emitters": [{"shape": "box", "box_size": [1, 1, 1e300]}]})", "/emitters/0/box_size/2: expected a size of at most"},
+      {R"({"emitters": [{"shape": "cube", "cube_size": 1e300}]})", "/emitters/0/cube_size: expected a size of at most"},
+      {R"({"emitters": [{"shape": "sphere", "sphere_radius": 1e300}]})", "/emitters/0/sphere_radius: expected a radius of at most"},
+      {R"({"emitters": [{"rate": 0, "initial_particles": [{"position": [0, 0, 1], "mass": 1e300}]}]})",
+       "/emitters/0/initial_particles/0/mass: expected a number in [1e-12, 3"},
+      {R"({"emitters": [{"rate": 0, "initial_particles": [{"position": [0, 0, 1], "mass": 1e-300}]}]})",
+       "/emitters/0/initial_particles/0/mass: expected a number in [1e-12, 3"},
+      {R"({"emitters": [{"rate": 0, "initial_particles": [{"position": [0, 0, 1], "radius": 1e-9}]}]})",
+       "/emitters/0/initial_particles/0/radius: expected a number in [1e-06, 3"},
+      {R"({"emitters": [{"rate": 0, "initial_particles": [{"position": [0, 0, 1], "radius": 1e30}]}]})",
+       "/emitters/0/initial_particles/0/radius: expected a radius of at most 1e+06 m"},
+      {R"({"emitters": [{"rate": 0, "initial_particles": [{"position": [0, 0, 2e6]}]}]})",
+       "/emitters/0/initial_particles/0/position: expected each coordinate of at most 1e+06 m (simulation.max_distance), found 2e+06"},
+      {R"({"emitters": [{"rate": 0, "initial_particles": [{"position": [0, 0, 1], "velocity": [-2e4, 0, 0]}]}]})",
+       "/emitters/0/initial_particles/0/velocity: expected each component of at most 10000 m/s (simulation.max_speed), found 20000"},
   };
   for (const auto& [doc, expected] : bad) EXPECT_TRUE(has(loader_error(doc), expected)) << doc << "\n" << loader_error(doc);
   // At the bounds, and beyond the defaults where the world is made larger and faster.
@@ -272,6 +294,12 @@ TEST(Robust, ParticlesAreBornInsideTheWorldsBoundsAndFitInFloats) {
     sim::ParticleSystemDef def;
     (radius ? def.emitter.radius : def.emitter.mass).mean = 1e300;
     EXPECT_THROW((void)world.add_particle_system(def), std::invalid_argument) << (radius ? "radius" : "mass");
+    sim::ParticleSystemDef initial;
+    initial.initial_particles.resize(1);
+    for (double bad : {1e300, 1e-300}) {
+      (radius ? initial.initial_particles[0].radius : initial.initial_particles[0].mass) = bad;
+      EXPECT_THROW((void)world.add_particle_system(initial), std::invalid_argument) << (radius ? "radius " : "mass ") << bad;
+    }
   }
 }
 

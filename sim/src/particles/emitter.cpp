@@ -16,8 +16,8 @@ namespace simreel::sim::detail {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kMinMass = 1e-12;   // (kg) floor of a mass draw: drag divides by it
-constexpr double kMinRadius = 1e-6;  // (m) floor of a radius draw
+constexpr double kMinMass = ranges::kParticleMassMin;  // (kg) floor of a mass draw
+constexpr double kMinRadius = ranges::kParticleRadiusMin;  // (m) floor of a radius draw
 
 /// Number of births up to and including time t, given x = rate * (t - start): birth j (from 0)
 /// is at start + (j + 1) / rate, so the count is floor(x) — the same for any cut of [start, t]

@@ -279,6 +279,11 @@ void validate_forces(const ParticleSystemDef& def) {
     check_vec(f + "velocity", q.velocity);
     check_pos(f + "mass", q.mass);
     check_pos(f + "radius", q.radius);
+    // stored as floats: beyond these they would be infinite or zero
+    if (!(q.mass >= ranges::kParticleMassMin && q.mass <= ranges::kParticleFloatMax))
+      bad(f + "mass", "in [1e-12, 3e38]", q.mass);
+    if (!(q.radius >= ranges::kParticleRadiusMin && q.radius <= ranges::kParticleFloatMax))
+      bad(f + "radius", "in [1e-6, 3e38]", q.radius);
     if (!std::isfinite(q.charge)) bad(f + "charge", "finite", q.charge);
   }
   for (std::size_t i = 0; i < def.springs.size(); ++i) {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "simreel/sim/ranges.hpp"
+
 namespace simreel::sim::detail {
 
 std::size_t split_particles(const EmitterDef& def, Rng& rng, ParticleStore& s, std::size_t end,
@@ -12,7 +14,7 @@ std::size_t split_particles(const EmitterDef& def, Rng& rng, ParticleStore& s, s
   const SplitDef& sp = def.split;
   if (!sp.enabled) return 0;
   constexpr double kPi = std::numbers::pi;
-  constexpr float kMinMass = 1e-12f;
+  constexpr float kMinMass = float(ranges::kParticleMassMin);
   const double cos_max = std::cos(sp.direction_deviation_deg * (kPi / 180.0));
   const float f = float(sp.size_fraction);
   const float mass_factor = f * f * f;  // same density

@@ -69,6 +69,13 @@ inline constexpr IntRange kEmitterMaxParticles{1, 50'000'000};  ///< live partic
 /// floats, and a larger value becomes infinite (the particle is then reported as diverged at its
 /// first step).
 inline constexpr double kParticleFloatMax = 3e38;
+/// (kg) the smallest particle mass: an emitter's draws are raised to it, a split's children too,
+/// and an initial particle below it is refused (drag and every force divide by the mass; far
+/// smaller, a float mass is zero).
+inline constexpr double kParticleMassMin = 1e-12;
+/// (m) the smallest particle radius: draws and size curves are raised to it, an initial
+/// particle below it is refused.
+inline constexpr double kParticleRadiusMin = 1e-6;
 inline constexpr Range kEmitterSize = kPositive;        ///< (m) disk_radius, quad_size, sphere_radius, box_size, cube_size
 inline constexpr Range kEmitterInheritVelocity = kUnit; ///< fraction of the emitter's path velocity
 inline constexpr Range kEmitterColorDeviation = kNonNegative;  ///< deviation of each RGB channel
