@@ -99,23 +99,22 @@ Scene scene_from_json(const json& doc, const std::string& file) {
                          emitter_pointers[b] + "), found \"" + scene.emitters[a].system.name + "\"");
         break;
       }
-  // A particle born beyond the world's bound is reported as diverged at the first step (exit 1,
-  // after the run began); a position out there is a bad scene, said here.
-  for (std::size_t a = 0; a < scene.emitters.size(); ++a) {
-    const sim::Vec3& at = scene.emitters[a].system.emitter.transform.translation;
-    if (scene.emitters[a].follow_camera || at.cwiseAbs().maxCoeff() <= scene.world.max_distance) continue;
-    std::ostringstream m;
-    m << file << ": " << emitter_pointers[a] << "/position: expected each coordinate within +-"
-      << scene.world.max_distance << " m (simulation.max_distance), found [" << at.x() << ", " << at.y() << ", "
-      << at.z() << "]";
-    errors.push_back(m.str());
-  }
-  // Likewise a particle born faster than simulation.max_speed, or larger than the world, or an
-  // emitter shape reaching beyond it: a draw's largest likely value (a uniform one's max, else
-  // the mean plus 5 deviations up to the max) is compared with the bound.
+  // A particle born beyond the world's bound, faster than simulation.max_speed or larger than
+  // the world is reported as diverged at the first step (exit 1, after the run began): a bad
+  // scene, said here. The emitter's position, then each draw's largest likely value (a uniform
+  // one's max, else the mean plus 5 deviations up to the max) and its shape's sizes are compared
+  // with the bounds.
   for (std::size_t a = 0; a < scene.emitters.size(); ++a) {
     const sim::ParticleSystemDef& sys = scene.emitters[a].system;
     const sim::EmitterDef& em = sys.emitter;
+    if (!scene.emitters[a].follow_camera && em.transform.translation.cwiseAbs().maxCoeff() > scene.world.max_distance) {
+      const sim::Vec3& at = em.transform.translation;
+      std::ostringstream m;
+      m << file << ": " << emitter_pointers[a] << "/position: expected each coordinate within +-"
+        << scene.world.max_distance << " m (simulation.max_distance), found [" << at.x() << ", " << at.y() << ", "
+        << at.z() << "]";
+      errors.push_back(m.str());
+    }
     const auto over = [&](const std::string& key, double value, double bound, const char* unit,
                           const char* bound_key, const char* what) {
       if (value <= bound) return;
