@@ -583,6 +583,78 @@ TEST(SimParticleCollision, PairSearchWidthsFindTheSamePairs) {
   }
 }
 
+TEST(SimParticleCollision, AwakeSearchGivesTheFullSearchsContactsToTheBit) {
+  // With most particles asleep the pair search starts from the awake ones alone, over the 27
+  // cells around each (awake_search_share), instead of every particle's half stencil. A dense
+  // random heap of 20,000 beads (radii 6-11 mm; a large system, whose full search splits over
+  // the threads), one in ten awake and coming down at up to 1 m/s (impacts that wake sleepers,
+  // whose pairs with other sleepers then join): the contacts (which pairs, in which order, with
+  // which depth, normal, target and impulse) and the run's results must be those of the full
+  // search, to the bit, at one and two threads.
+  const double h = 1.0 / 240;
+  std::vector<detail::Collider> ground;
+  ground.push_back(detail::make_collider(ShapeDef::plane(), "ground"));
+  ground.back().follow(Transform{}, Vec3::Zero(), Vec3::Zero());
+  struct Result {
+    std::vector<detail::ParticleCollider::Contact> contacts;
+    std::vector<float> x, v;
+    std::size_t awake_pairs = 0, mixed_pairs = 0;
+  };
+  const auto run = [&](int share, int threads) {
+    detail::ParticleStore s;
+    s.track_rest = true;
+    const std::size_t n = 20000;
+    s.append(n);
+    Rng rng(29, 0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const bool awake = k % 10 == 3;
+      const Vec3 x(rng.uniform(-0.27, 0.27), rng.uniform(-0.27, 0.27), rng.uniform(0.011, 0.4));
+      const Vec3 v = awake ? Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-1.0, 0.0))
+                           : Vec3::Zero();
+      for (int a = 0; a < 3; ++a) {
+        s.position[3 * k + std::size_t(a)] = float(x[a]);
+        s.velocity[3 * k + std::size_t(a)] = float(v[a]);
+        s.rest[4 * k + std::size_t(a)] = float(x[a]);
+      }
+      s.rest[4 * k + 3] = awake ? 0.0f : detail::kSleepTime;
+      s.radius[k] = float(rng.uniform(0.006, 0.011));
+      s.mass[k] = float(rng.uniform(1e-3, 3e-3));
+      s.age[k] = 1.0f;
+      s.id[k] = k;
+    }
+    detail::ParticleCollider pc;
+    pc.threads = threads;
+    pc.awake_search_share = share;
+    const std::vector<detail::ParticleGroupMember> members{{&s, 0.3, 0.4, true, 0, true, 9.81}};
+    pc.run(members, 0.05, h, &ground);
+    Result r{pc.contacts, std::vector<float>(s.position.data(), s.position.data() + 3 * n),
+             std::vector<float>(s.velocity.data(), s.velocity.data() + 3 * n)};
+    for (const auto& c : pc.contacts) {
+      if (c.i == detail::ParticleCollider::kCollider) continue;
+      ++(pc.inv_mass[c.i] != 0.0 && pc.inv_mass[c.j] != 0.0 ? r.awake_pairs : r.mixed_pairs);
+    }
+    return r;
+  };
+  const Result full = run(0, 1);
+  EXPECT_GT(full.awake_pairs, 2000u) << "the case must have pairs of two awake beads";
+  EXPECT_GT(full.mixed_pairs, 2000u) << "the case must have pairs of an awake bead and a sleeper";
+  for (const auto& [share, threads] : {std::pair{1, 1}, std::pair{4, 1}, std::pair{1, 2}}) {
+    const Result got = run(share, threads);
+    ASSERT_EQ(got.contacts.size(), full.contacts.size()) << "share " << share << ", threads " << threads;
+    for (std::size_t q = 0; q < full.contacts.size(); ++q) {
+      const auto &a = got.contacts[q], &b = full.contacts[q];
+      ASSERT_EQ(a.i, b.i) << "contact " << q;
+      ASSERT_EQ(a.j, b.j) << "contact " << q;
+      ASSERT_EQ(a.depth, b.depth) << "contact " << q;
+      ASSERT_EQ(a.n, b.n) << "contact " << q;
+      ASSERT_EQ(a.target, b.target) << "contact " << q;
+      ASSERT_EQ(a.pn, b.pn) << "contact " << q;
+    }
+    EXPECT_EQ(got.x, full.x);
+    EXPECT_EQ(got.v, full.v);
+  }
+}
+
 TEST(SimParticleCollision, LoneContactsAreSolvedByTheFirstSweep) {
   // A contact that shares neither particle with another is solved by one update: its normal
   // impulse reaches its restitution target, its friction impulse cancels the sliding or stops at

@@ -230,6 +230,14 @@ void ParticleCollider::find_pairs(double contact_speed, double h) {
   // step of a large system spent a third of its pair search so); untouched room costs no memory.
   const std::size_t n = x.size();
   contacts.reserve(n + n / 2);
+  if (any_asleep_ && awake_search_share > 0) {
+    std::size_t awake = 0;
+    for (const std::uint8_t a : asleep) awake += a == 0;
+    if (awake * std::size_t(awake_search_share) <= n) {
+      find_pairs_of_awake(contact_speed, h);
+      return;
+    }
+  }
   if (parts == 1) {
     find_pairs_in(0, cells, contact_speed, h, search_[0], contacts);
     return;
@@ -404,6 +412,62 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
         if (d2[q] > 0.0) try_pair(order_[si], order_[ps.cand_s[q]], d2[q], contact_speed, h, out);
     }
   }
+}
+
+void ParticleCollider::find_pairs_of_awake(double contact_speed, double h) {
+  const double margin = h > 0.0 ? pair_margin_fraction : 0.0;
+  const std::size_t cells = occupied_.size();
+  const std::uint64_t* key_of = occupied_.data();
+  const std::uint32_t* first = cell_first_.data();
+  const double *px = sx_.data(), *py = sy_.data(), *pz = sz_.data(), *pr = sorted_radius();
+  const auto awake_at = [&](std::uint32_t s) { return asleep[order_[s]] == 0; };
+  awake_pairs_.clear();
+  for (std::size_t c = 0; c < cells; ++c) {
+    bool any = false;
+    for (std::uint32_t s = first[c]; s < first[c + 1]; ++s) any = any || awake_at(s);
+    if (!any) continue;
+    // The nine columns (dx, dy) around the cell, three cells each (z - 1 .. z + 1). Cell
+    // coordinates start at 1 with a spare cell past the last: no key wraps.
+    std::uint32_t rb[9], re[9];
+    int runs = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy) {
+        const std::uint64_t lo = key_of[c] + std::uint64_t(dx) * stride_x_ + std::uint64_t(dy) * stride_y_ - 1;
+        const std::uint64_t* b = std::lower_bound(key_of, key_of + cells, lo);
+        const std::uint64_t* e = b;
+        while (e != key_of + cells && *e <= lo + 2) ++e;
+        if (b == e) continue;
+        rb[runs] = first[b - key_of];
+        re[runs++] = first[e - key_of];
+      }
+    for (std::uint32_t s = first[c]; s < first[c + 1]; ++s) {
+      if (!awake_at(s)) continue;
+      for (int r = 0; r < runs; ++r) {
+        // From s to each of the run, where the half stencil tests from the lower of the two:
+        // the same squared distance and reach to the bit (x_a - x_b is -(x_b - x_a) exactly;
+        // the sum and the smaller of two radii do not depend on their order).
+        const std::size_t len = re[r] - rb[r];
+        if (awake_d2_.size() < len) awake_d2_.resize(len);
+        within_reach(px[s], py[s], pz[s], pr[s], margin, px + rb[r], py + rb[r], pz + rb[r], pr + rb[r], len,
+                     awake_d2_.data());
+        for (std::uint32_t u = rb[r]; u < re[r]; ++u) {
+          const double d2 = awake_d2_[u - rb[r]];
+          // A pair of two awake ones is taken from the lower; a sleeper's from the awake one
+          // (and none with itself: d2 is 0).
+          if (!(d2 > 0.0) || (u < s && awake_at(u))) continue;
+          awake_pairs_.push_back({std::min(s, u), std::max(s, u), d2});
+        }
+      }
+    }
+  }
+  // The half stencil's order: by the lower sorted position, then the higher (its candidate runs
+  // ascend in key, so in sorted position).
+  std::sort(awake_pairs_.begin(), awake_pairs_.end(), [](const ReachPair& a, const ReachPair& b) {
+    return a.lo != b.lo ? a.lo < b.lo : a.hi < b.hi;
+  });
+  for (const ReachPair& p : awake_pairs_)
+    try_pair(order_[p.lo], order_[p.hi], p.d2, Vec3(px[p.hi] - px[p.lo], py[p.hi] - py[p.lo], pz[p.hi] - pz[p.lo]),
+             contact_speed, h, contacts);
 }
 
 void ParticleCollider::find_sleeping_neighbours(const std::vector<std::uint32_t>& woken, double h) {
