@@ -4,10 +4,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -184,4 +187,121 @@ TEST(Mesh, UnsupportedFormatAndPointsOnlyAreClearErrors) {
     }
     fs::remove(p);
   }
+}
+
+// assimp reads each file in a child process (mesh.cpp), so a file that makes it loop or abort is
+// an AssetError naming the file, not a hung or killed simreel. Before, a PLY file cut short in
+// its header read itself forever (assimp 5.2's stream reader seeks back to the start), and one
+// cut short in its vertex list tripped an ai_assert in the triangulation and aborted the process.
+
+namespace {
+
+/// The first `bytes` bytes of the test cube in PLY, as a file.
+fs::path cut_ply(std::size_t bytes) {
+  std::ifstream in(fs::path(SIMREEL_SOURCE_DIR) / "tests/assets/data/cube.ply", std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_GT(text.size(), bytes);
+  return temp_file("cut" + std::to_string(bytes) + ".ply", text.substr(0, bytes));
+}
+
+}  // namespace
+
+TEST(MeshIsolation, PlyCutInItsHeaderIsAnErrorAtTheTimeLimitNotAHang) {
+  const fs::path p = cut_ply(120);  // inside "element face 12": no end_header
+  // In a child with an alarm, so that a regression fails the test instead of hanging it.
+  EXPECT_EXIT(
+      {
+        ::alarm(60);
+        ::setenv("SIMREEL_MESH_IMPORT_SECONDS", "1", 1);
+        try {
+          (void)load_mesh(p);
+        } catch (const AssetError& e) {
+          std::fprintf(stderr, "%s\n", e.what());
+          std::exit(0);
+        }
+        std::exit(1);
+      },
+      ::testing::ExitedWithCode(0), "cut120\\.ply: cannot import mesh: assimp did not finish reading it within 1 s");
+  fs::remove(p);
+}
+
+TEST(MeshIsolation, PlyCutInItsVerticesIsAnErrorNotAnAbort) {
+  for (const std::size_t bytes : {200u, 250u}) {
+    const fs::path p = cut_ply(bytes);
+    try {
+      (void)load_mesh(p);
+      ADD_FAILURE() << bytes << " bytes imported";
+    } catch (const AssetError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(p.string() + ": cannot import mesh: assimp crashed reading it (signal SIGABRT)"),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("ai_assert"), std::string::npos) << "assimp's own message is kept: " << what;
+    }
+    fs::remove(p);
+  }
+}
+
+TEST(MeshIsolation, EveryFieldOfTheMeshAndItsGroupsComesBackFromTheChild) {
+  const fs::path dir = fs::temp_directory_path() / ("simreel-assets-wire-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "two.mtl") << "newmtl red\nKd 0.9 0.1 0.2\nnewmtl wood\nKd 0.5 0.4 0.3\nmap_Kd grain.png\n";
+  std::ofstream(dir / "two.obj") << "mtllib two.mtl\n"
+                                    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\n"
+                                    "vt 0.25 0.5\nvt 0.75 0.5\nvt 0.5 1\n"
+                                    "o lower\nusemtl red\nf 1/1 2/2 3/3\n"
+                                    "o upper\nusemtl wood\nf 4/1 5/2 6/3\n";
+  const auto mesh = load_mesh(dir / "two.obj");
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  ASSERT_EQ(mesh.positions.size(), 6u);
+  ASSERT_EQ(mesh.normals.size(), 6u);
+  ASSERT_EQ(mesh.uvs.size(), 6u);
+  std::map<std::string, const simreel::assets::MeshMaterial*> by_name;
+  for (const auto& m : mesh.materials) by_name[m.name] = &m;
+  ASSERT_TRUE(by_name.count("red") && by_name.count("wood"));
+  EXPECT_FLOAT_EQ(by_name["red"]->base_color[0], 0.9f);
+  EXPECT_FLOAT_EQ(by_name["red"]->base_color[2], 0.2f);
+  EXPECT_TRUE(by_name["red"]->texture.empty());
+  EXPECT_EQ(by_name["wood"]->texture, dir / "grain.png");
+  for (std::size_t t = 0; t < 2; ++t) {
+    const auto& tri = mesh.triangles[t];
+    const bool upper = mesh.positions[tri[0]].z() > 0.5f;
+    EXPECT_EQ(mesh.materials.at(mesh.triangle_material[t]).name, upper ? "wood" : "red");
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f& p = mesh.positions[tri[k]];
+      // Each triangle's UVs follow its corners: (0,0)->(0.25,0.5), (1,0)->(0.75,0.5), (0,1)->(0.5,1).
+      const Eigen::Vector2f uv = mesh.uvs[tri[k]];
+      EXPECT_FLOAT_EQ(uv.x(), p.x() > 0.5f ? 0.75f : p.y() > 0.5f ? 0.5f : 0.25f);
+      EXPECT_FLOAT_EQ(uv.y(), p.y() > 0.5f ? 1.0f : 0.5f);
+      EXPECT_NEAR(std::abs(mesh.normals[tri[k]].z()), 1.0f, 1e-6f);
+    }
+  }
+  const auto groups = simreel::assets::load_mesh_groups(dir / "two.obj");
+  ASSERT_EQ(groups.size(), 2u);
+  EXPECT_EQ(groups[0].name, "lower");
+  EXPECT_EQ(groups[1].name, "upper");
+  ASSERT_EQ(groups[1].positions.size(), 3u);
+  for (const auto& p : groups[1].positions) EXPECT_FLOAT_EQ(p.z(), 1.0f);
+  fs::remove_all(dir);
+}
+
+TEST(Mesh, AssimpReasonThatQuotesTheRestOfTheFileIsClipped) {
+  // assimp's "Cannot parse string \"...\" as a real number" quoted everything after the bad number:
+  // 1.8 MB of message for a 1.8 MB STL file. The message stays one readable line.
+  std::string stl = "solid s\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 x\n  vertex 1 0 0\n  vertex 0 1 0\n"
+                    " endloop\nendfacet\n";
+  for (int k = 0; k < 20000; ++k)
+    stl += "facet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vertex 0 1 0\n endloop\nendfacet\n";
+  stl += "endsolid s\n";
+  const auto p = temp_file("long_reason.stl", stl);
+  try {
+    (void)load_mesh(p);
+    ADD_FAILURE() << "imported";
+  } catch (const AssetError& e) {
+    const std::string what = e.what();
+    EXPECT_LT(what.size(), 600u) << what.substr(0, 600);
+    EXPECT_NE(what.find(p.string() + ": cannot import mesh: Cannot parse string"), std::string::npos) << what;
+    EXPECT_NE(what.find(" more characters)"), std::string::npos) << what;
+  }
+  fs::remove(p);
 }

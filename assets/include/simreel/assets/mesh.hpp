@@ -45,6 +45,8 @@ inline constexpr std::uint64_t kMaxMeshVertices = 10'000'000;
 inline constexpr std::uint64_t kMaxMeshTriangles = 10'000'000;
 /// Memory one import may take (address space beyond what the process used before it): 4 GiB.
 inline constexpr std::uint64_t kMaxMeshImportBytes = 4ull << 30;
+/// Time one import may take: 10 s plus 1 s per 2 MiB of file, or $SIMREEL_MESH_IMPORT_SECONDS
+/// when that is a positive number of seconds.
 
 /// Imports every mesh of a file (OBJ, STL, PLY, glTF/GLB, FBX, DAE, ...) into one mesh: node
 /// transforms applied, triangulated, identical vertices joined, normals generated where missing
@@ -54,8 +56,12 @@ inline constexpr std::uint64_t kMaxMeshImportBytes = 4ull << 30;
 /// metadata says "UpAxis" = 1 (FBX, Collada) are y up; both are turned to z up by the rotation
 /// (x, y, z) -> (x, -z, y) (+90 degrees about x). OBJ, STL and PLY carry no up axis and are taken
 /// as written, i.e. z up.
+/// assimp reads the file in a forked child process (where the process cannot fork, in this one),
+/// which sends the plain arrays back through a pipe: a file that makes assimp crash, abort or
+/// loop is an error, not the end of the caller.
 /// @throws AssetError naming the file when it is missing, not a regular file, unreadable,
-///         unsupported, broken (assimp's data-structure validation), beyond the limits above,
+///         unsupported, broken (assimp's data-structure validation, or assimp crashed on it or
+///         did not finish within the time limit above), beyond the limits above,
 ///         has a vertex coordinate that is NaN or infinite as a float (checked before identical
 ///         vertices are joined, and again after the node transforms) or has no triangles.
 TriangleMesh load_mesh(const std::filesystem::path& path);
