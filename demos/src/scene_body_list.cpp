@@ -17,6 +17,7 @@
 
 #include "scene_read.hpp"
 #include "simreel/assets/mesh.hpp"
+#include "simreel/render/image.hpp"
 #include "simreel/sim/convex_decomposition.hpp"
 #include "simreel/sim/hull_mesh.hpp"
 #include "simreel/sim/world.hpp"
@@ -169,6 +170,14 @@ std::string texture_file(ObjectReader& o) {
   if (tex.empty() || !std::filesystem::is_regular_file(path, ec)) {
     o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" +
                                          path.string() + " is not a file)");
+    return {};
+  }
+  // Decoded once here as well as by the renderer: a malformed image is bad input, refused at
+  // its pointer with the scene's other errors, not a failure after the outputs were opened.
+  try {
+    (void)render::read_image(path);
+  } catch (const render::IoError& e) {
+    o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" + e.what() + ")");
     return {};
   }
   return path.string();

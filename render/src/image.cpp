@@ -155,14 +155,30 @@ void write_png(const fs::path& path, const Image& image, int compression) {
 }
 
 Image read_image(const fs::path& path) {
+  const std::string what = "cannot read image " + path.string() + ": ";
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) throw IoError(what + "no such file");
+  // A FIFO would block the read (a texture named /dev/stdin), a device might never end.
+  if (!fs::is_regular_file(status)) throw IoError(what + "not a regular file (a directory, device or FIFO)");
+  const auto reason = [] {
+    const char* r = stbi_failure_reason();
+    return std::string(r != nullptr ? r : "unknown error");
+  };
   int w = 0;
   int h = 0;
   int channels = 0;
+  // The size from the header first: a file can declare a size whose pixels take gigabytes.
+  if (stbi_info(path.c_str(), &w, &h, &channels) == 0) throw IoError(what + reason());
+  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide)
+    throw IoError(what + std::to_string(w) + " x " + std::to_string(h) + " pixels, expected 1 to " +
+                  std::to_string(kMaxImageSide) + " on each side");
   unsigned char* data = stbi_load(path.c_str(), &w, &h, &channels, 4);
-  if (data == nullptr) {
-    const char* reason = stbi_failure_reason();
-    throw IoError("cannot read image " + path.string() + ": " +
-                  (reason != nullptr ? reason : "unknown error"));
+  if (data == nullptr) throw IoError(what + reason());
+  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide) {  // as the header said
+    stbi_image_free(data);
+    throw IoError(what + std::to_string(w) + " x " + std::to_string(h) + " pixels, expected 1 to " +
+                  std::to_string(kMaxImageSide) + " on each side");
   }
   Image image(w, h);
   std::memcpy(image.rgba.data(), data, image.rgba.size());

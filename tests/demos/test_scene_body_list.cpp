@@ -364,6 +364,25 @@ TEST(SceneBodyList, BadBodiesAreReportedWithTheirPointers) {
   has(body_errors(R"({"type": "kinematic", "shape": "box"})"), "expected a \"path\" to follow for a \"kinematic\" body");
   has(body_errors(R"({"shape": "box", "density": 5, "mass": 2})"), "/bodies/0/mass: expected \"density\" or \"mass\", found both");
   has(body_errors(R"({"shape": "box", "material": {"texture": "nope.png"}})"), "/bodies/0/material/texture: expected an image file");
+  {
+    // A file that is not a decodable image is refused at its pointer when the scene loads (it
+    // was a runtime failure, exit 1, once the renderer read it).
+    const auto dir = std::filesystem::temp_directory_path() / ("simreel_body_tex_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "cut.png", std::ios::binary) << "\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
+    std::string err;
+    try {
+      (void)scene_from_json(json::parse(R"({"bodies": [{"shape": "box", "material": {"texture": "cut.png"}}]})"),
+                            (dir / "s.json").string());
+    } catch (const SceneError& e) {
+      err = e.what();
+    }
+    EXPECT_NE(err.find("/bodies/0/material/texture: expected an image file (PNG, JPEG, ...), found \"cut.png\" "
+                       "(cannot read image " + (dir / "cut.png").string() + ": "),
+              std::string::npos)
+        << err;
+    std::filesystem::remove_all(dir);
+  }
   has(body_errors(R"({"shape": "mesh", "mesh": "missing.obj"})"), "/bodies/0/mesh");
   has(errors_of(R"({"colliders": [{"type": "box", "name": "a"}], "bodies": [{"name": "a", "shape": "box"}]})"),
       "/bodies/0): expected a name not used by another collider");

@@ -1,8 +1,12 @@
 // PNG output is exact and atomic; failures name the file and leave nothing behind.
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "render_test_util.hpp"
@@ -145,6 +149,62 @@ TEST(RenderImage, ReadErrorsNameThePath) {
   const fs::path junk = dir.path() / "junk.png";
   std::ofstream(junk) << "not an image";
   EXPECT_THROW((void)read_image(junk), IoError);
+}
+
+/// The message read_image gives for `path`, "" if it reads.
+std::string read_error(const fs::path& path) {
+  try {
+    (void)read_image(path);
+  } catch (const IoError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RenderImage, EmptyOversizedAndNonRegularImagesAreRefusedByName) {
+  const test::TempDir dir("png-limits");
+  // stb_image reads a PNM header with no digits as a 0 x 0 image and returned it: `simreel hash`
+  // then failed with exit 1 and "cannot hash an empty or malformed image", naming no file.
+  const fs::path empty = dir.path() / "empty.png";
+  std::ofstream(empty, std::ios::binary) << "P6\n\x9d\xe3\xfeWJ";
+  std::string err = read_error(empty);
+  EXPECT_NE(err.find(empty.string() + ": 0 x 0 pixels, expected 1 to 16384 on each side"), std::string::npos) << err;
+  // A PNG whose header declares 20000 x 1 pixels: refused from the header, before decoding.
+  const fs::path wide = dir.path() / "wide.png";
+  write_png(wide, pattern(4, 1));
+  std::string bytes;
+  {
+    std::ifstream in(wide, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_EQ(bytes.substr(12, 4), "IHDR");
+  bytes[16] = 0, bytes[17] = 0, bytes[18] = char(0x4e), bytes[19] = char(0x20);  // width 20000
+  std::uint32_t crc = 0xffffffffu;  // the chunk's CRC-32 over type and data, so only the size is wrong
+  for (std::size_t i = 12; i < 12 + 4 + 13; ++i) {
+    crc ^= std::uint8_t(bytes[i]);
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  crc = ~crc;
+  for (int k = 0; k < 4; ++k) bytes[29 + k] = char(crc >> (24 - 8 * k));
+  std::ofstream(wide, std::ios::binary | std::ios::trunc) << bytes;
+  err = read_error(wide);
+  EXPECT_NE(err.find(wide.string() + ": 20000 x 1 pixels, expected 1 to 16384 on each side"), std::string::npos) << err;
+  // A FIFO would block the read (it did: a texture named /dev/stdin). Held open for writing and
+  // given some bytes here, so that a regression fails this test instead of hanging it.
+  const fs::path fifo = dir.path() / "pipe.png";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const int writer = ::open(fifo.c_str(), O_RDWR | O_NONBLOCK);
+  ASSERT_GE(writer, 0);
+  const std::string junk(4096, 'x');
+  ASSERT_EQ(::write(writer, junk.data(), junk.size()), ssize_t(junk.size()));
+  err = read_error(fifo);
+  ::close(writer);
+  EXPECT_NE(err.find(fifo.string() + ": not a regular file"), std::string::npos) << err;
+  // A PNG cut short in its pixels.
+  const fs::path cut = dir.path() / "cut.png";
+  write_png(cut, pattern(64, 64));
+  fs::resize_file(cut, fs::file_size(cut) / 2);
+  EXPECT_NE(read_error(cut).find(cut.string() + ": "), std::string::npos);
 }
 
 }  // namespace

@@ -42,7 +42,14 @@ class IoError : public std::runtime_error {
 /// @throws IoError naming the path; std::bad_alloc when memory runs out.
 void write_png(const std::filesystem::path& path, const Image& image, int compression = 4);
 
-/// Reads PNG/JPEG/BMP/TGA into RGBA8. @throws IoError naming the path and stb's reason.
+/// The largest image side read_image accepts: 16384 px, the least GL_MAX_TEXTURE_SIZE that
+/// OpenGL 4.5 guarantees, so any image read uploads as a texture (at most 1 GiB of RGBA8).
+inline constexpr int kMaxImageSide = 16384;
+
+/// Reads PNG/JPEG/BMP/TGA/PNM/... (what stb_image reads, by content) into RGBA8.
+/// @throws IoError naming the path and the reason: no such file, not a regular file (a FIFO
+///         would block), stb's reason for a malformed file, or a side of 0 or above
+///         kMaxImageSide pixels (checked from the header before the pixels are decoded).
 Image read_image(const std::filesystem::path& path);
 
 /// Area-average (box filter) resample to width x height, exact in integer arithmetic, so the
