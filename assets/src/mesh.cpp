@@ -314,6 +314,7 @@ class WireReader {
   }
   void get(void* out, std::size_t n) {
     if (std::size_t(end_ - p_) < n) truncated();
+    if (n == 0) return;  // an empty vector's data() may be null, which memcpy may not take
     std::memcpy(out, p_, n);
     p_ += n;
   }
