@@ -153,7 +153,8 @@ std::shared_ptr<const assets::TriangleMesh> mesh_file(ObjectReader& r, const std
   }
   const std::filesystem::path path = std::filesystem::path(r.file()).parent_path() / name;
   try {
-    return std::make_shared<assets::TriangleMesh>(assets::load_mesh(path));
+    auto mesh = std::make_shared<assets::TriangleMesh>(assets::load_mesh(path));
+    if (mesh_textures_readable(r, key, path, *mesh)) return mesh;
   } catch (const assets::AssetError& e) {
     r.error_at(r.pointer(key), e.what());
   }
@@ -166,18 +167,9 @@ std::string texture_file(ObjectReader& o) {
   if (!o.has("texture")) return {};
   const std::string tex = o.string("texture", "");
   const std::filesystem::path path = std::filesystem::path(o.file()).parent_path() / tex;
-  std::error_code ec;
-  if (tex.empty() || !std::filesystem::is_regular_file(path, ec)) {
-    o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" +
-                                         path.string() + " is not a file)");
-    return {};
-  }
-  // Decoded once here as well as by the renderer: a malformed image is bad input, refused at
-  // its pointer with the scene's other errors, not a failure after the outputs were opened.
-  try {
-    (void)render::read_image(path);
-  } catch (const render::IoError& e) {
-    o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" + e.what() + ")");
+  const std::string why = tex.empty() ? std::string("\"\" is not a file") : texture_problem(path);
+  if (!why.empty()) {
+    o.error_at(o.pointer("texture"), "expected an image file (PNG, JPEG, ...), found \"" + tex + "\" (" + why + ")");
     return {};
   }
   return path.string();

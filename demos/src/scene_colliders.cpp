@@ -133,7 +133,8 @@ ColliderScene collider(const json& j, const std::string& ptr, const std::string&
       const std::filesystem::path path = std::filesystem::path(file).parent_path() / name;
       try {
         auto mesh = std::make_shared<assets::TriangleMesh>(assets::load_mesh(path));
-        if (scale_keeps_mesh_finite(r, c.mesh_scale, mesh->positions)) {
+        if (mesh_textures_readable(r, "file", path, *mesh) &&
+            scale_keeps_mesh_finite(r, c.mesh_scale, mesh->positions)) {
           c.mesh.vertices.reserve(mesh->positions.size());
           for (const auto& p : mesh->positions)
             c.mesh.vertices.emplace_back(p.x() * c.mesh_scale[0], p.y() * c.mesh_scale[1], p.z() * c.mesh_scale[2]);

@@ -214,12 +214,12 @@ render::MeshDesc mesh_desc(const ColliderScene& c) {
   // with the file's base colour and texture.
   std::vector<std::uint32_t> used;
   bool valid = m.triangle_material.size() == m.triangles.size();
-  for (std::size_t t = 0; valid && !c.color_given && t < m.triangle_material.size(); ++t) {
+  for (std::size_t t = 0; valid && t < m.triangle_material.size(); ++t) {
     const std::uint32_t k = m.triangle_material[t];
     valid = k < m.materials.size();
     if (valid && std::find(used.begin(), used.end(), k) == used.end()) used.push_back(k);
   }
-  const bool by_material = valid && used.size() > 1;
+  const bool by_material = valid && !c.color_given && used.size() > 1;
   d.positions.reserve(3 * m.positions.size());
   d.normals.reserve(3 * m.normals.size());
   for (const auto& p : m.positions)
@@ -237,7 +237,10 @@ render::MeshDesc mesh_desc(const ColliderScene& c) {
     return !mm.texture.empty() && mm.texture.string()[0] != '*' ? mm.texture.string() : std::string();
   };
   d.material = collider_material(c);
-  if (!m.materials.empty()) d.material.texture_path = file_texture(m.materials[0]);
+  // The texture of the one material the faces use (assimp lists its own default material first,
+  // so the first is often not it), else of the first.
+  if (valid && used.size() == 1) d.material.texture_path = file_texture(m.materials[used[0]]);
+  else if (!m.materials.empty()) d.material.texture_path = file_texture(m.materials[0]);
   // Open meshes (a ramp's underside, stairs seen from behind) show their inside faces too.
   d.material.double_sided = true;
   if (!by_material) {

@@ -17,6 +17,7 @@
 ///   scene.cpp            scene_from_json (the top level, in file order), load_scene, build_world
 
 #include <array>
+#include <filesystem>
 #include <cstddef>
 #include <limits>
 #include <numbers>
@@ -25,6 +26,7 @@
 #include <vector>
 
 #include "json_reader.hpp"
+#include "simreel/assets/mesh.hpp"
 #include "scene.hpp"
 
 namespace simreel::app::scene_read {
@@ -73,6 +75,16 @@ inline constexpr double kMaxLightIntensity = 1000.0;
 /// file's, m) beyond kMaxScaledCoordinate on some axis.
 bool scale_keeps_mesh_finite(ObjectReader& r, const std::array<double, 3>& scale,
                              const std::vector<Eigen::Vector3f>& positions);
+
+/// "" when `path` is an image the renderer can draw as a texture (a regular file that
+/// render::read_image decodes); otherwise why not (the file and the reader's reason).
+std::string texture_problem(const std::filesystem::path& path);
+
+/// False, with an error at r's `key`, when some material of the mesh file `path` (loaded as
+/// `mesh`) names a texture that texture_problem() refuses: the renderer would stop on it after
+/// the outputs were opened (exit 1, no pointer). Embedded textures ("*0", ...) are not read.
+bool mesh_textures_readable(ObjectReader& r, const std::string& key, const std::filesystem::path& path,
+                            const assets::TriangleMesh& mesh);
 
 /// Calls each(object, pointer, index) for every element of the array r[key]; reports non-arrays
 /// and non-object elements.

@@ -2,8 +2,10 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <system_error>
 
 #include "scene_read.hpp"
+#include "simreel/render/image.hpp"
 
 namespace simreel::app::scene_read {
 
@@ -145,6 +147,35 @@ bool scale_keeps_mesh_finite(ObjectReader& r, const std::array<double, 3>& scale
     << ": a vertex reaches " << reach << " m";
   r.error_at(r.pointer("scale"), m.str());
   return false;
+}
+
+std::string texture_problem(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return path.string() + " is not a file";
+  // Decoded here as well as by the renderer: a malformed image is bad input, refused with the
+  // scene's other errors, not a failure after the outputs were opened.
+  try {
+    (void)render::read_image(path);
+  } catch (const render::IoError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+bool mesh_textures_readable(ObjectReader& r, const std::string& key, const std::filesystem::path& path,
+                            const assets::TriangleMesh& mesh) {
+  std::vector<std::filesystem::path> seen;  // materials often share one image
+  for (const assets::MeshMaterial& m : mesh.materials) {
+    const std::string tex = m.texture.string();
+    if (tex.empty() || tex[0] == '*' || std::find(seen.begin(), seen.end(), m.texture) != seen.end()) continue;
+    seen.push_back(m.texture);
+    const std::string why = texture_problem(m.texture);
+    if (why.empty()) continue;
+    r.error_at(r.pointer(key), path.filename().string() + "'s material \"" + m.name + "\" names the texture " +
+                                   m.texture.filename().string() + ": expected an image file (PNG, JPEG, ...) (" + why + ")");
+    return false;
+  }
+  return true;
 }
 
 }  // namespace simreel::app::scene_read

@@ -415,6 +415,36 @@ TEST(Robust, MeshFileThatCrashesOrHangsAssimpExits2WithThePointer) {
   EXPECT_TRUE(has(r.err, "header_cut.ply: cannot import mesh: assimp did not finish reading it within 1 s")) << r.err;
 }
 
+TEST(Robust, TextureAMeshFileNamesThatIsMissingCutOrAFifoExits2BeforeAnyOutput) {
+  // The renderer read such a texture after the outputs were opened and stopped with exit 1,
+  // naming neither the scene nor the mesh file; a FIFO under the name would block the read.
+  TempDir d;
+  write_file(d / "sq.obj", "mtllib sq.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+                           "usemtl wood\nf 1/1 2/2 3/3\n");
+  write_file(d / "sq.mtl", "newmtl wood\nKd 0.5 0.4 0.3\nmap_Kd grain.png\n");
+  write_file(d / "s.json", R"({"colliders": [{"type": "mesh", "file": "sq.obj"}], "emitters": [{"rate": 10}]})");
+  const auto render = [&] {
+    return run_simreel("render " + (d / "s.json").string() + " -o " + (d / "out").string() +
+                           " -o " + (d / "out.gif").string() + " --frames 2 --size 32x24",
+                       "timeout 60");
+  };
+  const auto expect_refused = [&](const std::string& why) {
+    const auto r = render();
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_TRUE(has(r.err, "/colliders/0/file: sq.obj's material \"wood\" names the texture grain.png: "
+                           "expected an image file (PNG, JPEG, ...) (")) << r.err;
+    EXPECT_TRUE(has(r.err, why)) << r.err;
+    EXPECT_FALSE(fs::exists(d / "out")) << "a frame folder was made";
+    EXPECT_FALSE(fs::exists(d / "out.gif")) << "a video was written";
+  };
+  expect_refused("grain.png is not a file");
+  write_file(d / "grain.png", "\x89PNG\r\n");
+  expect_refused("cannot read image " + (d / "grain.png").string());
+  fs::remove(d / "grain.png");
+  ASSERT_EQ(::mkfifo((d / "grain.png").c_str(), 0600), 0);
+  expect_refused("grain.png is not a file");
+}
+
 // --- messages ----------------------------------------------------------------------------------
 
 TEST(Robust, NumberOverflowNamesFileLineAndColumnOrTheSetPointer) {

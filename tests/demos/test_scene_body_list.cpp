@@ -5,6 +5,7 @@
 // reported with the file and JSON pointer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "scene.hpp"
 #include "simreel/assets/mesh.hpp"
 #include "scene_list_builder.hpp"
+#include "simreel/render/image.hpp"
 #include "simreel/render/mesh.hpp"
 
 namespace {
@@ -386,4 +388,50 @@ TEST(SceneBodyList, BadBodiesAreReportedWithTheirPointers) {
   has(body_errors(R"({"shape": "mesh", "mesh": "missing.obj"})"), "/bodies/0/mesh");
   has(errors_of(R"({"colliders": [{"type": "box", "name": "a"}], "bodies": [{"name": "a", "shape": "box"}]})"),
       "/bodies/0): expected a name not used by another collider");
+}
+
+TEST(SceneBodyList, TextureAMeshFileNamesMustBeAnImageWhenTheSceneLoads) {
+  // An OBJ whose MTL named a missing or malformed texture passed the loader; the renderer then
+  // stopped on it after the outputs were opened (exit 1, naming neither the scene nor the mesh).
+  const auto dir = std::filesystem::temp_directory_path() / ("simreel_mesh_tex_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "sq.obj") << "mtllib sq.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+                                   "vt 0 1\nusemtl red\nf 1/1 2/2 3/3\nusemtl blue\nf 1/1 3/3 4/4\n";
+  std::ofstream(dir / "sq.mtl") << "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\nmap_Kd tex.png\n";
+  const std::string scene = (dir / "s.json").string();
+  const std::string collider = R"({"colliders": [{"type": "mesh", "name": "m", "file": "sq.obj"}]})";
+  const std::string body = R"({"bodies": [{"type": "static", "shape": "mesh", "mesh": "sq.obj"}]})";
+  const auto has = [](const std::string& err, const std::string& part) {
+    EXPECT_NE(err.find(part), std::string::npos) << "expected \"" << part << "\" in: " << err;
+  };
+  // Missing.
+  has(errors_of(collider, scene), "/colliders/0/file: sq.obj's material \"blue\" names the texture tex.png: "
+                                  "expected an image file (PNG, JPEG, ...) (" + (dir / "tex.png").string() + " is not a file)");
+  has(errors_of(body, scene), "/bodies/0/mesh: sq.obj's material \"blue\" names the texture tex.png");
+  // Cut in its header.
+  std::ofstream(dir / "tex.png", std::ios::binary) << "\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
+  has(errors_of(collider, scene), "/colliders/0/file: sq.obj's material \"blue\" names the texture tex.png: "
+                                  "expected an image file (PNG, JPEG, ...) (cannot read image " + (dir / "tex.png").string());
+  has(errors_of(body, scene), "/bodies/0/mesh: sq.obj's material \"blue\" names the texture tex.png");
+  // A folder under the name.
+  std::filesystem::remove(dir / "tex.png");
+  std::filesystem::create_directory(dir / "tex.png");
+  has(errors_of(collider, scene), "tex.png is not a file");
+  // A real image: the scene loads, and the mesh keeps the texture for the renderer.
+  std::filesystem::remove(dir / "tex.png");
+  render::Image img(2, 2);
+  std::fill(img.rgba.begin(), img.rgba.end(), std::uint8_t(200));
+  render::write_png(dir / "tex.png", img);
+  EXPECT_EQ(errors_of(collider, scene), "");
+  EXPECT_EQ(errors_of(body, scene), "");
+  // A file whose faces all use one material is drawn with that material's texture (assimp puts
+  // its own default material first, so "the first material" had none and the image was dropped).
+  std::ofstream(dir / "one.obj") << "mtllib sq.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+                                    "usemtl blue\nf 1/1 2/2 3/3\n";
+  const Scene one = scene_from_json(json::parse(R"({"colliders": [{"type": "mesh", "name": "m", "file": "one.obj"}]})"), scene);
+  ASSERT_EQ(one.colliders.size(), 1u);
+  const render::MeshDesc desc = mesh_desc(one.colliders[0]);
+  EXPECT_TRUE(desc.parts.empty());
+  EXPECT_EQ(desc.material.texture_path, (dir / "tex.png").string());
+  std::filesystem::remove_all(dir);
 }
