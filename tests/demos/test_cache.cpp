@@ -199,6 +199,38 @@ TEST(StateRoundTrip, StateOfAnotherSceneIsRefused) {
   EXPECT_THROW(c.world.load_state(std::string_view(s).substr(0, 10)), simreel::sim::StateError);
 }
 
+// A corrupt record count (the checksum recomputed over it, as a hand-made file would have) is
+// refused from the bytes the section has left, before anything is allocated for it: 2^32
+// contact manifolds asked for a terabyte, and `bake --resume` ended in std::bad_alloc (exit 1).
+TEST(StateRoundTrip, RecordCountBeyondTheSectionIsRefusedBeforeAllocating) {
+  const Scene tumble = load_scene(scene_path("tumble"));
+  SceneWorld a = build_world(tumble);
+  for (int i = 0; i < 40; ++i) a.world.advance(1.0 / 60.0);  // bodies on the ground: manifolds
+  std::string s;
+  a.world.save_state(s);
+  const std::size_t tag = s.find("CONT");
+  ASSERT_NE(tag, std::string::npos);
+  std::uint64_t section = 0, manifolds = 0;
+  std::memcpy(&section, s.data() + tag + 4, 8);
+  std::memcpy(&manifolds, s.data() + tag + 12, 8);
+  ASSERT_GT(manifolds, 0u) << "tumble's bodies should touch something after 40 frames";
+  for (const std::uint64_t bad : {std::uint64_t{1} << 32, std::uint64_t{1} << 62, section}) {
+    std::string c = s;
+    std::memcpy(c.data() + tag + 12, &bad, 8);
+    SceneWorld b = build_world(tumble);
+    try {
+      b.world.load_state(c);
+      ADD_FAILURE() << bad << " manifolds were accepted";
+    } catch (const simreel::sim::StateError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::to_string(bad) + " contact manifolds declared, the "),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  SceneWorld b = build_world(tumble);
+  EXPECT_NO_THROW(b.world.load_state(s));
+}
+
 /// Every PNG of `dir`, by name.
 std::vector<std::pair<std::string, std::string>> pngs(const fs::path& dir) {
   std::vector<std::pair<std::string, std::string>> out;

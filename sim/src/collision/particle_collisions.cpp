@@ -457,9 +457,8 @@ void ParticleCollider::save_warm(StateWriter& out) const {
 }
 
 void ParticleCollider::load_warm(StateReader& in) {
-  const auto groups = in.value<std::uint64_t>();
-  if (groups > (std::uint64_t{1} << 20)) throw StateError("state: too many particle contact groups");
-  caches_.resize(std::size_t(groups));
+  // A group without entries: its id and five array counts.
+  caches_.resize(in.records(sizeof(std::uint32_t) + 5 * sizeof(std::uint64_t), "particle contact groups"));
   constexpr std::size_t kMax = std::size_t{1} << 40;
   for (WarmCache& c : caches_) {
     in.value(c.group);

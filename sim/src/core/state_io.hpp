@@ -122,6 +122,18 @@ class StateReader {
     if (n > 0) std::memcpy(static_cast<void*>(a.data()), in_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
   }
+  /// Reads a count of records that take at least `min_bytes` each: more than the bytes left in
+  /// the section could hold is an error naming `what`, before the caller allocates them (a
+  /// corrupt count of 2^32 contact manifolds asked for a terabyte).
+  std::size_t records(std::size_t min_bytes, const char* what) {
+    const auto n = value<std::uint64_t>();
+    const std::size_t left = (end_ != 0 ? end_ : in_.size()) - pos_;
+    if (n > left / min_bytes)
+      throw StateError(std::string("state: ") + std::to_string(n) + " " + what + " declared, the " +
+                       std::to_string(left) + " bytes left in section '" + tag_ + "' hold at most " +
+                       std::to_string(left / min_bytes));
+    return std::size_t(n);
+  }
   /// Reads a count that must equal `expected` (an object count fixed by the scene).
   void count(std::uint64_t expected, const char* what) {
     const auto n = value<std::uint64_t>();

@@ -224,9 +224,10 @@ void save_contacts(const detail::BodyDynamics& d, StateWriter& out) {
 
 void load_contacts(detail::BodyDynamics& d, StateReader& in) {
   in.begin("CONT");
-  const auto n = in.value<std::uint64_t>();
-  if (n > (std::uint64_t{1} << 32)) throw StateError("state: too many contact manifolds");
-  d.previous.assign(std::size_t(n), detail::BodyManifold{});
+  // A manifold without points: its key, rigid indices, first point, count and normal.
+  constexpr std::size_t kLeast = 2 * sizeof(std::uint64_t) + 3 * sizeof(std::uint32_t) +
+                                 3 * sizeof(std::uint32_t) + sizeof(std::int32_t) + sizeof(Vec3);
+  d.previous.assign(in.records(kLeast, "contact manifolds"), detail::BodyManifold{});
   for (detail::BodyManifold& m : d.previous) {
     in.value(m.key.body_a);
     in.value(m.key.shape_a);
