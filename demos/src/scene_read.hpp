@@ -17,8 +17,8 @@
 ///   scene.cpp            scene_from_json (the top level, in file order), load_scene, build_world
 
 #include <array>
-#include <filesystem>
 #include <cstddef>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -26,8 +26,8 @@
 #include <vector>
 
 #include "json_reader.hpp"
-#include "simreel/assets/mesh.hpp"
 #include "scene.hpp"
+#include "simreel/assets/mesh.hpp"
 
 namespace simreel::app::scene_read {
 
