@@ -15,6 +15,7 @@
 #include <limits>
 #include <ostream>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <random>
@@ -229,6 +230,127 @@ TEST(StateRoundTrip, RecordCountBeyondTheSectionIsRefusedBeforeAllocating) {
   }
   SceneWorld b = build_world(tumble);
   EXPECT_NO_THROW(b.world.load_state(s));
+}
+
+/// The state of `scene` after `frames` frames with the 8-byte double (or 4-byte float) at `offset`
+/// bytes after the first occurrence of section tag `tag` set to `value`.
+std::string state_with(const Scene& scene, int frames, const char* tag, std::size_t offset, double value,
+                       bool as_float) {
+  SceneWorld a = build_world(scene);
+  for (int i = 0; i < frames; ++i) a.world.advance(1.0 / 60.0);
+  std::string s;
+  a.world.save_state(s);
+  const std::size_t at = s.find(tag);
+  EXPECT_NE(at, std::string::npos) << tag;
+  if (at == std::string::npos) return s;
+  if (as_float) {
+    const float f = float(value);
+    std::memcpy(s.data() + at + offset, &f, sizeof f);
+  } else {
+    std::memcpy(s.data() + at + offset, &value, sizeof value);
+  }
+  return s;
+}
+
+// A state whose bytes are intact (its cache checksum recomputed) but whose values no step could
+// have written: NaN, inf, a particle beyond simulation.max_distance. Each is refused at load with
+// the quantity named, where it used to load and stop the run one step later as "simulation
+// diverged" (exit 1). Offsets: a section is its tag (4 bytes) and size (8), then its fields
+// (state_snapshot.cpp).
+TEST(StateRoundTrip, NonFiniteOrOutOfBoundsValuesAreRefusedAtLoad) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* scene;
+    int frames;
+    const char* tag;
+    std::size_t offset;
+    double value;
+    bool as_float;
+    const char* names;
+  };
+  const Case cases[] = {
+      {"tumble", 5, "WRLD", 12, nan, false, "the world time is not finite"},
+      // BODY: body count (8), the first body's motion type (1), its position.
+      {"tumble", 5, "BODY", 21, nan, false, "position is not finite"},
+      // RIGD: rigid count (8), the positions' count (8), the first position.
+      {"tumble", 5, "RIGD", 28, inf, false, "rigid positions: value 0 of"},
+      // The first orientation's w (after the positions: n Vec3 and the orientations' count), and a
+      // velocity far above light's (the step's own divergence bound): finite, yet no step writes
+      // them.
+      {"tumble", 5, "RIGD", 28 + 6 * 24 + 8 + 24, 3.0, false, "is not a unit quaternion"},
+      {"tumble", 5, "RIGD", 28 + 6 * 24 + 8 + 6 * 32 + 8, 1e12, false, "faster than light"},
+      // The relations the step keeps between the arrays: body 0's angular momentum L.x (ω is no
+      // longer I_w⁻¹ L) and its body inertia I_b(0,0) (I_b⁻¹ no longer its inverse).
+      {"tumble", 5, "RIGD", 532, 7.5, false, "angular velocity is not I_w^-1 L"},
+      {"tumble", 5, "RIGD", 948, 1e3, false, "inverse inertia is not the inverse of its inertia"},
+      {"tumble", 5, "RIGD", 948 + 8, 1e3, false, "inertia is not symmetric positive definite"},
+      // SHAP: shape count (8), the first shape's type (1) and point (24), its normal (fountain's
+      // ground plane: (0, 0, 1)).
+      {"fountain", 30, "SHAP", 45, 0.5, false, "shape 0: the normal is not a unit vector"},
+      // PSYS: system count (8), particle count (8), the positions' count (8), the first position.
+      {"fountain", 30, "PSYS", 36, nan, true, "particle positions: value 0 of"},
+      {"fountain", 30, "PSYS", 36, 2.0e7, true, "is beyond simulation.max_distance"},
+      // CLTH: cloth count (8), vertex count (8), the positions' count (8), the first position.
+      {"flag", 5, "CLTH", 36, -inf, false, "positions: value 0 of"},
+  };
+  {  // the RIGD offsets below assume tumble's six rigid bodies
+    SceneWorld a = build_world(load_scene(scene_path("tumble")));
+    std::string s;
+    a.world.save_state(s);
+    std::uint64_t rigid = 0;
+    std::memcpy(&rigid, s.data() + s.find("RIGD") + 12, 8);
+    ASSERT_EQ(rigid, 6u);
+  }
+  for (const Case& c : cases) {
+    const Scene scene = load_scene(scene_path(c.scene));
+    const std::string bad = state_with(scene, c.frames, c.tag, c.offset, c.value, c.as_float);
+    SceneWorld b = build_world(scene);
+    try {
+      b.world.load_state(bad);
+      ADD_FAILURE() << c.scene << " " << c.tag << "+" << c.offset << " = " << c.value << " was accepted";
+    } catch (const simreel::sim::StateError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.names), std::string::npos) << c.scene << ": " << e.what();
+    }
+  }
+}
+
+// The load checks refuse no state a step writes: every frame's state of the scenes with bodies,
+// joints, contacts, sleep and cloth loads (a check too tight would refuse a user's cache). The
+// scene list, the frame count and the stride are overridable for a longer sweep
+// (SIMREEL_STATE_SWEEP="scene,scene:frames").
+TEST(StateRoundTrip, EveryStateAStepWritesPassesTheLoadChecks) {
+  std::vector<std::string> scenes = {"tumble", "dominoes", "chandelier", "rope_bridge", "ring_toss",
+                                     "newtons_cradle", "jet_crates", "flag"};
+  int frames = 90;
+  if (const char* e = std::getenv("SIMREEL_STATE_SWEEP")) {
+    std::string v = e;
+    if (const auto colon = v.find(':'); colon != std::string::npos) {
+      frames = std::stoi(v.substr(colon + 1));
+      v = v.substr(0, colon);
+    }
+    scenes.clear();
+    for (std::size_t at = 0; at <= v.size();) {
+      const std::size_t comma = std::min(v.find(',', at), v.size());
+      scenes.push_back(v.substr(at, comma - at));
+      at = comma + 1;
+    }
+  }
+  for (const std::string& name : scenes) {
+    const Scene scene = load_scene(scene_path(name.c_str()));
+    SceneWorld a = build_world(scene), b = build_world(scene);
+    std::string s;
+    for (int f = 0; f < frames; ++f) {
+      a.world.advance(1.0 / 60.0);
+      a.world.save_state(s);
+      try {
+        b.world.load_state(s);
+      } catch (const simreel::sim::StateError& e) {
+        ADD_FAILURE() << name << " frame " << f + 1 << ": " << e.what();
+        break;
+      }
+    }
+  }
 }
 
 /// Every PNG of `dir`, by name.

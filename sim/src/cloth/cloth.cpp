@@ -330,6 +330,11 @@ void Cloth::load_state(detail::StateReader& in) {
   if (S.x.size() != S.n || S.v.size() != S.n || S.x_start.size() != S.n || S.dv.size() != S.n)
     throw StateError("state: cloth '" + S.def.name + "' arrays do not hold its " +
                      std::to_string(S.n) + " vertices");
+  const std::string of = "cloth '" + S.def.name + "' ";
+  detail::require_finite(S.x, S.n, of + "positions");
+  detail::require_finite(S.v, S.n, of + "velocities");
+  detail::require_finite(S.x_start, S.n, of + "start positions");
+  detail::require_finite(S.dv, S.n, of + "velocity changes");
   S.refresh_views();
 }
 const std::vector<Vec3>& Cloth::velocities() const { return s_->v; }

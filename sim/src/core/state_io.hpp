@@ -9,6 +9,7 @@
 // Sections are per subsystem (state_snapshot.cpp): adding a subsystem adds a section and bumps
 // kStateFormat.
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
@@ -19,6 +20,7 @@
 
 #include "simreel/sim/random.hpp"
 #include "simreel/sim/state_error.hpp"
+#include "simreel/sim/types.hpp"
 
 namespace simreel::sim::detail {
 
@@ -69,6 +71,31 @@ class StateWriter {
 };
 
 using sim::StateError;
+
+/// Whether every scalar of v is finite (a float, double, Vec3, Mat3 or Quat).
+inline bool finite_value(double v) { return std::isfinite(v); }
+inline bool finite_value(const Quat& q) { return q.coeffs().allFinite(); }
+template <class Derived>
+bool finite_value(const Eigen::DenseBase<Derived>& m) {
+  return m.allFinite();
+}
+
+/// Refuses a loaded value that a step could not have written: NaN or infinite. The checksum of a
+/// cache frame only proves the bytes are the ones written; a hand-edited or corrupt frame with a
+/// recomputed checksum otherwise loaded and ended a run one step later as "simulation diverged"
+/// (exit 1) instead of naming the state.
+template <class T>
+void require_finite(const T& v, const std::string& what) {
+  if (!finite_value(v)) throw StateError("state: " + what + " is not finite");
+}
+/// The same over the first n elements of an array, naming the first bad element's index.
+template <class Array>
+void require_finite(const Array& a, std::size_t n, const std::string& what) {
+  for (std::size_t i = 0; i < n; ++i)
+    if (!finite_value(a[i]))
+      throw StateError("state: " + what + ": value " + std::to_string(i) + " of " +
+                       std::to_string(n) + " is not finite");
+}
 
 /// Reads what StateWriter wrote; every read is bounds-checked (a truncated or corrupt state
 /// throws StateError, it never reads past the end).

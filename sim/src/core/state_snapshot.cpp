@@ -22,6 +22,8 @@
 // A new subsystem adds a section here, written by a save_X / load_X pair like the ones below,
 // and bumps kStateFormat.
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <string>
 
 #include "core/state_io.hpp"
@@ -51,6 +53,7 @@ void load_clock(WorldState& w, StateReader& in) {
   in.value(w.time);
   in.value(w.steps);
   in.end();
+  detail::require_finite(w.time, "the world time");
 }
 
 // --- bodies: poses and velocities of the body frames, what was last reported ---------------
@@ -84,6 +87,13 @@ void load_bodies(WorldState& w, StateReader& in) {
     in.value(b.angular_velocity);
     in.value(b.reported_translation);
     in.value(b.reported_rotation);
+    const std::string of = "body '" + b.name + "' ";
+    detail::require_finite(b.pose.translation, of + "position");
+    detail::require_finite(b.pose.rotation, of + "orientation");
+    detail::require_finite(b.velocity, of + "velocity");
+    detail::require_finite(b.angular_velocity, of + "angular velocity");
+    detail::require_finite(b.reported_translation, of + "reported position");
+    detail::require_finite(b.reported_rotation, of + "reported orientation");
   }
   in.end();
 }
@@ -110,9 +120,37 @@ void save_shapes(const WorldState& w, StateWriter& out) {
   out.end();
 }
 
+/// What Collider::set_pose() and follow() leave in a shape (collision/collider.cpp), checked on a
+/// loaded state: finite poses and velocities below light's; a unit normal; a unit orientation
+/// with R its rotation matrix; an orthonormal previous rotation; a finite bounding box of
+/// non-negative size (a plane's box is not read). A corrupt pose otherwise loaded and sent the
+/// bodies touching it off at the next step.
+void check_shape(const detail::Collider& c, std::size_t k) {
+  constexpr double kLight = 299792458.0;  // (m/s, rad/s)
+  constexpr double kTol = 1e-6;
+  const auto bad = [&](const std::string& what) {
+    throw StateError("state: shape " + std::to_string(k) + ": " + what);
+  };
+  for (const Vec3* v : {&c.point, &c.normal, &c.center, &c.velocity, &c.angular_velocity, &c.prev_center})
+    if (!v->allFinite()) bad("a position, normal or velocity is not finite");
+  if (!(c.rotation.coeffs().allFinite() && c.R.allFinite() && c.prev_R.allFinite()))
+    bad("a rotation is not finite");
+  if (!(c.velocity.norm() < kLight && c.angular_velocity.norm() < kLight)) bad("moves or spins faster than light");
+  if (!(std::abs(c.normal.norm() - 1.0) <= kTol)) bad("the normal is not a unit vector");
+  if (!(std::abs(c.rotation.norm() - 1.0) <= kTol)) bad("the orientation is not a unit quaternion");
+  if (!((c.R - c.rotation.toRotationMatrix()).cwiseAbs().maxCoeff() <= kTol))
+    bad("the rotation matrix is not the orientation's");
+  if (!((c.prev_R.transpose() * c.prev_R - Mat3::Identity()).cwiseAbs().maxCoeff() <= kTol))
+    bad("the previous rotation matrix is not a rotation");
+  if (c.shape != detail::Collider::Shape::plane &&
+      !(c.aabb_center.allFinite() && c.aabb_half.allFinite() && c.aabb_half.minCoeff() >= 0.0))
+    bad("the bounding box is not finite and of non-negative size");
+}
+
 void load_shapes(WorldState& w, StateReader& in) {
   in.begin("SHAP");
   in.count(w.shapes.size(), "shapes");
+  std::size_t k = 0;
   for (detail::Collider& c : w.shapes) {
     if (in.value<std::uint8_t>() != std::uint8_t(c.shape)) throw StateError("state: a shape has another type");
     in.value(c.point);
@@ -126,6 +164,7 @@ void load_shapes(WorldState& w, StateReader& in) {
     in.value(c.prev_R);
     in.value(c.aabb_center);
     in.value(c.aabb_half);
+    check_shape(c, k++);
     c.note_pose();  // derived from the poses just read, as set_pose() derives it
   }
   in.end();
@@ -156,6 +195,60 @@ void save_rigid(const detail::RigidBodies& r, StateWriter& out) {
   out.end();
 }
 
+/// The relations a step keeps between the rigid arrays (rigid/body_state.cpp, Coutinho §4.2 and
+/// App. C), checked on a loaded state: finite, non-negative mass and drags; a dynamic body's
+/// inertia symmetric positive definite with I_b⁻¹ its inverse; awake, 1/m and I_w⁻¹ = R I_b⁻¹ Rᵀ
+/// with ω = I_w⁻¹ L (update_derived() leaves them so, to rounding); asleep or static, zero inverse
+/// mass and world inverse inertia; unit orientations; speeds below the one at which a step stops
+/// the run as diverged (stage_bodies.cpp). A corrupt matrix or momentum otherwise loaded and
+/// blew the body up at the next step ("faster than light", exit 1).
+void check_rigid(const detail::RigidBodies& r) {
+  constexpr double kLight = 299792458.0;  // (m/s, rad/s)
+  constexpr double kTol = 1e-6;           // relative; the step leaves them equal to rounding
+  const std::size_t n = r.size();
+  const auto bad = [&](std::size_t i, const std::string& what) {
+    throw StateError("state: rigid body " + std::to_string(i) + " of " + std::to_string(n) + ": " + what);
+  };
+  const auto close = [](const auto& a, const auto& b, double scale) {
+    return (a - b).cwiseAbs().maxCoeff() <= kTol * scale + 1e-300;
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const double m = r.mass[i];
+    if (!(std::isfinite(m) && m >= 0.0 && r.linear_drag[i] >= 0.0 && r.angular_drag[i] >= 0.0 &&
+          std::isfinite(r.linear_drag[i]) && std::isfinite(r.angular_drag[i]) && r.inertia_body[i].allFinite()))
+      bad(i, "mass, inertia or drag is not a finite number >= 0");
+    if (!(std::abs(r.orientation[i].norm() - 1.0) <= kTol))
+      bad(i, "orientation is not a unit quaternion (norm " + std::to_string(r.orientation[i].norm()) + ")");
+    for (const Vec3* v : {&r.linear_velocity[i], &r.angular_velocity[i], &r.bias_velocity[i],
+                          &r.bias_angular_velocity[i]})
+      if (!(v->norm() < kLight)) bad(i, "moves or spins faster than light (a speed of " + std::to_string(v->norm()) + ")");
+    const Mat3& I = r.inertia_body[i];
+    const Mat3& Ib_inv = r.inv_inertia_body[i];
+    const Mat3& Iw_inv = r.inv_inertia_world[i];
+    if (m == 0.0) {  // static or kinematic: infinite mass
+      if (r.inv_mass[i] != 0.0 || !Ib_inv.isZero(0.0) || !Iw_inv.isZero(0.0))
+        bad(i, "a static or kinematic body has a non-zero inverse mass or inertia");
+      continue;
+    }
+    const double scale = I.cwiseAbs().maxCoeff();
+    if (!(scale > 0.0) || !close(I, I.transpose(), scale) || Eigen::LLT<Mat3>(I).info() != Eigen::Success)
+      bad(i, "inertia is not symmetric positive definite");
+    if (!close(I * Ib_inv, Mat3::Identity(), 1.0)) bad(i, "inverse inertia is not the inverse of its inertia");
+    if (r.asleep[i] != 0) {
+      if (r.inv_mass[i] != 0.0 || !Iw_inv.isZero(0.0))
+        bad(i, "asleep with a non-zero inverse mass or world inverse inertia");
+      continue;
+    }
+    if (!close(Vec3::Constant(r.inv_mass[i] * m), Vec3::Ones(), 1.0)) bad(i, "inverse mass is not 1 / mass");
+    const Mat3 R = r.orientation[i].toRotationMatrix();
+    if (!close(Iw_inv, R * Ib_inv * R.transpose(), Ib_inv.cwiseAbs().maxCoeff()))
+      bad(i, "world inverse inertia is not R I_b^-1 R^T");
+    const Vec3 w = Iw_inv * r.angular_momentum[i];
+    if (!close(r.angular_velocity[i], w, std::max(r.angular_velocity[i].cwiseAbs().maxCoeff(), w.cwiseAbs().maxCoeff())))
+      bad(i, "angular velocity is not I_w^-1 L");
+  }
+}
+
 void load_rigid(detail::RigidBodies& r, StateReader& in) {
   in.begin("RIGD");
   const std::size_t n = r.size();
@@ -184,6 +277,21 @@ void load_rigid(detail::RigidBodies& r, StateReader& in) {
                         r.linear_drag.size(), r.angular_drag.size(), r.bias_velocity.size(),
                         r.bias_angular_velocity.size(), r.asleep.size()})
     if (k != n) throw StateError("state: rigid arrays do not hold " + std::to_string(n) + " bodies");
+  // What a step integrates or derives is finite (the mass, inertia and drags: check_rigid()), then
+  // the relations between the arrays hold.
+  detail::require_finite(r.position, n, "rigid positions");
+  detail::require_finite(r.orientation, n, "rigid orientations");
+  detail::require_finite(r.linear_velocity, n, "rigid velocities");
+  detail::require_finite(r.angular_momentum, n, "rigid angular momenta");
+  detail::require_finite(r.angular_velocity, n, "rigid angular velocities");
+  detail::require_finite(r.inv_mass, n, "rigid inverse masses");
+  detail::require_finite(r.inv_inertia_body, n, "rigid inverse inertias");
+  detail::require_finite(r.inv_inertia_world, n, "rigid world inverse inertias");
+  detail::require_finite(r.force, n, "rigid forces");
+  detail::require_finite(r.torque, n, "rigid torques");
+  detail::require_finite(r.bias_velocity, n, "rigid bias velocities");
+  detail::require_finite(r.bias_angular_velocity, n, "rigid bias angular velocities");
+  check_rigid(r);
   in.end();
 }
 
@@ -241,6 +349,8 @@ void load_contacts(detail::BodyDynamics& d, StateReader& in) {
     if (count < 0 || count > detail::kMaxManifoldPoints) throw StateError("state: a manifold has a bad point count");
     m.manifold.count = count;
     in.value(m.manifold.normal);
+    if (!(std::abs(m.manifold.normal.norm() - 1.0) <= 1e-6))
+      throw StateError("state: a contact manifold's normal is not a unit vector");
     for (int k = 0; k < count; ++k) {
       detail::ManifoldPoint& p = m.manifold.points[std::size_t(k)];
       in.value(p.point_a);
@@ -252,11 +362,18 @@ void load_contacts(detail::BodyDynamics& d, StateReader& in) {
       in.value(p.id.index_b);
       in.value(p.normal_impulse);
       in.value(p.tangent_impulse);
+      for (const Vec3* v : {&p.point_a, &p.point_b, &p.tangent_impulse})
+        detail::require_finite(*v, "a contact point");
+      detail::require_finite(p.separation, "a contact point's separation");
+      // The solver clamps the accumulated normal impulse to >= 0 (rigid/contact_solver.cpp).
+      if (!(std::isfinite(p.normal_impulse) && p.normal_impulse >= 0.0))
+        throw StateError("state: a contact point's normal impulse is not a finite number >= 0");
     }
   }
   d.manifolds.clear();
   d.points.clear();
   in.array(d.rest_time, d.rigid.size(), "rest times");
+  detail::require_finite(d.rest_time, d.rest_time.size(), "rest times");
   in.array(d.island, d.rigid.size(), "islands");
   in.end();
 }
@@ -283,6 +400,8 @@ void load_joints(WorldState& w, StateReader& in) {
     in.value(j.reading.force);
     in.value(j.reading.torque);
     j.reading.broken = in.value<std::uint8_t>() != 0;
+    detail::require_finite(j.reading.force, "a joint's force");
+    detail::require_finite(j.reading.torque, "a joint's torque");
   }
   in.end();
 }
@@ -353,6 +472,23 @@ void load_store(detail::ParticleStore& st, StateReader& in, const std::string& n
                   st.rest.size() == (st.track_rest ? 4 * n : 0);
   if (!ok) throw StateError("state: particle system '" + name + "' arrays do not hold its " +
                             std::to_string(n) + " particles");
+  const std::string of = "particle system '" + name + "': particle ";
+  detail::require_finite(st.position, 3 * n, of + "positions");
+  detail::require_finite(st.velocity, 3 * n, of + "velocities");
+  detail::require_finite(st.prev_position, st.prev_position.size(), of + "start positions");
+  detail::require_finite(st.color, 4 * n, of + "colours");
+  detail::require_finite(st.radius, n, of + "radii");
+  detail::require_finite(st.mass, n, of + "masses");
+  detail::require_finite(st.age, n, of + "ages");
+  detail::require_finite(st.charge, st.charge.size(), of + "charges");
+  detail::require_finite(st.base_radius, n, of + "base radii");
+  detail::require_finite(st.tint, n, of + "tints");
+  detail::require_finite(st.rest, st.rest.size(), of + "rest states");
+  for (std::size_t i = 0; i < n; ++i)  // +inf: a particle added without a lifetime
+    if (!(st.lifetime[i] >= 0.0f))
+      throw StateError("state: " + of + "lifetimes: value " + std::to_string(i) + " of " +
+                       std::to_string(n) + " is " + std::to_string(st.lifetime[i]) +
+                       ", expected a number >= 0");
 }
 
 void save_systems(const WorldState& w, StateWriter& out) {
@@ -389,6 +525,23 @@ void load_systems(WorldState& w, StateReader& in) {
   in.count(w.systems.size(), "particle systems");
   for (detail::ParticleSystemState& ps : w.systems.dense()) {
     load_store(ps.store, in, ps.def.name, !ps.sub_emitters.empty());
+    // Beyond the divergence bounds the next step would stop the run (stage_integrate.cpp).
+    // The start-of-step and rest positions too: the swept collision test starts from the one, a
+    // sleeping particle is held at the other.
+    const detail::ParticleStore& st = ps.store;
+    const auto near = [&](const auto& column, std::size_t i) {
+      return column.size() <= i || std::abs(column[i]) <= ps.forces.max_distance;
+    };
+    for (std::size_t i = 0; i < 3 * st.count; ++i)
+      if (!(std::abs(st.position[i]) <= ps.forces.max_distance &&
+            std::abs(st.velocity[i]) <= ps.forces.max_speed && near(st.prev_position, i) &&
+            near(st.rest, 4 * (i / 3) + i % 3))) {
+        std::ostringstream m;
+        m << "state: particle system '" << ps.def.name << "': particle " << i / 3
+          << " is beyond simulation.max_distance = " << ps.forces.max_distance
+          << " m or simulation.max_speed = " << ps.forces.max_speed << " m/s";
+        throw StateError(m.str());
+      }
     in.value(ps.next_id);
     in.value(ps.emitter.scheduled);
     in.array(ps.emitter.bursts_fired, ps.def.emitter.bursts.size(), "emitter bursts");

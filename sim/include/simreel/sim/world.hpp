@@ -215,8 +215,12 @@ class World {
   /// saved from (same state_hash() now and after any further advance()). The next advance()
   /// reports only what moves from here on; poses() gives every moving body's current pose.
   /// @throws StateError (state_error.hpp) naming what differs when the bytes are truncated, of
-  ///         another format, or for other objects (counts, particle capacity, body types); the
-  ///         world is then left partly loaded and should be discarded.
+  ///         another format, or for other objects (counts, particle capacity, body types), and
+  ///         naming the quantity when a value is one no step writes: NaN or infinite, a particle
+  ///         beyond the divergence bounds, a non-unit orientation, rigid arrays that break their
+  ///         relations (I_b⁻¹ I_b = E, I_w⁻¹ = R I_b⁻¹ Rᵀ, ω = I_w⁻¹ L; Coutinho §4.2), a negative
+  ///         normal impulse (docs/cache.md lists them); the world is then left partly loaded and
+  ///         should be discarded.
   void load_state(std::string_view bytes);
   /// The pose of every kinematic and dynamic body (the engine's dense order) as the moved list
   /// reports it: what a renderer needs after load_state() to show the restored state.
