@@ -293,6 +293,7 @@ TEST(StateRoundTrip, NonFiniteOrOutOfBoundsValuesAreRefusedAtLoad) {
       {"fountain", 30, "PSYS", 36, 2.0e7, true, "is beyond simulation.max_distance"},
       // CLTH: cloth count (8), vertex count (8), the positions' count (8), the first position.
       {"flag", 5, "CLTH", 36, -inf, false, "positions: value 0 of"},
+      {"flag", 5, "CLTH", 36, -2.0e7, false, "cloth 'flag': vertex 0 is beyond simulation.max_distance"},
   };
   {  // the RIGD offsets below assume tumble's six rigid bodies
     SceneWorld a = build_world(load_scene(scene_path("tumble")));

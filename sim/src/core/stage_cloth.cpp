@@ -8,14 +8,39 @@
 
 namespace simreel::sim::detail {
 
+/// The first vertex of `cloth` with a coordinate beyond def.max_distance or a velocity component
+/// beyond def.max_speed, or its vertex count. The particles' divergence bounds: a cloth torn
+/// kilometres apart by a blow-up is finite, but its triangles' swept boxes then all overlap and
+/// the contact rounds below test every pair of them, minutes a step (a state with one vertex
+/// moved 6 km ran past 10 minutes for two frames), instead of stopping the run.
+static std::size_t beyond_bounds(const Cloth& cloth, const WorldDef& def) {
+  const std::vector<Vec3>& x = cloth.positions();
+  const std::vector<Vec3>& v = cloth.velocities();
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (!(x[i].cwiseAbs().maxCoeff() <= def.max_distance && v[i].cwiseAbs().maxCoeff() <= def.max_speed))
+      return i;
+  return x.size();
+}
+
 void stage_cloth(WorldState& w, double t0, double t1) {
   std::vector<Cloth>& cloths = w.cloths.dense();
   for (std::size_t c = 0; c < cloths.size(); ++c) {
-    if (cloths[c].step(t0, t1, &w.shapes, coupling_log(w), w.threads)) continue;
+    const bool finite = cloths[c].step(t0, t1, &w.shapes, coupling_log(w), w.threads);
+    const std::size_t far = finite ? beyond_bounds(cloths[c], w.def) : 0;
+    if (finite && far == cloths[c].positions().size()) continue;
     std::ostringstream m;
     m.precision(9);
-    m << "cloth '" << cloths[c].definition().name << "' (index " << c
-      << "): non-finite vertex state at internal step " << w.steps + 1 << ", t = " << t1 << " s";
+    m << "cloth '" << cloths[c].definition().name << "' (index " << c << "): ";
+    if (finite) {
+      const Vec3& x = cloths[c].positions()[far];
+      const Vec3& v = cloths[c].velocities()[far];
+      m << "diverged (vertex " << far << " at |x| = " << x.norm() << " m, |v| = " << v.norm()
+        << " m/s; bounds simulation.max_distance = " << w.def.max_distance
+        << " m, simulation.max_speed = " << w.def.max_speed << " m/s per component)";
+    } else {
+      m << "non-finite vertex state";
+    }
+    m << " at internal step " << w.steps + 1 << ", t = " << t1 << " s";
     throw NonFiniteState(m.str());
   }
   // Self-collision and cloth–cloth contacts once every cloth has moved (issue 16).

@@ -582,7 +582,15 @@ void save_cloths(const WorldState& w, StateWriter& out) {
 void load_cloths(WorldState& w, StateReader& in) {
   in.begin("CLTH");
   in.count(w.cloths.size(), "cloths");
-  for (Cloth& c : w.cloths.dense()) c.load_state(in);
+  for (Cloth& c : w.cloths.dense()) {
+    c.load_state(in);
+    // The divergence bounds, as for particles (stage_cloth.cpp stops a step beyond them).
+    for (std::size_t i = 0; i < c.positions().size(); ++i)
+      if (!(c.positions()[i].cwiseAbs().maxCoeff() <= w.def.max_distance &&
+            c.velocities()[i].cwiseAbs().maxCoeff() <= w.def.max_speed))
+        throw StateError("state: cloth '" + c.definition().name + "': vertex " + std::to_string(i) +
+                         " is beyond simulation.max_distance or simulation.max_speed");
+  }
   in.end();
 }
 

@@ -19,10 +19,12 @@ struct WorldDef {
                                   ///< count: work is cut into items fixed by the scene, not by
                                   ///< the count, and no item's result depends on the thread
                                   ///< that takes it (fixed reduction order, per-particle gathers)
-  double max_speed = 1e4;         ///< (m/s) > 0: a particle velocity component beyond it is a
-                                  ///< blow-up (divergence), reported as NonFiniteState
-  double max_distance = 1e6;      ///< (m) > 0: a particle coordinate beyond it (from the world
-                                  ///< origin) is a blow-up, reported as NonFiniteState
+  double max_speed = 1e4;         ///< (m/s) > 0: a particle's or cloth vertex's velocity
+                                  ///< component beyond it is a blow-up (divergence), reported
+                                  ///< as NonFiniteState
+  double max_distance = 1e6;      ///< (m) > 0: a particle or cloth vertex coordinate beyond it
+                                  ///< (from the world origin) is a blow-up, reported as
+                                  ///< NonFiniteState
   /// Dynamic bodies at rest fall asleep (an island of bodies in contact, all slower than
   /// 0.05 m/s and 2°/s for 0.5 s: Box2D's tolerances) and cost nothing until something moving
   /// touches them or World::wake is called; false keeps every body simulated every step.
