@@ -77,6 +77,10 @@ struct Proxy {
 inline constexpr double kSleepLinearSpeed = 0.05;                     ///< (m/s)
 inline constexpr double kSleepAngularSpeed = 2.0 * 3.14159265358979 / 180.0;  ///< (rad/s)
 inline constexpr double kTimeToSleep = 0.5;                           ///< (s)
+/// A body speed (m/s) or spin (rad/s) at or above light's is an explosion of the solve, not
+/// motion: a step stops the run there (stage_bodies.cpp) and a loaded state is refused
+/// (state_snapshot.cpp), long before the values overflow.
+inline constexpr double kDivergedSpeed = 299792458.0;
 
 /// A registered joint (World::add_joint; Coutinho Ch. 5): its definition, its geometry in its
 /// bodies' frames, the bodies by handle (resolved to rigid entries every step: removals move

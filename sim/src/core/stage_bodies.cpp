@@ -188,9 +188,8 @@ void stage_bodies(WorldState& w, double t0, double t1) {
     // Stop before the shapes and the moved list carry NaNs to the collisions and the renderer.
     // A speed above that of light (or a spin whose rim would pass it) is an explosion of the
     // solve, not motion: it stops the run too, long before it overflows.
-    constexpr double kLight = 299792458.0;  // (m/s)
     if (!(r.position[i].allFinite() && r.orientation[i].coeffs().allFinite() &&
-          r.linear_velocity[i].norm() < kLight && r.angular_velocity[i].norm() < kLight)) {
+          r.linear_velocity[i].norm() < kDivergedSpeed && r.angular_velocity[i].norm() < kDivergedSpeed)) {
       std::ostringstream m;
       m.precision(9);
       m << "body '" << b.name << "': non-finite position or velocity (faster than light) at internal step "

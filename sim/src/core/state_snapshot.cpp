@@ -126,7 +126,6 @@ void save_shapes(const WorldState& w, StateWriter& out) {
 /// non-negative size (a plane's box is not read). A corrupt pose otherwise loaded and sent the
 /// bodies touching it off at the next step.
 void check_shape(const detail::Collider& c, std::size_t k) {
-  constexpr double kLight = 299792458.0;  // (m/s, rad/s)
   constexpr double kTol = 1e-6;
   const auto bad = [&](const std::string& what) {
     throw StateError("state: shape " + std::to_string(k) + ": " + what);
@@ -135,7 +134,7 @@ void check_shape(const detail::Collider& c, std::size_t k) {
     if (!v->allFinite()) bad("a position, normal or velocity is not finite");
   if (!(c.rotation.coeffs().allFinite() && c.R.allFinite() && c.prev_R.allFinite()))
     bad("a rotation is not finite");
-  if (!(c.velocity.norm() < kLight && c.angular_velocity.norm() < kLight)) bad("moves or spins faster than light");
+  if (!(c.velocity.norm() < detail::kDivergedSpeed && c.angular_velocity.norm() < detail::kDivergedSpeed)) bad("moves or spins faster than light");
   if (!(std::abs(c.normal.norm() - 1.0) <= kTol)) bad("the normal is not a unit vector");
   if (!(std::abs(c.rotation.norm() - 1.0) <= kTol)) bad("the orientation is not a unit quaternion");
   if (!((c.R - c.rotation.toRotationMatrix()).cwiseAbs().maxCoeff() <= kTol))
@@ -203,7 +202,6 @@ void save_rigid(const detail::RigidBodies& r, StateWriter& out) {
 /// the run as diverged (stage_bodies.cpp). A corrupt matrix or momentum otherwise loaded and
 /// blew the body up at the next step ("faster than light", exit 1).
 void check_rigid(const detail::RigidBodies& r) {
-  constexpr double kLight = 299792458.0;  // (m/s, rad/s)
   constexpr double kTol = 1e-6;           // relative; the step leaves them equal to rounding
   const std::size_t n = r.size();
   const auto bad = [&](std::size_t i, const std::string& what) {
@@ -221,7 +219,7 @@ void check_rigid(const detail::RigidBodies& r) {
       bad(i, "orientation is not a unit quaternion (norm " + std::to_string(r.orientation[i].norm()) + ")");
     for (const Vec3* v : {&r.linear_velocity[i], &r.angular_velocity[i], &r.bias_velocity[i],
                           &r.bias_angular_velocity[i]})
-      if (!(v->norm() < kLight)) bad(i, "moves or spins faster than light (a speed of " + std::to_string(v->norm()) + ")");
+      if (!(v->norm() < detail::kDivergedSpeed)) bad(i, "moves or spins faster than light (a speed of " + std::to_string(v->norm()) + ")");
     const Mat3& I = r.inertia_body[i];
     const Mat3& Ib_inv = r.inv_inertia_body[i];
     const Mat3& Iw_inv = r.inv_inertia_world[i];
