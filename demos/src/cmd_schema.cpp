@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "simreel/sim/ranges.hpp"
 #include "json_reader.hpp"
 #include "scene.hpp"
 #include "simreel/effects/effects.hpp"
@@ -102,13 +103,6 @@ std::string unit_of(const std::string& object, const std::string& key) {
   return "";
 }
 
-std::string number_text(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
-
 /// "in [0, 1]" / ">= 0" / "> 0" from a schema's bounds ("" for none).
 std::string range_text(const json& s) {
   const bool lo = s.contains("minimum") || s.contains("exclusiveMinimum");
@@ -117,10 +111,10 @@ std::string range_text(const json& s) {
                      : lo                  ? s["exclusiveMinimum"].get<double>()
                                            : 0.0;
   if (lo && hi)
-    return std::string("in ") + (s.contains("minimum") ? "[" : "(") + number_text(min) + ", " +
-           number_text(s["maximum"].get<double>()) + "]";
-  if (lo) return (s.contains("minimum") ? ">= " : "> ") + number_text(min);
-  if (hi) return "<= " + number_text(s["maximum"].get<double>());
+    return std::string("in ") + (s.contains("minimum") ? "[" : "(") + sim::format_number(min) + ", " +
+           sim::format_number(s["maximum"].get<double>()) + "]";
+  if (lo) return (s.contains("minimum") ? ">= " : "> ") + sim::format_number(min);
+  if (hi) return "<= " + sim::format_number(s["maximum"].get<double>());
   return "";
 }
 

@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "simreel/sim/ranges.hpp"
 #include "json_reader.hpp"
 #include "run_options.hpp"
 #include "signal_scope.hpp"
@@ -367,7 +368,7 @@ int sweep_command(const SweepOptions& o) {
       for (const auto& s : v.sets) args.insert(args.end(), {"--set", s});
       if (v.seed) args.insert(args.end(), {"--seed", std::to_string(*v.seed)});
       else if (o.seed) args.insert(args.end(), {"--seed", std::to_string(*o.seed)});
-      if (o.fps) args.insert(args.end(), {"--fps", std::to_string(*o.fps)});
+      if (o.fps) args.insert(args.end(), {"--fps", sim::exact_number(*o.fps)});
       if (o.size) args.insert(args.end(), {"--size", *o.size});
       if (o.backend) args.insert(args.end(), {"--backend", *o.backend});
       if (o.memory_limit) args.insert(args.end(), {"--memory-limit", *o.memory_limit});

@@ -1,4 +1,5 @@
 #include "json_reader.hpp"
+#include "simreel/sim/ranges.hpp"
 
 #include <sys/stat.h>
 
@@ -37,13 +38,6 @@ std::string type_name(const json& v) {
     case json::value_t::number_float: return "number";
     default: return "value";
   }
-}
-
-std::string format_number(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
 }
 
 struct NumberAt {
@@ -357,11 +351,11 @@ double ObjectReader::number(const std::string& key, double fallback, double min,
   if (!v) return fallback;
   std::string range = "a number";
   if (std::isfinite(min) && std::isfinite(max))
-    range += std::string(" in ") + (min_exclusive ? "(" : "[") + format_number(min) + ", " + format_number(max) + "]";
+    range += std::string(" in ") + (min_exclusive ? "(" : "[") + sim::format_number(min) + ", " + sim::format_number(max) + "]";
   else if (std::isfinite(min))
-    range += (min_exclusive ? " > " : " >= ") + format_number(min);
+    range += (min_exclusive ? " > " : " >= ") + sim::format_number(min);
   else if (std::isfinite(max))
-    range += " <= " + format_number(max);
+    range += " <= " + sim::format_number(max);
   if (!v->is_number()) {
     error(key, range, *v);
     return fallback;
@@ -461,11 +455,11 @@ std::vector<double> ObjectReader::numbers(const std::string& key, std::vector<do
   if (std::isfinite(min) || std::isfinite(max)) {
     expected += " each ";
     if (std::isfinite(min) && std::isfinite(max))
-      expected += std::string("in ") + (min_exclusive ? "(" : "[") + format_number(min) + ", " + format_number(max) + "]";
+      expected += std::string("in ") + (min_exclusive ? "(" : "[") + sim::format_number(min) + ", " + sim::format_number(max) + "]";
     else if (std::isfinite(min))
-      expected += (min_exclusive ? "> " : ">= ") + format_number(min);
+      expected += (min_exclusive ? "> " : ">= ") + sim::format_number(min);
     else
-      expected += "<= " + format_number(max);
+      expected += "<= " + sim::format_number(max);
   }
   if (!v->is_array() || v->size() != count) {
     error(key, expected, *v);

@@ -1,4 +1,5 @@
 #include "run_options.hpp"
+#include "simreel/sim/ranges.hpp"
 
 #include "scene_read.hpp"
 
@@ -137,9 +138,9 @@ Scene prepare_scene(const RunOptions& o, int* first) {
   }
   if (o.fps) {
     if (!(*o.fps > 0.0 && *o.fps <= 1000.0))
-      throw SceneError("--fps " + std::to_string(*o.fps) + ": expected a number in (0, 1000]");
+      throw SceneError("--fps " + sim::format_number(*o.fps) + ": expected a number in (0, 1000]");
     if (std::string m = scene_read::steps_per_frame_problem(*o.fps, scene.world.max_step); !m.empty())
-      throw SceneError("--fps " + std::to_string(*o.fps) + " with " + scene.file + ": /simulation/max_step: " + m);
+      throw SceneError("--fps " + sim::format_number(*o.fps) + " with " + scene.file + ": /simulation/max_step: " + m);
     scene.fps = *o.fps;
   }
   if (o.seed) {

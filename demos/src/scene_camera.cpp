@@ -1,6 +1,7 @@
 // The top-level "render", "camera" (with its path or orbit) and "light" objects; README
 // "render", "camera", "light".
 #include "scene_read.hpp"
+#include "simreel/sim/ranges.hpp"
 
 #include <sstream>
 
@@ -46,8 +47,8 @@ void camera_motion(ObjectReader& s, const render::Camera& base, render::CameraMo
       if ((key.target - key.position).norm() < 1e-6f)
         k.error_at(k.pointer("target"), "expected a target different from the position");
       if (!motion.keys.empty() && !(key.time > motion.keys.back().time))
-        k.error_at(k.pointer("time"), "expected times strictly increasing, found " + std::to_string(key.time) +
-                                          " after " + std::to_string(motion.keys.back().time));
+        k.error_at(k.pointer("time"), "expected times strictly increasing, found " + sim::format_number(key.time) +
+                                          " after " + sim::format_number(motion.keys.back().time));
       k.finish();
       motion.keys.push_back(key);
     }

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "scene_read.hpp"
+#include "simreel/sim/ranges.hpp"
 
 namespace simreel::app::scene_read {
 
@@ -136,8 +137,8 @@ void chain(const json& j, const std::string& ptr, const std::string& file, std::
   const double radius = r.number("radius", shape == "sphere" ? 0.5 * l : 0.02, ranges::kColliderSize);
   const double thickness = r.number("thickness", 2.0 * radius, ranges::kColliderSize);
   if (shape == "capsule" && chord > 1e-6 && !(radius < 0.5 * l))
-    r.error_at(r.pointer("radius"), "expected a capsule radius below half the link length (" + std::to_string(0.5 * l) +
-                                        " m), found " + std::to_string(radius));
+    r.error_at(r.pointer("radius"), "expected a capsule radius below half the link length (" + sim::format_number(0.5 * l) +
+                                        " m), found " + sim::format_number(radius));
   if (r.has("density") && r.has("mass")) r.error_at(r.pointer("mass"), "expected \"density\" or \"mass\", found both");
   const double density = r.number("density", 7800.0, ranges::kBodyDensity);
   const double mass = r.number("mass", 0.0, ranges::kBodyMass);  // the whole chain's
@@ -153,7 +154,7 @@ void chain(const json& j, const std::string& ptr, const std::string& file, std::
   const Vec3 horizontal = (b - a) - (b - a).dot(up) * up;
   if (hanging && chord > 1e-6 && horizontal.norm() < 1e-6 * chord)
     r.error_at(r.pointer("slack"), "expected no slack for a chain pinned at both ends straight above each other, found " +
-                                       std::to_string(slack));
+                                       sim::format_number(slack));
   else if (hanging && n < 2)
     r.error_at(r.pointer("links"), "expected at least 2 links for a slack chain pinned at both ends, found 1");
   r.finish();

@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "scene_read.hpp"
+#include "simreel/sim/ranges.hpp"
 #include "simreel/render/image.hpp"
 
 namespace simreel::app::scene_read {
@@ -51,8 +52,8 @@ sim::Distribution distribution(ObjectReader& r, const std::string& key, sim::Dis
   }
   const json* v = r.get(key);
   if (!v) return fallback;
-  const std::string range = std::string(" in [") + (std::isfinite(min) ? std::to_string(min) : "-inf") + ", " +
-                            (std::isfinite(max) ? std::to_string(max) : "inf") + "]";
+  const std::string range = std::string(" in [") + (std::isfinite(min) ? sim::format_number(min) : "-inf") + ", " +
+                            (std::isfinite(max) ? sim::format_number(max) : "inf") + "]";
   if (v->is_number()) {
     const double x = r.number(key, fallback.mean, min, max);
     fallback.mean = x;

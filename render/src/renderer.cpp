@@ -11,6 +11,7 @@
 #include <cstring>
 #include <numbers>
 #include <stdexcept>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -274,8 +275,9 @@ Renderer::~Renderer() = default;
 
 void Renderer::set_camera(const Camera& camera) {
   if (!(camera.fov_deg > 0.f && camera.fov_deg < 180.f)) {
-    throw std::invalid_argument("camera fov_deg must be in (0, 180), got " +
-                                std::to_string(camera.fov_deg));
+    std::ostringstream m;  // (std::to_string's fixed decimals print 1e-9 as 0.000000)
+    m << "camera fov_deg must be in (0, 180), got " << camera.fov_deg;
+    throw std::invalid_argument(m.str());
   }
   if (!(camera.near_m > 0.f && camera.far_m > camera.near_m)) {
     throw std::invalid_argument("camera clip distances need 0 < near_m < far_m");

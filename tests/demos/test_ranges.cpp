@@ -3,6 +3,7 @@
 // (std::invalid_argument naming the field), and the boundary value is accepted by both.
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <functional>
 #include <string>
 
@@ -83,6 +84,27 @@ TEST(Ranges, RangeContainsItsBoundsAndRejectsNanAndInfinity) {
   EXPECT_EQ(sim::describe(sim::ranges::kEmitterRate), "in [0, 1e+09]");
   EXPECT_EQ(sim::describe(sim::ranges::kPositive), "> 0 and finite");
   EXPECT_EQ(sim::describe(sim::ranges::kHitSplitSizeFraction), "in (0, 1]");
+}
+
+TEST(Ranges, NumbersInMessagesKeepTheirMagnitudeAndHandedOnNumbersReadBackExactly) {
+  // std::to_string(double) printed six fixed decimals: 1e-300 as "0.000000" (a time key "after"
+  // an equal one), 1e300 as a 301-digit integer, and a sweep handed --fps 23.976023976 to its
+  // children as 23.976024, so they rendered at another sampling time than the one asked for.
+  EXPECT_EQ(sim::format_number(1e-300), "1e-300");
+  EXPECT_EQ(sim::format_number(1e300), "1e+300");
+  EXPECT_EQ(sim::format_number(0.1), "0.1");
+  EXPECT_EQ(sim::format_number(23.976023976), "23.97602398");
+  EXPECT_EQ(sim::format_number(-std::numeric_limits<double>::infinity()), "-inf");
+  for (const double x : {23.976023976, 1.0 / 3.0, 1e-300, 5e-324, 1.7976931348623157e308, -0.1, 60.0, 0.0}) {
+    const std::string t = sim::exact_number(x);
+    double back = -1.0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), back);
+    EXPECT_TRUE(ec == std::errc() && end == t.data() + t.size()) << t;
+    EXPECT_EQ(back, x) << t;
+    EXPECT_LE(t.size(), 24u) << t;
+  }
+  EXPECT_EQ(sim::exact_number(23.976023976), "23.976023976");
+  EXPECT_EQ(sim::exact_number(60.0), "60");
 }
 
 TEST(Ranges, EmitterRateCappedAt1e9ByLoaderAndEngine) {

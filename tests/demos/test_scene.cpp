@@ -155,6 +155,9 @@ TEST(SceneCamera, PathKeysAndOrbitAreRead) {
 TEST(SceneCamera, BadPathAndOrbitValuesNamePointers) {
   std::string e = errors_of(json::parse(R"({"camera":{"path":[{"time":1},{"time":1}]}})"));
   EXPECT_NE(e.find("s.json: /camera/path/1/time: expected times strictly increasing"), std::string::npos) << e;
+  // Times closer than a microsecond read as themselves, not as "0.000000 after 0.000000".
+  e = errors_of(json::parse(R"({"camera":{"path":[{"time":2e-7},{"time":1e-7}]}})"));
+  EXPECT_NE(e.find("found 1e-07 after 2e-07"), std::string::npos) << e;
   e = errors_of(json::parse(R"({"camera":{"orbit":{"radius":0}}})"));
   EXPECT_NE(e.find("s.json: /camera/orbit/radius: expected a number in (0, 1000000]"), std::string::npos) << e;
   e = errors_of(json::parse(R"({"camera":{"path":[{"position":[1,2,3]}], "orbit":{}}})"));

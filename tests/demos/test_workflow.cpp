@@ -215,6 +215,19 @@ TEST(Workflow, SweepRendersEveryCombinationIntoOneLabelledSheet) {
   EXPECT_EQ(slurp(d / "sheet1.png"), slurp(d / "sheet.png"));
 }
 
+TEST(Workflow, SweepHandsItsFpsToEachVariantExactly) {
+  // The children were given std::to_string(fps), six decimals: --fps 23.976023976 rendered every
+  // variant (and recorded its golden) at 23.976024 fps, another sampling time than the one asked.
+  TempDir d;
+  write_file(d / "jet.json", kGoldenScene);
+  const auto r = run_simreel("sweep " + (d / "jet.json").string() +
+                             " --vary /emitters/0/rate=50 --frames 0:2 --size 64x48 --strip 1 --fps 23.976023976"
+                             " --contact-sheet " + (d / "sheet.png").string() + " -o " + (d / "v").string() + " --hash");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const auto j = nlohmann::json::parse(slurp(d / "v" / "00_rate-50.json"));
+  EXPECT_EQ(j.at("fps").get<double>(), 23.976023976) << j.at("fps");
+}
+
 TEST(Workflow, SweepRunsNoMoreVariantsAtOnceThanTheMemoryBudgetHolds) {
   // Each variant was checked against the budget alone, and --jobs (default: the cores) of them
   // then ran together: 16 variants of 4K frames on a 16-core machine needed 16 budgets' worth.

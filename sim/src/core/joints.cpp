@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/world_impl.hpp"
+#include "simreel/sim/ranges.hpp"
 #include "core/world_state.hpp"
 #include "simreel/sim/world.hpp"
 
@@ -30,11 +31,11 @@ void validate_joint(const JointDef& def) {
       if (!std::isfinite(def.lower_angle) || !std::isfinite(def.upper_angle) || def.lower_angle > 0.0 ||
           def.upper_angle < 0.0)
         bad(def, "lower_angle", "hinge limits must be finite with lower_angle <= 0 <= upper_angle (rad), got [" +
-                                    std::to_string(def.lower_angle) + ", " + std::to_string(def.upper_angle) + "]");
+                                    format_number(def.lower_angle) + ", " + format_number(def.upper_angle) + "]");
     } else if (def.type == JointType::spherical) {
       if (!(def.cone_angle > 0.0 && def.cone_angle < kPi))
         bad(def, "cone_angle", "must be in (0, pi) rad with limits on a spherical joint, got " +
-                                   std::to_string(def.cone_angle));
+                                   format_number(def.cone_angle));
       if (!(def.twist_lower <= 0.0 && def.twist_upper >= 0.0 && def.twist_lower >= -kPi && def.twist_upper <= kPi))
         bad(def, "twist_lower", "twist limits must satisfy -pi <= twist_lower <= 0 <= twist_upper <= pi (rad)");
     }

@@ -27,6 +27,7 @@
 #include <string>
 
 #include "core/state_io.hpp"
+#include "simreel/sim/ranges.hpp"
 #include "core/world_impl.hpp"
 
 namespace simreel::sim {
@@ -216,10 +217,10 @@ void check_rigid(const detail::RigidBodies& r) {
           std::isfinite(r.linear_drag[i]) && std::isfinite(r.angular_drag[i]) && r.inertia_body[i].allFinite()))
       bad(i, "mass, inertia or drag is not a finite number >= 0");
     if (!(std::abs(r.orientation[i].norm() - 1.0) <= kTol))
-      bad(i, "orientation is not a unit quaternion (norm " + std::to_string(r.orientation[i].norm()) + ")");
+      bad(i, "orientation is not a unit quaternion (norm " + format_number(r.orientation[i].norm()) + ")");
     for (const Vec3* v : {&r.linear_velocity[i], &r.angular_velocity[i], &r.bias_velocity[i],
                           &r.bias_angular_velocity[i]})
-      if (!(v->norm() < detail::kDivergedSpeed)) bad(i, "moves or spins faster than light (a speed of " + std::to_string(v->norm()) + ")");
+      if (!(v->norm() < detail::kDivergedSpeed)) bad(i, "moves or spins faster than light (a speed of " + format_number(v->norm()) + ")");
     const Mat3& I = r.inertia_body[i];
     const Mat3& Ib_inv = r.inv_inertia_body[i];
     const Mat3& Iw_inv = r.inv_inertia_world[i];
@@ -488,7 +489,7 @@ void load_store(detail::ParticleStore& st, StateReader& in, const std::string& n
   for (std::size_t i = 0; i < n; ++i)  // +inf: a particle added without a lifetime
     if (!(st.lifetime[i] >= 0.0f))
       throw StateError("state: " + of + "lifetimes: value " + std::to_string(i) + " of " +
-                       std::to_string(n) + " is " + std::to_string(st.lifetime[i]) +
+                       std::to_string(n) + " is " + format_number(st.lifetime[i]) +
                        ", expected a number >= 0");
 }
 

@@ -1,6 +1,7 @@
 // Mass properties: primitive closed forms, signed-tetrahedron sums over closed triangle meshes,
 // compounds, principal axes (Coutinho App. D; Mirtich 1996).
 #include "rigid/mass_properties.hpp"
+#include "simreel/sim/ranges.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -115,7 +116,7 @@ MassProperties capsule_mass(double radius, double half_height, double density) {
   require_positive(density, "capsule_mass", "density");
   if (!(std::isfinite(half_height) && half_height >= 0.0))
     throw std::invalid_argument("capsule_mass: half_height must be finite and >= 0, got " +
-                                std::to_string(half_height));
+                                format_number(half_height));
   const double r = radius, h = half_height, r2 = r * r;
   const double v_cyl = kPi * r2 * 2.0 * h;
   const double v_sph = 4.0 / 3.0 * kPi * r2 * r;
@@ -227,7 +228,7 @@ MassProperties combine(std::span<const MassPart> parts) {
   for (std::size_t i = 0; i < parts.size(); ++i) {
     if (!(parts[i].props.mass > 0.0))
       throw std::invalid_argument("combine: part " + std::to_string(i) + " has non-positive mass " +
-                                  std::to_string(parts[i].props.mass));
+                                  format_number(parts[i].props.mass));
     const auto& part = parts[i];
     total.mass += part.props.mass;
     total.volume += part.props.volume;

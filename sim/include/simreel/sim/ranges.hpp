@@ -10,6 +10,7 @@
 ///
 /// Eigen-free and constexpr, so the loader and tests can use it without the engine's types.
 
+#include <charconv>
 #include <cstdint>
 #include <limits>
 #include <sstream>
@@ -156,6 +157,25 @@ inline constexpr Range kClothFriction = kFriction;
 inline constexpr Range kClothRestitution = kRestitution;
 
 }  // namespace ranges
+
+/// How a number reads in messages: ten significant digits, in fixed or exponent form as %g
+/// picks ("0.1", "23.97602398", "1e-300", "inf", "nan"). std::to_string's six fixed decimals
+/// printed 1e-300 as "0.000000" and 1e300 as a 301-digit integer.
+inline std::string format_number(double x) {
+  std::ostringstream s;
+  s.precision(10);
+  s << x;
+  return s.str();
+}
+
+/// The shortest text that reads back as exactly x (std::to_chars' round-trip form, e.g.
+/// "23.976023976"): for a number handed on to another run (a sweep's children), where
+/// format_number() would round it.
+inline std::string exact_number(double x) {
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
+  return ec == std::errc() ? std::string(buf, end) : format_number(x);
+}
 
 /// How a range reads in messages: "in [0, 1]", "in (0, 1]", ">= 0 and finite", "> 0 and
 /// finite", ">= 0 (infinity allowed)".
