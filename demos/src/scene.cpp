@@ -110,6 +110,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
     if (!scene.emitters[a].follow_camera && em.transform.translation.cwiseAbs().maxCoeff() > scene.world.max_distance) {
       const sim::Vec3& at = em.transform.translation;
       std::ostringstream m;
+      m.precision(10);  // as sim::format_number: a coordinate just past the bound must not read as it
       m << file << ": " << emitter_pointers[a] << "/position: expected each coordinate within +-"
         << scene.world.max_distance << " m (simulation.max_distance), found [" << at.x() << ", " << at.y() << ", "
         << at.z() << "]";
@@ -119,6 +120,7 @@ Scene scene_from_json(const json& doc, const std::string& file) {
                           const char* bound_key, const char* what) {
       if (value <= bound) return;
       std::ostringstream m;
+      m.precision(10);  // as sim::format_number
       m << file << ": " << emitter_pointers[a] << "/" << key << ": expected " << what << " of at most " << bound
         << " " << unit << " (" << bound_key << "), found " << value;
       errors.push_back(m.str());

@@ -15,6 +15,7 @@ namespace {
 void inside_world(ObjectReader& s, const std::string& key, const Eigen::Vector3f& p, double reach) {
   if (!s.has(key) || (p.cwiseAbs().maxCoeff() <= reach)) return;
   std::ostringstream m;
+  m.precision(10);  // as sim::format_number
   m << "expected each coordinate within +-" << reach << " m (simulation.max_distance), found [" << p.x() << ", "
     << p.y() << ", " << p.z() << "]";
   s.error_at(s.pointer(key), m.str());

@@ -1,4 +1,5 @@
 #include "sim_cache.hpp"
+#include "simreel/sim/ranges.hpp"
 
 #include <cinttypes>
 #include <cstdio>
@@ -207,11 +208,9 @@ std::string identity_difference(const CacheIdentity& found, const CacheIdentity&
   }
   if (found.seed != wanted.seed)
     d.push_back("seed " + std::to_string(found.seed) + " differs from " + std::to_string(wanted.seed));
-  if (found.fps != wanted.fps) {
-    std::ostringstream s;
-    s << "fps " << found.fps << " differs from " << wanted.fps;
-    d.push_back(s.str());
-  }
+  // Exact texts: two rates that differ past the sixth digit must not read as the same number.
+  if (found.fps != wanted.fps)
+    d.push_back("fps " + sim::exact_number(found.fps) + " differs from " + sim::exact_number(wanted.fps));
   if (found.simreel_version != wanted.simreel_version)
     d.push_back("baked by simreel " + found.simreel_version + ", this is " + wanted.simreel_version);
   if (found.state_format != wanted.state_format)

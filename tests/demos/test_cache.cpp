@@ -549,6 +549,10 @@ TEST_F(CacheRefused, OtherOverridesSeedOrFps) {
   r = render(" --fps 25");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("fps 30 differs from 25"), std::string::npos) << r.err;
+  // Rates that agree to six digits are told apart (the message printed "fps 30 differs from 30").
+  r = render(" --fps 30.0000001");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("fps 30 differs from 30.0000001"), std::string::npos) << r.err;
 }
 
 TEST_F(CacheRefused, FramesBeyondTheBake) {
