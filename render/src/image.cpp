@@ -4,6 +4,7 @@
 #include <libdeflate.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -141,6 +143,44 @@ std::string encode_png(const Image& image, int level) {
   return png;
 }
 
+/// The image format a file's first bytes name, by the signatures stb_image tests; "" for none
+/// (TGA has no signature).
+std::string format_by_signature(const std::string& head) {
+  const auto starts = [&](std::string_view magic) { return head.compare(0, magic.size(), magic) == 0; };
+  if (starts("\x89PNG\r\n\x1a\n")) return "PNG";
+  if (starts("\xff\xd8")) return "JPEG";
+  if (starts("GIF8")) return "GIF";
+  if (starts("BM")) return "BMP";
+  if (starts("8BPS")) return "PSD";
+  if (starts("#?RADIANCE") || starts("#?RGBE")) return "HDR";
+  if (starts("P5") || starts("P6")) return "PNM";
+  return "";
+}
+
+/// What a `format` file that stb_image refused with failure `code` is, in words: its terse codes
+/// for a file that ends early named as such.
+std::string undecodable(const std::string& format, const char* code) {
+  const std::string c = code != nullptr ? code : "unknown error";
+  const bool cut = c == "outofdata" || c == "bad file" || c == "unexpected end" || c == "no IDAT" ||
+                   c == "not enough pixels";
+  return "a " + format + (cut ? " file cut short: its data ends early" : " file that cannot be decoded") +
+         " (stb_image: " + c + ")";
+}
+
+/// The width and height a PNG's IHDR chunk declares (PNG specification §11.2.2), if `head`
+/// holds it: stb_image refuses a PNG of more than 2^30 bytes of pixels before it reports a size.
+bool png_header_size(const std::string& head, std::uint32_t& w, std::uint32_t& h) {
+  if (head.size() < 24 || head.compare(12, 4, "IHDR") != 0) return false;
+  const auto be32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (std::size_t k = 0; k < 4; ++k) v = (v << 8) | std::uint8_t(head[at + k]);
+    return v;
+  };
+  w = be32(16);
+  h = be32(20);
+  return true;
+}
+
 }  // namespace
 
 void write_png(const fs::path& path, const Image& image, int compression) {
@@ -161,24 +201,43 @@ Image read_image(const fs::path& path) {
   if (!fs::exists(status)) throw IoError(what + "no such file");
   // A FIFO would block the read (a texture named /dev/stdin), a device might never end.
   if (!fs::is_regular_file(status)) throw IoError(what + "not a regular file (a directory, device or FIFO)");
-  const auto reason = [] {
-    const char* r = stbi_failure_reason();
-    return std::string(r != nullptr ? r : "unknown error");
+  std::string head(32, '\0');
+  {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (f == nullptr) throw IoError(what + "cannot open it (" + std::strerror(errno) + ")");
+    head.resize(std::fread(head.data(), 1, head.size(), f));
+    std::fclose(f);
+  }
+  const std::string format = format_by_signature(head);
+  const auto size_error = [&](long long w, long long h) {
+    return IoError(what + std::to_string(w) + " x " + std::to_string(h) + " pixels, expected 1 to " +
+                   std::to_string(kMaxImageSide) + " on each side");
   };
+  // stb_image tries every format in turn, so a PNG it refuses reads "unknown image type" (the
+  // last format's reason): the format is named from the signature and the reason put in words.
+  // stbi_info() gives the reason of the last format it tried, stbi_load() that of the format
+  // whose signature matched.
+  const auto decode_error = [&](bool loading) {
+    if (format.empty())
+      return IoError(what + "not an image format simreel reads (PNG, JPEG, BMP, GIF, TGA, PSD, HDR, PNM)");
+    return IoError(what + (loading ? undecodable(format, stbi_failure_reason())
+                                   : "a " + format + " file whose header is cut short or corrupt"));
+  };
+  std::uint32_t png_w = 0, png_h = 0;
+  if (format == "PNG" && png_header_size(head, png_w, png_h) &&
+      (png_w < 1 || png_h < 1 || png_w > std::uint32_t(kMaxImageSide) || png_h > std::uint32_t(kMaxImageSide)))
+    throw size_error(png_w, png_h);
   int w = 0;
   int h = 0;
   int channels = 0;
   // The size from the header first: a file can declare a size whose pixels take gigabytes.
-  if (stbi_info(path.c_str(), &w, &h, &channels) == 0) throw IoError(what + reason());
-  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide)
-    throw IoError(what + std::to_string(w) + " x " + std::to_string(h) + " pixels, expected 1 to " +
-                  std::to_string(kMaxImageSide) + " on each side");
+  if (stbi_info(path.c_str(), &w, &h, &channels) == 0) throw decode_error(false);
+  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide) throw size_error(w, h);
   unsigned char* data = stbi_load(path.c_str(), &w, &h, &channels, 4);
-  if (data == nullptr) throw IoError(what + reason());
+  if (data == nullptr) throw decode_error(true);
   if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide) {  // as the header said
     stbi_image_free(data);
-    throw IoError(what + std::to_string(w) + " x " + std::to_string(h) + " pixels, expected 1 to " +
-                  std::to_string(kMaxImageSide) + " on each side");
+    throw size_error(w, h);
   }
   Image image(w, h);
   std::memcpy(image.rgba.data(), data, image.rgba.size());

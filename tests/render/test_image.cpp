@@ -161,6 +161,30 @@ std::string read_error(const fs::path& path) {
   return "";
 }
 
+/// A 4 x 1 PNG whose IHDR chunk is rewritten to declare w x h pixels, its CRC-32 recomputed so
+/// that only the size is wrong.
+void write_declared_png(const fs::path& path, std::uint32_t w, std::uint32_t h) {
+  write_png(path, pattern(4, 1));
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_EQ(bytes.substr(12, 4), "IHDR");
+  for (int k = 0; k < 4; ++k) {
+    bytes[std::size_t(16 + k)] = char(w >> (24 - 8 * k));
+    bytes[std::size_t(20 + k)] = char(h >> (24 - 8 * k));
+  }
+  std::uint32_t crc = 0xffffffffu;  // over the chunk's type and data
+  for (std::size_t i = 12; i < 12 + 4 + 13; ++i) {
+    crc ^= std::uint8_t(bytes[i]);
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  crc = ~crc;
+  for (int k = 0; k < 4; ++k) bytes[29 + std::size_t(k)] = char(crc >> (24 - 8 * k));
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
 TEST(RenderImage, EmptyOversizedAndNonRegularImagesAreRefusedByName) {
   const test::TempDir dir("png-limits");
   // stb_image reads a PNM header with no digits as a 0 x 0 image and returned it: `simreel hash`
@@ -171,22 +195,7 @@ TEST(RenderImage, EmptyOversizedAndNonRegularImagesAreRefusedByName) {
   EXPECT_NE(err.find(empty.string() + ": 0 x 0 pixels, expected 1 to 16384 on each side"), std::string::npos) << err;
   // A PNG whose header declares 20000 x 1 pixels: refused from the header, before decoding.
   const fs::path wide = dir.path() / "wide.png";
-  write_png(wide, pattern(4, 1));
-  std::string bytes;
-  {
-    std::ifstream in(wide, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
-  ASSERT_EQ(bytes.substr(12, 4), "IHDR");
-  bytes[16] = 0, bytes[17] = 0, bytes[18] = char(0x4e), bytes[19] = char(0x20);  // width 20000
-  std::uint32_t crc = 0xffffffffu;  // the chunk's CRC-32 over type and data, so only the size is wrong
-  for (std::size_t i = 12; i < 12 + 4 + 13; ++i) {
-    crc ^= std::uint8_t(bytes[i]);
-    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-  }
-  crc = ~crc;
-  for (int k = 0; k < 4; ++k) bytes[29 + k] = char(crc >> (24 - 8 * k));
-  std::ofstream(wide, std::ios::binary | std::ios::trunc) << bytes;
+  write_declared_png(wide, 20000, 1);
   err = read_error(wide);
   EXPECT_NE(err.find(wide.string() + ": 20000 x 1 pixels, expected 1 to 16384 on each side"), std::string::npos) << err;
   // A FIFO would block the read (it did: a texture named /dev/stdin). Held open for writing and
@@ -204,7 +213,48 @@ TEST(RenderImage, EmptyOversizedAndNonRegularImagesAreRefusedByName) {
   const fs::path cut = dir.path() / "cut.png";
   write_png(cut, pattern(64, 64));
   fs::resize_file(cut, fs::file_size(cut) / 2);
-  EXPECT_NE(read_error(cut).find(cut.string() + ": "), std::string::npos);
+  err = read_error(cut);
+  EXPECT_NE(err.find(cut.string() + ": a PNG file cut short: its data ends early (stb_image: "), std::string::npos)
+      << err;
+}
+
+TEST(RenderImage, RefusedImagesSayWhatIsWrongNotUnknownType) {
+  // stb_image tries each format in turn and reports the last one's reason, so each of these
+  // PNGs read "unknown image type", as if PNG were not read at all.
+  const test::TempDir dir("png-reasons");
+  // 20000 x 20000 RGBA is 1.6 GB of pixels: stb_image refuses it before reporting a size.
+  const fs::path big = dir.path() / "big.png";
+  write_declared_png(big, 20000, 20000);
+  std::string err = read_error(big);
+  EXPECT_NE(err.find(big.string() + ": 20000 x 20000 pixels, expected 1 to 16384 on each side"), std::string::npos)
+      << err;
+  // A PNG's first 20 bytes: the signature, but not the whole header.
+  const fs::path head = dir.path() / "head.png";
+  write_png(head, pattern(8, 8));
+  fs::resize_file(head, 20);
+  err = read_error(head);
+  EXPECT_NE(err.find(head.string() + ": a PNG file whose header is cut short or corrupt"), std::string::npos) << err;
+  // Its compressed data damaged: stb_image's reason, named as its own.
+  const fs::path damaged = dir.path() / "damaged.png";
+  write_png(damaged, pattern(8, 8));
+  std::string bytes;
+  {
+    std::ifstream in(damaged, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::size_t idat = bytes.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  bytes[idat + 4] = char(bytes[idat + 4] ^ 0xff);  // the zlib header's first byte
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc) << bytes;
+  err = read_error(damaged);
+  EXPECT_NE(err.find(damaged.string() + ": a PNG file that cannot be decoded (stb_image: "), std::string::npos)
+      << err;
+  // No signature stb_image knows (and not a TGA): the formats that are read.
+  const fs::path text = dir.path() / "notes.png";
+  std::ofstream(text) << "not an image at all, just some words in a file";
+  err = read_error(text);
+  EXPECT_NE(err.find(text.string() + ": not an image format simreel reads (PNG, JPEG, "), std::string::npos) << err;
+  EXPECT_EQ(err.find("unknown image type"), std::string::npos) << err;
 }
 
 }  // namespace

@@ -48,8 +48,10 @@ inline constexpr int kMaxImageSide = 16384;
 
 /// Reads PNG/JPEG/BMP/TGA/PNM/... (what stb_image reads, by content) into RGBA8.
 /// @throws IoError naming the path and the reason: no such file, not a regular file (a FIFO
-///         would block), stb's reason for a malformed file, or a side of 0 or above
-///         kMaxImageSide pixels (checked from the header before the pixels are decoded).
+///         would block), no image signature stb_image knows, a file of a known format cut
+///         short or corrupt (with stb_image's reason), or a side of 0 or above kMaxImageSide
+///         pixels (checked from the header before the pixels are decoded; for a PNG from its
+///         IHDR chunk, since stb_image refuses one of over 2^30 bytes of pixels unsized).
 Image read_image(const std::filesystem::path& path);
 
 /// Area-average (box filter) resample to width x height, exact in integer arithmetic, so the
