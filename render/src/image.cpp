@@ -213,10 +213,9 @@ Image read_image(const fs::path& path) {
     return IoError(what + std::to_string(w) + " x " + std::to_string(h) + " pixels, expected 1 to " +
                    std::to_string(kMaxImageSide) + " on each side");
   };
-  // stb_image tries every format in turn, so a PNG it refuses reads "unknown image type" (the
-  // last format's reason): the format is named from the signature and the reason put in words.
-  // stbi_info() gives the reason of the last format it tried, stbi_load() that of the format
-  // whose signature matched.
+  // stbi_info() tries every format in turn and leaves the last one's reason ("unknown image
+  // type" for a PNG it refused), stbi_load() that of the format whose signature matched: the
+  // format is named from the signature, and only stbi_load()'s reason is passed on.
   const auto decode_error = [&](bool loading) {
     if (format.empty())
       return IoError(what + "not an image format simreel reads (PNG, JPEG, BMP, GIF, TGA, PSD, HDR, PNM)");
