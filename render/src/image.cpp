@@ -25,6 +25,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// The eight bytes every PNG file begins with (PNG specification §5.2).
+constexpr std::string_view kPngSignature("\x89PNG\r\n\x1a\n", 8);
+
 /// The Paeth predictor (PNG specification §9.4): of left, above and upper-left, the one closest
 /// to left + above - upper-left.
 std::uint8_t paeth(int a, int b, int c) {
@@ -126,7 +129,7 @@ std::string encode_png(const Image& image, int level) {
   libdeflate_free_compressor(compressor);
   if (zsize == 0) throw std::runtime_error("PNG: the compressed rows did not fit their bound");
 
-  std::string png("\x89PNG\r\n\x1a\n", 8);
+  std::string png(kPngSignature);
   std::uint8_t ihdr[13] = {};
   for (int k = 0; k < 4; ++k) {
     ihdr[k] = std::uint8_t(std::uint32_t(w) >> (24 - 8 * k));
@@ -147,7 +150,7 @@ std::string encode_png(const Image& image, int level) {
 /// (TGA has no signature).
 std::string format_by_signature(const std::string& head) {
   const auto starts = [&](std::string_view magic) { return head.compare(0, magic.size(), magic) == 0; };
-  if (starts("\x89PNG\r\n\x1a\n")) return "PNG";
+  if (starts(kPngSignature)) return "PNG";
   if (starts("\xff\xd8")) return "JPEG";
   if (starts("GIF8")) return "GIF";
   if (starts("BM")) return "BMP";
