@@ -137,8 +137,10 @@ std::size_t append_within_avx2(std::uint32_t si, const std::uint32_t* __restrict
   return append_within_scalar(si, cs + u, r2 + u, len - u, cut2, pi, pj, pr2, p);
 }
 
-/// block_pairs_avx512() for four candidates with AVX2: lanes past `left` load nothing (a
-/// masked load) and are not kept. Writes up to 4 entries past the result.
+/// block_pairs_avx512() for four candidates with AVX2: lanes past `left` are loaded but not kept
+/// (reads up to 3 doubles past a run: see CellPairs). A plain load, not a masked one: on AMD Zen 1
+/// the masked loads made the whole pair-force step 18-22 % slower (docs/benchmarks.md, stop 86).
+/// Writes up to 4 entries past the result.
 __attribute__((target("avx2"), always_inline)) inline std::size_t
 block_pairs_avx2(__m256d xi, __m256d yi, __m256d zi, __m128i vi, __m256d cut2,
                  const double* __restrict sx, const double* __restrict sy,
@@ -146,9 +148,9 @@ block_pairs_avx2(__m256d xi, __m256d yi, __m256d zi, __m128i vi, __m256d cut2,
                  std::uint32_t* __restrict pi, std::uint32_t* __restrict pj,
                  double* __restrict pr2, std::size_t p) {
   const __m256i lane = live_lanes4(left);
-  const __m256d dx = _mm256_sub_pd(xi, _mm256_maskload_pd(sx + u, lane));
-  const __m256d dy = _mm256_sub_pd(yi, _mm256_maskload_pd(sy + u, lane));
-  const __m256d dz = _mm256_sub_pd(zi, _mm256_maskload_pd(sz + u, lane));
+  const __m256d dx = _mm256_sub_pd(xi, _mm256_loadu_pd(sx + u));
+  const __m256d dy = _mm256_sub_pd(yi, _mm256_loadu_pd(sy + u));
+  const __m256d dz = _mm256_sub_pd(zi, _mm256_loadu_pd(sz + u));
   const __m256d d =
       _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
   const int k = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(d, cut2, _CMP_LT_OQ), _mm256_castsi256_pd(lane)));

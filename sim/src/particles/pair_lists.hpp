@@ -19,7 +19,9 @@ using AppendWithin = std::size_t (*)(std::uint32_t si, const std::uint32_t* cs, 
 /// The pairs of one dense-grid cell's particles si in [first, last), read in place from the
 /// sorted positions (sx, sy, sz; m): for each si in turn, the candidates of runs 0..4 (run 0
 /// from si + 1, the runs [rb[r], re[r]) otherwise) with |x_si - x_s|² < cut2 (m²), appended from
-/// place p in ascending s; returns the new count. May write up to 8 entries past it.
+/// place p in ascending s; returns the new count. May write up to 8 entries past it, and may
+/// read (not use) up to 3 doubles past the end of each of sx, sy and sz: they must be readable
+/// (pair forces' sorted_ holds sx, sy, sz, q, m in a row, then kCopyBlock doubles of slack).
 using CellPairs = std::size_t (*)(const double* sx, const double* sy, const double* sz,
                                   std::uint32_t first, std::uint32_t last, const std::uint32_t* rb,
                                   const std::uint32_t* re, double cut2, std::uint32_t* pi,
