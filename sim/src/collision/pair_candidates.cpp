@@ -151,10 +151,18 @@ std::size_t gather_in_box_avx2(const std::uint32_t* rb, const std::uint32_t* re,
   const __m256d reach = _mm256_set1_pd(box.reach);
   for (int u = 0; u < runs; ++u) {
     for (std::uint32_t s = rb[u], e = re[u]; s < e; s += 4) {
-      // Masked loads: nothing read past e (those lanes are not kept).
+      // Nothing read past e: a run's whole blocks by plain loads, its last part by masked ones
+      // (those lanes are not kept). Masked loads are slow on AMD Zen 1 (docs/benchmarks.md,
+      // stop 86), and the sorted arrays have no slack to read into.
       const __m256i live = live_lanes4(e - s);
-      const __m256d x = _mm256_maskload_pd(px + s, live), y = _mm256_maskload_pd(py + s, live);
-      const __m256d z = _mm256_maskload_pd(pz + s, live), r = _mm256_maskload_pd(pr + s, live);
+      __m256d x, y, z, r;
+      if (e - s >= 4) {
+        x = _mm256_loadu_pd(px + s), y = _mm256_loadu_pd(py + s);
+        z = _mm256_loadu_pd(pz + s), r = _mm256_loadu_pd(pr + s);
+      } else {
+        x = _mm256_maskload_pd(px + s, live), y = _mm256_maskload_pd(py + s, live);
+        z = _mm256_maskload_pd(pz + s, live), r = _mm256_maskload_pd(pr + s, live);
+      }
       __m256d keep = _mm256_and_pd(_mm256_castsi256_pd(live), _mm256_cmp_pd(_mm256_sub_pd(x, hx), reach, _CMP_LE_OQ));
       keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(lx, x), reach, _CMP_LE_OQ));
       keep = _mm256_and_pd(keep, _mm256_cmp_pd(_mm256_sub_pd(y, hy), reach, _CMP_LE_OQ));
@@ -186,14 +194,15 @@ std::size_t in_reach_avx2(double xi, double yi, double zi, double ri, double mar
   const __m256d r = _mm256_set1_pd(ri), mg = _mm256_set1_pd(margin), zero = _mm256_setzero_pd();
   std::size_t k = 0;
   for (std::size_t b = 0; b < m; b += 4) {
-    // Masked loads: nothing read past m (those lanes are not kept).
+    // Plain loads, up to 3 past m into the candidates' slack (see InReach); those lanes are not
+    // kept. (Masked loads are slow on AMD Zen 1: docs/benchmarks.md, stop 86.)
     const __m256i live = live_lanes4(m - b);
-    const __m256d dx = _mm256_sub_pd(_mm256_maskload_pd(cx + b, live), x);
-    const __m256d dy = _mm256_sub_pd(_mm256_maskload_pd(cy + b, live), y);
-    const __m256d dz = _mm256_sub_pd(_mm256_maskload_pd(cz + b, live), z);
+    const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(cx + b), x);
+    const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(cy + b), y);
+    const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(cz + b), z);
     const __m256d e = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
                                     _mm256_mul_pd(dz, dz));
-    const __m256d rj = _mm256_maskload_pd(cr + b, live);
+    const __m256d rj = _mm256_loadu_pd(cr + b);
     const __m256d smaller = _mm256_blendv_pd(r, rj, _mm256_cmp_pd(rj, r, _CMP_LT_OQ));  // rj < ri ? rj : ri
     const __m256d reach = _mm256_add_pd(_mm256_add_pd(r, rj), _mm256_mul_pd(mg, smaller));
     const int mask = _mm256_movemask_pd(_mm256_and_pd(

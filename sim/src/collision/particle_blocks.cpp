@@ -300,13 +300,17 @@ void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
     unsigned asked = 0;
     for (std::size_t j = 0; j < lanes; ++j) asked |= unsigned(pend[k0 + j] != 0) << j;
     if (asked == 0) continue;
+    // A whole block by plain loads (the lanes not asked hold other particles' bounds and are
+    // masked out below), a last part by masked ones (past n nothing was written). Masked loads
+    // are slow on AMD Zen 1 (docs/benchmarks.md, stop 86).
+    const bool whole = lanes == 4;
     const __m256i m = mask_lanes64(asked);
-    const __m256d g = _mm256_maskload_pd(b.grow + k0, m);
+    const __m256d g = whole ? _mm256_loadu_pd(b.grow + k0) : _mm256_maskload_pd(b.grow + k0, m);
     __m256d lo[3], hi[3];
     unsigned in_aabb = asked;
     for (int a = 0; a < 3; ++a) {
-      lo[a] = _mm256_maskload_pd(b.lo[a] + k0, m);
-      hi[a] = _mm256_maskload_pd(b.hi[a] + k0, m);
+      lo[a] = whole ? _mm256_loadu_pd(b.lo[a] + k0) : _mm256_maskload_pd(b.lo[a] + k0, m);
+      hi[a] = whole ? _mm256_loadu_pd(b.hi[a] + k0) : _mm256_maskload_pd(b.hi[a] + k0, m);
       const __m256d e = _mm256_add_pd(_mm256_set1_pd(half[a]), g);
       const __m256d neg_e = _mm256_xor_pd(e, sign);
       const __m256d ca = _mm256_set1_pd(center[a]);
