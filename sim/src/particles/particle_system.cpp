@@ -168,6 +168,28 @@ ParticleView ParticleStore::view() const {
 
 namespace {
 
+/// out[3k], out[3k + 1], out[3k + 2] = p[k] for k < n (out: 3 n floats). Without AVX-512, four
+/// particles at a time by three 128-bit shuffles: the compiler's own spread used lane-crossing
+/// vpermd, which issues as 3 micro-ops with a throughput of one per 4 cycles on AMD Zen 1 (the
+/// semi-implicit kernel held 80 of them; docs/benchmarks.md, stop 86). With AVX-512 the
+/// compiler's clone spreads sixteen at a time, which the shuffles would not beat.
+inline void spread3(const float* p, std::size_t n, float* out) {
+#if SIMREEL_HAS_VECTOR_CLONES
+  static const bool avx512 = cpu_has_avx512vl();
+  std::size_t k = 0;
+  if (!avx512)
+    for (; k + 4 <= n; k += 4) {
+      const __m128 q = _mm_loadu_ps(p + k);
+      _mm_storeu_ps(out + 3 * k, _mm_shuffle_ps(q, q, _MM_SHUFFLE(1, 0, 0, 0)));
+      _mm_storeu_ps(out + 3 * k + 4, _mm_shuffle_ps(q, q, _MM_SHUFFLE(2, 2, 1, 1)));
+      _mm_storeu_ps(out + 3 * k + 8, _mm_shuffle_ps(q, q, _MM_SHUFFLE(3, 3, 3, 2)));
+    }
+  for (; k < n; ++k) out[3 * k] = out[3 * k + 1] = out[3 * k + 2] = p[k];
+#else
+  for (std::size_t k = 0; k < n; ++k) out[3 * k] = out[3 * k + 1] = out[3 * k + 2] = p[k];
+#endif
+}
+
 /// Semi-implicit (symplectic) Euler, Coutinho App. B / §3.3 — with the drag taken at the new
 /// velocity:  v' = (v + h g) d, d = 1 / (1 + h k_d / m);  x' = x + h v' - h²/2 a(v') d², where
 /// a(v') = g - k_d v' / m. Explicit drag multiplies v by (1 - h k_d / m) each step, which
@@ -185,24 +207,6 @@ namespace {
 /// the per-particle d and c spread to a per-float pattern first, so the main loop is a plain
 /// element-wise loop the compiler vectorises without shuffles. Float throughout: the method's
 /// O(h) error dwarfs float rounding.
-/// out[3k], out[3k + 1], out[3k + 2] = p[k] for k < n (out: 3 n floats). Four particles at a time by three 128-bit shuffles: the compiler's
-/// own spread used lane-crossing vpermd, which issues as 3 micro-ops with a throughput of one per
-/// 4 cycles on AMD Zen 1 (the semi-implicit kernel held 80 of them; docs/benchmarks.md, stop 86).
-inline void spread3(const float* p, std::size_t n, float* out) {
-#if SIMREEL_HAS_VECTOR_CLONES
-  std::size_t k = 0;
-  for (; k + 4 <= n; k += 4) {
-    const __m128 q = _mm_loadu_ps(p + k);
-    _mm_storeu_ps(out + 3 * k, _mm_shuffle_ps(q, q, _MM_SHUFFLE(1, 0, 0, 0)));
-    _mm_storeu_ps(out + 3 * k + 4, _mm_shuffle_ps(q, q, _MM_SHUFFLE(2, 2, 1, 1)));
-    _mm_storeu_ps(out + 3 * k + 8, _mm_shuffle_ps(q, q, _MM_SHUFFLE(3, 3, 3, 2)));
-  }
-  for (; k < n; ++k) out[3 * k] = out[3 * k + 1] = out[3 * k + 2] = p[k];
-#else
-  for (std::size_t k = 0; k < n; ++k) out[3 * k] = out[3 * k + 1] = out[3 * k + 2] = p[k];
-#endif
-}
-
 template <bool kDrag>
 SIMREEL_VECTOR_CLONES unsigned semi_implicit_euler(ParticleStore& s, std::size_t begin, std::size_t end, float h,
                              const ForceParams& f) {
