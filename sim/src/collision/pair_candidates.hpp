@@ -33,7 +33,7 @@ using GatherInBox = std::size_t (*)(const std::uint32_t* rb, const std::uint32_t
 /// The candidates [0, m) within reach of particle (xi, yi, zi, ri): within_reach()'s test, the
 /// places and squared distances of those within reach written to the front of `hit` and `hd2`,
 /// in order; returns the count. May write up to 8 entries past it, and may read (not use) up to
-/// 7 entries past the end of cx, cy, cz and cr (the callers' candidate lists have 8 of slack).
+/// 3 entries past the end of cx, cy, cz and cr (the callers' candidate lists have 8 of slack).
 /// One pass instead of within_reach() and a scan of its output.
 using InReach = std::size_t (*)(double xi, double yi, double zi, double ri, double margin,
                                 const double* cx, const double* cy, const double* cz,
