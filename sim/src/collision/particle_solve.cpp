@@ -137,30 +137,22 @@ __attribute__((target("avx2"), always_inline)) inline __m256d dot4(const __m256d
                        _mm256_mul_pd(a[2], b[2]));
 }
 
-/// Two aligned pairs of doubles as the low and high halves of one register.
+/// The four particles' velocities (out[0..2]: x, y, z, one particle a lane) and inverse masses
+/// (out[3]): four aligned rows of SolveBody transposed, row halves into register halves (halves())
+/// and then unpacks; vperm2f128 is 8 micro-ops on AMD Zen 1 (docs/benchmarks.md, stop 86).
 __attribute__((target("avx2"), always_inline)) inline __m256d halves(const double* lo, const double* hi) {
   return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_load_pd(lo)), _mm_load_pd(hi), 1);
 }
-
-/// The four particles' velocities (out[0..2]: x, y, z, one particle a lane) and inverse masses
-/// (out[3]): four aligned rows of SolveBody transposed. The rows' halves are loaded into the
-/// halves of registers (vinsertf128 from memory) and paired by unpacks: no vperm2f128, which is
-/// 8 micro-ops on AMD Zen 1 (docs/benchmarks.md, stop 86). A half-row load is forwarded from the
-/// whole-row store of store_bodies().
 __attribute__((target("avx2"), always_inline)) inline void load_bodies(const SolveBody* b, const std::uint32_t* p,
                                                                       __m256d* out) {
-  const double *b0 = b[p[0]].v, *b1 = b[p[1]].v, *b2 = b[p[2]].v, *b3 = b[p[3]].v;
-  const __m256d t0 = halves(b0, b2), t1 = halves(b1, b3);          // (v0 v1) of rows 0, 2 and 1, 3
-  const __m256d t2 = halves(b0 + 2, b2 + 2), t3 = halves(b1 + 2, b3 + 2);  // (v2 w)
-  out[0] = _mm256_unpacklo_pd(t0, t1);
-  out[1] = _mm256_unpackhi_pd(t0, t1);
-  out[2] = _mm256_unpacklo_pd(t2, t3);
-  out[3] = _mm256_unpackhi_pd(t2, t3);
+  const __m256d t0 = halves(b[p[0]].v, b[p[2]].v), t1 = halves(b[p[1]].v, b[p[3]].v);  // (v0 v1)
+  const __m256d t2 = halves(b[p[0]].v + 2, b[p[2]].v + 2), t3 = halves(b[p[1]].v + 2, b[p[3]].v + 2);  // (v2 w)
+  out[0] = _mm256_unpacklo_pd(t0, t1), out[1] = _mm256_unpackhi_pd(t0, t1);
+  out[2] = _mm256_unpacklo_pd(t2, t3), out[3] = _mm256_unpackhi_pd(t2, t3);
 }
 
 /// load_bodies() in reverse: velocities v[0..2] and inverse masses w, one particle a lane, back
-/// to their four rows (each row written whole, so a later load of it is forwarded whole). The
-/// rows are put together by 128-bit inserts, not vperm2f128 (see load_bodies()).
+/// to their four rows, each written whole (so a later load of it is forwarded) by 128-bit inserts.
 __attribute__((target("avx2"), always_inline)) inline void store_bodies(SolveBody* b, const std::uint32_t* p,
                                                                        const __m256d* v, __m256d w) {
   const __m256d a = _mm256_unpacklo_pd(v[0], v[1]), c = _mm256_unpackhi_pd(v[0], v[1]);
