@@ -75,7 +75,7 @@ __attribute__((target("avx2"))) void near_axis_plane_avx2(const float* __restric
 
 /// The CPU has AVX2 and not AVX-512VL (whose clone of near_axis_plane() has eight lanes).
 inline bool axis_plane_avx2() {
-  static const bool yes = !cpu_has_avx512vl() && (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+  static const bool yes = !cpu_has_avx512vl() && cpu_has_avx2();
   return yes;
 }
 #endif
@@ -439,7 +439,7 @@ void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          int lanes) {
 #if SIMREEL_HAS_VECTOR_CLONES
   static const bool avx512 = cpu_has_avx512vl();
-  static const bool avx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+  static const bool avx2 = cpu_has_avx2();
   const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
   // The lanes' column index is a 32-bit integer.
   const bool fits = (t.last[0] + 1.0) * (t.last[1] + 1.0) < 0x1p30;

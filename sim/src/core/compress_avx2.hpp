@@ -71,7 +71,7 @@ namespace simreel::sim::detail {
 /// tables above) or 1 (one element at a time; also without SIMREEL_VECTOR_CLONES).
 inline int compress_width() {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const int w = cpu_has_avx512vl() ? 8 : (__builtin_cpu_init(), __builtin_cpu_supports("avx2")) ? 4 : 1;
+  static const int w = cpu_has_avx512vl() ? 8 : cpu_has_avx2() ? 4 : 1;
   return w;
 #else
   return 1;

@@ -33,6 +33,13 @@ inline bool cpu_has_avx512f() {
   return __builtin_cpu_supports("avx512f");
 }
 
+/// True where the CPU runs AVX2, the target of the four-lane hand-written forms (the pair
+/// searches, the plane tests, the row kernels); callers keep the answer in a static.
+inline bool cpu_has_avx2() {
+  __builtin_cpu_init();  // (may run before the constructors that would do it)
+  return __builtin_cpu_supports("avx2");
+}
+
 /// True where the CPU runs AVX-512F with AVX-512VL, the target of the hand-written forms beside
 /// scalar ones (pair_forces.cpp, particle_pairs.cpp); callers keep the answer in a static.
 inline bool cpu_has_avx512vl() {

@@ -357,7 +357,7 @@ int widest_row_lanes() {
 
 bool row_lanes_avx2() {
 #if SIMREEL_HAS_VECTOR_CLONES
-  static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+  static const bool yes = cpu_has_avx2();
   return yes;
 #else
   return false;
