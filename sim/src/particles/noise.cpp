@@ -80,8 +80,9 @@ struct Lattice {
 /// Why twice: the corner gradients come doubled from grad_component2(), and every operation
 /// below is a sum or difference of doubled values or a product of one doubled value with one
 /// that is not, which doubles exactly; so the halved results are the bits of the undoubled
-/// arithmetic, except where a product falls below 2^-126 (a point within ~1e-7 of a cell face
-/// in two axes), where the doubled form can keep one more bit of a subnormal.
+/// arithmetic, except where a product falls below 2^-126 (a point within ~1e-13 of a cell
+/// face, or ~1e-7 of two), where the doubled form can keep one more bit of a subnormal: 5 of
+/// 60,000 curl values near cell faces, each by 1.4e-45 (docs/benchmarks.md, stop 87).
 __attribute__((always_inline)) inline float potential2(std::uint32_t seed, const Lattice& l,
                                                       float& g0, float& g1, float& g2) {
   // The statements run corner by corner, each sum and blend taken as far as the corners so far
