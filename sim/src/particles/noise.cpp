@@ -49,7 +49,7 @@ constexpr std::uint32_t top_first(std::uint32_t plus_one) {
 constexpr std::uint32_t kTopX = top_first(kGradX), kTopY = top_first(kGradY),
                         kTopZ = top_first(kGradZ);
 /// Twice row s / 2's component of `table` (-2, 0 or 2): see kTopX.
-inline float grad_component2(std::uint32_t s, std::uint32_t table) {
+constexpr float grad_component2(std::uint32_t s, std::uint32_t table) {
   return __builtin_bit_cast(float, (table << s) & 0xC0000000u);
 }
 constexpr bool tables_agree() {
@@ -57,9 +57,8 @@ constexpr bool tables_agree() {
     for (std::uint32_t t : {0u, 1u, 2u}) {
       const std::uint32_t plus_one = t == 0 ? kGradX : t == 1 ? kGradY : kGradZ;
       const std::uint32_t top = t == 0 ? kTopX : t == 1 ? kTopY : kTopZ;
-      const float twice = float(2 * (std::int32_t((plus_one >> (2 * h)) & 3u) - 1));
-      if (__builtin_bit_cast(float, (top << (2 * h)) & 0xC0000000u) != twice ||
-          std::int32_t(top << (2 * h)) >> 30 != std::int32_t((plus_one >> (2 * h)) & 3u) - 1)
+      // -2, 0 and 2 come only from 11, 00 and 01: this also checks the two's complement form.
+      if (grad_component2(2 * h, top) != float(2 * (std::int32_t((plus_one >> (2 * h)) & 3u) - 1)))
         return false;
     }
   return true;
