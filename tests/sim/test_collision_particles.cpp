@@ -376,7 +376,7 @@ TEST(SimParticleCollision, ProjectionLetsASpeculativeContactCloseItsGapButNotOve
   // Whatever the step did, the projection must leave the bead alone where it closed the gap and
   // bring it back only from an overlap, to touching: pushing it back to the gap it was found with
   // undid gravity's work every step, and a settled pile's beads read a velocity without moving
-  // (AllButAFewBeadsOfALargeSettledPileSleep).
+  // (BeadsHeldStillInALargePileSleepEvenWithAVelocity).
   const double r = 0.01, h = 1.0 / 240, gap = 0.02 * r;
   for (const double end_gap : {gap, 0.5 * gap, 0.0, -0.005 * r, -0.03 * r}) {
     detail::ParticleCollider pc;

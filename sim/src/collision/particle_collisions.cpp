@@ -313,9 +313,17 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
 }
 
 void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& members, double h) {
-  // Flat order here (run() has written the particles and put `asleep` back). A particle slower than the sleep
-  // speed after the solve adds the step to its time at rest; reaching kSleepTime it falls
-  // asleep where it is, its velocity zeroed.
+  // Flat order here (run() has written the particles and put `asleep` back). A particle slower
+  // than the sleep speed after the solve, or that moved less than the sleep speed times the step
+  // since the last step's end, adds the step to its time at rest; reaching kSleepTime it falls
+  // asleep where it is, its velocity zeroed. Either reading alone misses a bead that does not
+  // move: one caged by sleeping neighbours can keep a velocity that the solve leaves sliding
+  // along two of them and the overlap projection takes back every step (it stands still while
+  // its velocity reads 1-4 cm/s); one pressed between a neighbour and a mesh's facets can be
+  // put back and forth by 50 um a step with a velocity of 1e-20 m/s. Both stayed awake for ever.
+  // An awake particle's rest[0..2] (read only while asleep) hold its position at the end of the
+  // last step for this test; while asleep, the position it sleeps at (the same place).
+  const float reach = kSleepSpeed * float(h);
   std::size_t k = 0;
   for (const auto& m : members) {
     ParticleStore& s = *m.store;
@@ -326,18 +334,18 @@ void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& membe
     for (std::size_t i = 0; i < s.count; ++i, ++k) {
       float* r = &s.rest[4 * i];
       if (asleep[k] != 0) continue;  // asleep all step: it did not move
+      const float* x = &s.position[3 * i];
       const float* vf = &s.velocity[3 * i];
-      const float speed2 = vf[0] * vf[0] + vf[1] * vf[1] + vf[2] * vf[2];
-      if (!(speed2 < kSleepSpeed * kSleepSpeed)) {
+      const float dx = x[0] - r[0], dy = x[1] - r[1], dz = x[2] - r[2];
+      for (std::size_t a = 0; a < 3; ++a) r[a] = x[a];
+      const bool slow = vf[0] * vf[0] + vf[1] * vf[1] + vf[2] * vf[2] < kSleepSpeed * kSleepSpeed;
+      if (!slow && !(dx * dx + dy * dy + dz * dz < reach * reach)) {
         r[3] = 0.0f;
         continue;
       }
       r[3] = std::min(kSleepTime, r[3] + float(h));
       if (r[3] < kSleepTime) continue;
-      for (std::size_t a = 0; a < 3; ++a) {
-        r[a] = s.position[3 * i + a];
-        s.velocity[3 * i + a] = 0.0f;
-      }
+      for (std::size_t a = 0; a < 3; ++a) s.velocity[3 * i + a] = 0.0f;
     }
   }
 }

@@ -25,7 +25,7 @@
 namespace simreel::sim::detail {
 
 /// Version of the section layout; World::load_state refuses any other.
-inline constexpr std::uint32_t kStateFormat = 3;  // 2: joints; 3: particle sleep
+inline constexpr std::uint32_t kStateFormat = 4;  // 2: joints; 3: particle sleep; 4: an awake particle's rest position is where its last step ended (the motion test of update_rest())
 
 /// Appends to a byte string (reused from frame to frame: no allocation once grown).
 class StateWriter {

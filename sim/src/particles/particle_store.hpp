@@ -121,8 +121,9 @@ class Column {
   std::size_t cap_ = 0, head_ = 0, size_ = 0;
 };
 
-/// Sleep of particles at rest (ParticleStore::rest): slower than kSleepSpeed (m/s) for
-/// kSleepTime (s) — Box2D's linear sleep tolerance and time to sleep.
+/// Sleep of particles at rest (ParticleStore::rest): slower than kSleepSpeed (m/s), by velocity
+/// or by the motion over each step, for kSleepTime (s) — Box2D's linear sleep tolerance and time
+/// to sleep.
 inline constexpr float kSleepSpeed = 0.01f;
 inline constexpr float kSleepTime = 0.5f;
 
@@ -160,8 +161,9 @@ struct ParticleStore {
   Column<std::uint8_t> from_split;       ///< (count) 1: created by a split (§3.9.1), 0:
                                          ///< emitted or spawned (sub-emitter filter)
   /// Sleep of particles at rest in a particle–particle group (collision/particle_collisions.hpp):
-  /// (count x 4) the position it sleeps at (m, world) and the time (s) it has been slower than
-  /// the sleep speed; asleep from kSleepTime on. Kept only when `track_rest` (systems that
+  /// (count x 4) the position it sleeps at (m, world; while awake, its position at the end of
+  /// the last step, for the motion test) and the time (s) it has been slower than the sleep
+  /// speed; asleep from kSleepTime on. Kept only when `track_rest` (systems that
   /// collide with each other's particles); part of the state.
   Column<float> rest;
   bool track_rest = false;
