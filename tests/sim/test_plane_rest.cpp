@@ -1,10 +1,12 @@
-// The resting-on-a-plane fast path of the particle collision pass (collision/plane_rest.hpp) gives
-// the general path's results bit for bit (Coutinho §3.4 swept sphere against the plane, §3.6.1
+// The resting-on-a-plane fast path of the particle collision pass (collision/plane_rest.hpp, float
+// arithmetic) gives the general path's results (double) to a few roundings of a float, and never
+// leaves a particle inside the plane (Coutinho §3.4 swept sphere against the plane, §3.6.1
 // friction, §3.6.3 resting contact). The general path is reached with the same plane plus a
 // second, far one that nothing comes near (the fast path takes one plane only; the far plane
 // changes no value of the general path: its sweep finds nothing and its projections do nothing).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -92,7 +94,9 @@ detail::ParticleStore make_store(std::size_t n, std::size_t dense, const Vec3& q
   return s;
 }
 
-void expect_same_as_general_path(const Case& c) {
+Vec3 stored(const float* p) { return Vec3(p[0], p[1], p[2]); }
+
+void expect_close_to_general_path(const Case& c) {
   const double h = 1.0 / 240;
   const Vec3 q = c.point;
   detail::Collider ground;
@@ -118,44 +122,74 @@ void expect_same_as_general_path(const Case& c) {
   detail::CollisionContext ctx_fast, ctx_general;
   detail::collide(fast, 0, n, h, one, ctx_fast, f);
   detail::collide(general, 0, n, h, two, ctx_general, f);
-  // Bit for bit, and the pass did something: most particles near the plane moved.
-  std::size_t differ = 0, moved = 0;
+  // The same to a few roundings of a float, and the pass did something: most particles near
+  // the plane moved. The tolerance is eight float epsilons of the scale the float arithmetic
+  // works at: for positions the particle's distance from the plane's point, plus the margin by
+  // which keep_stored_out() steps a stored float out of the plane when its first try rounds
+  // back in (2^k 1.2e-7 (1 + |x|) on try k: the two paths may need different tries); for
+  // velocities its speed before and after the pass (the friction's 1 - dv_t / |v_t| cancels).
+  std::size_t differ = 0, moved = 0, inside = 0, exact = 0;
+  double worst_x = 0.0, worst_v = 0.0;
   detail::ParticleStore before = make_store(n, dense, q, ground.normal, c.stored, h, c.all_resting);
   if (c.edges) give_edge_values(before);
-  for (std::size_t i = 0; i < 3 * n; ++i) {
-    differ += std::memcmp(&fast.position[i], &general.position[i], sizeof(float)) != 0 ||
-              std::memcmp(&fast.velocity[i], &general.velocity[i], sizeof(float)) != 0;
-    moved += fast.velocity[i] != before.velocity[i];
+  constexpr double kEps = std::numeric_limits<float>::epsilon();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 xf = stored(&fast.position[3 * i]);
+    const Vec3 xg = stored(&general.position[3 * i]);
+    const Vec3 vf = stored(&fast.velocity[3 * i]);
+    const Vec3 vg = stored(&general.velocity[3 * i]);
+    const Vec3 v0 = stored(&before.velocity[3 * i]);
+    const bool finite = xg.allFinite() && vg.allFinite();
+    if (!finite) {  // non-finite lanes go to the general path: the same bits
+      differ += std::memcmp(&fast.position[3 * i], &general.position[3 * i], 3 * sizeof(float)) != 0 ||
+                std::memcmp(&fast.velocity[3 * i], &general.velocity[3 * i], 3 * sizeof(float)) != 0;
+      continue;
+    }
+    const double scale_x = std::max((xg - q).cwiseAbs().maxCoeff(), 1e-3) +
+                           0.5 * (1.0 + xg.cwiseAbs().maxCoeff());
+    const double scale_v = std::max({vg.norm(), v0.norm(), 1e-3});
+    const double ex = (xf - xg).cwiseAbs().maxCoeff() / (kEps * scale_x);
+    const double ev = (vf - vg).cwiseAbs().maxCoeff() / (kEps * scale_v);
+    worst_x = std::max(worst_x, ex);
+    worst_v = std::max(worst_v, ev);
+    differ += !(ex <= 8.0 && ev <= 8.0);
+    exact += xf == xg && vf == vg;
+    inside += ground.normal.dot(xf - q) - double(fast.radius[i]) < 0.0;
+    for (int a = 0; a < 3; ++a) moved += fast.velocity[3 * i + std::size_t(a)] != before.velocity[3 * i + std::size_t(a)];
   }
-  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(differ, 0u) << "worst position error " << worst_x << " eps, velocity " << worst_v << " eps";
+  EXPECT_EQ(inside, 0u);
   EXPECT_GT(moved, c.edges ? n / 2 : n);
+  // The fast path took part: some results are not the double path's bits (about a tenth here; in
+  // the upright plane's form x and y are mostly the same floats).
+  EXPECT_LT(exact, n - n / 50);
 }
 
-TEST(SimPlaneRest, FastPathEqualsGeneralPathBitForBit) {
-  expect_same_as_general_path({});
+TEST(SimPlaneRest, FastPathMatchesGeneralPath) {
+  expect_close_to_general_path({});
 }
 
-TEST(SimPlaneRest, FastPathEqualsGeneralPathWithQuadraticDragStaticFrictionAndTilt) {
-  expect_same_as_general_path({true, false, false, Vec3::UnitZ()});
-  expect_same_as_general_path({false, true, false, Vec3::UnitZ()});
-  expect_same_as_general_path({false, false, false, Vec3(0.2, -0.1, 1.0)});
-  expect_same_as_general_path({true, true, false, Vec3(-0.3, 0.1, 1.0)});
+TEST(SimPlaneRest, FastPathMatchesGeneralPathWithQuadraticDragStaticFrictionAndTilt) {
+  expect_close_to_general_path({true, false, false, Vec3::UnitZ()});
+  expect_close_to_general_path({false, true, false, Vec3::UnitZ()});
+  expect_close_to_general_path({false, false, false, Vec3(0.2, -0.1, 1.0)});
+  expect_close_to_general_path({true, true, false, Vec3(-0.3, 0.1, 1.0)});
 }
 
-TEST(SimPlaneRest, FastPathEqualsGeneralPathWithTheStartOfStepStored) {
-  expect_same_as_general_path({false, false, true, Vec3::UnitZ()});
-  expect_same_as_general_path({true, true, true, Vec3(0.1, 0.2, 1.0)});
+TEST(SimPlaneRest, FastPathMatchesGeneralPathWithTheStartOfStepStored) {
+  expect_close_to_general_path({false, false, true, Vec3::UnitZ()});
+  expect_close_to_general_path({true, true, true, Vec3(0.1, 0.2, 1.0)});
 }
 
-TEST(SimPlaneRest, FastPathEqualsGeneralPathOnSettledBlocks) {
+TEST(SimPlaneRest, FastPathMatchesGeneralPathOnSettledBlocks) {
   // Every lane of every block resting: the blocks skip their per-lane follow-up, except where
   // a stored float lies a hair inside the (tilted) plane and must be stepped out.
-  expect_same_as_general_path({false, false, false, Vec3(0.2, -0.1, 1.0), true});
-  expect_same_as_general_path({false, true, true, Vec3(-0.3, 0.1, 1.0), true});
-  expect_same_as_general_path({false, false, false, Vec3::UnitZ(), true});
+  expect_close_to_general_path({false, false, false, Vec3(0.2, -0.1, 1.0), true});
+  expect_close_to_general_path({false, true, true, Vec3(-0.3, 0.1, 1.0), true});
+  expect_close_to_general_path({false, false, false, Vec3::UnitZ(), true});
 }
 
-TEST(SimPlaneRest, UprightPlaneFormEqualsGeneralPathOnEdgeValues) {
+TEST(SimPlaneRest, UprightPlaneFormMatchesGeneralPathOnEdgeValues) {
   for (const Vec3& point : {Vec3(0.3, -0.2, 0.1), Vec3(0.0, 0.0, 0.0)}) {
     for (bool quadratic : {false, true}) {
       Case c;
@@ -163,11 +197,11 @@ TEST(SimPlaneRest, UprightPlaneFormEqualsGeneralPathOnEdgeValues) {
       c.quadratic = quadratic;
       c.two_mu = quadratic;
       c.edges = true;
-      expect_same_as_general_path(c);
+      expect_close_to_general_path(c);
       c.all_resting = true;
-      expect_same_as_general_path(c);
+      expect_close_to_general_path(c);
       c.stored = true;
-      expect_same_as_general_path(c);
+      expect_close_to_general_path(c);
     }
   }
 }

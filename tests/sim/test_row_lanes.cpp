@@ -140,11 +140,13 @@ TEST(SimRowLanes, RowsAndColumnsAvx2EqualClonesAndRoundTrip) {
         ASSERT_TRUE(exact(y[k], rows[3 * k + 1])) << "len " << len << " lanes " << lanes << " row " << k;
         ASSERT_TRUE(exact(z[k], rows[3 * k + 2])) << "len " << len << " lanes " << lanes << " row " << k;
       }
+      // The float columns: the same values, bits and all.
       std::vector<float> fx(len), fy(len), fz(len), back(3 * len + 1, 7.0f);
+      detail::rows_to_columns(rows.data(), len, fx.data(), fy.data(), fz.data(), lanes);
       for (std::size_t k = 0; k < len; ++k) {
-        fx[k] = float(x[k]);
-        fy[k] = float(y[k]);
-        fz[k] = float(z[k]);
+        ASSERT_EQ(std::memcmp(&fx[k], &rows[3 * k], sizeof(float)), 0) << "len " << len << " lanes " << lanes << " row " << k;
+        ASSERT_EQ(std::memcmp(&fy[k], &rows[3 * k + 1], sizeof(float)), 0) << "len " << len << " lanes " << lanes << " row " << k;
+        ASSERT_EQ(std::memcmp(&fz[k], &rows[3 * k + 2], sizeof(float)), 0) << "len " << len << " lanes " << lanes << " row " << k;
       }
       detail::columns_to_rows(fx.data(), fy.data(), fz.data(), len, back.data(), lanes);
       if (len > 0) {  // (rows.data() may be null when empty)

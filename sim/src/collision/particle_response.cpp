@@ -428,7 +428,8 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
     // testing the block first changes nothing.
     constexpr std::size_t kBlock = kPlaneRestLanes;
     // One plane that only bounces (the ground): the particles near it go through the vectorised
-    // resting fast path first (plane_rest.hpp, the same results); resolve() takes the rest.
+    // resting fast path first (plane_rest.hpp, float lanes: resolve()'s results to a few roundings
+    // of a float); resolve() takes the rest.
     // Then nothing is shared between particles (no splash, no body impulse, no removal), so
     // large systems split their blocks statically over ctx.threads: the same results.
     const Collider& c0 = colliders.front();

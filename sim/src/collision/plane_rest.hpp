@@ -1,10 +1,13 @@
 #pragma once
 // The resting-on-a-plane fast path of the particle collision pass (private to collision/):
 // particles lying on the one ground plane of a scene, resolved lane by lane in a loop the
-// compiler vectorises, with the same double arithmetic as the general slow path (resolve() in
-// particle_response.cpp), so the results are bit for bit the same. Coutinho §3.4 (the swept
-// sphere against the plane), §3.6.1 (Coulomb friction with the critical coefficient), §3.6.3
-// (resting contact: the normal velocity and acceleration cancelled, friction on their impulse).
+// compiler vectorises, with the arithmetic of the general slow path (resolve() in
+// particle_response.cpp) in float lanes, relative to the plane's point (the sweep's distances and
+// time of impact in double), so the results are the slow path's to a few roundings of a float
+// (tests/sim/test_plane_rest.cpp; docs/benchmarks.md, issue 19 at stop 89). Coutinho §3.4 (the
+// swept sphere against the plane), §3.6.1 (Coulomb friction with the critical coefficient),
+// §3.6.3 (resting contact: the normal velocity and acceleration cancelled, friction on their
+// impulse).
 
 #include <cstddef>
 #include <cstdint>
@@ -16,12 +19,12 @@ inline constexpr std::size_t kPlaneRestLanes = 256;
 
 /// Input and output lanes (structure of arrays) of plane_rest(): one particle per lane.
 struct PlaneRestLanes {
-  // in: end-of-step position (m) and velocity (m/s) as integrated, mass (kg), radius (m), the
-  // particle's step dt = min(age, h) (s), and, for integrators that store it, the start-of-step
-  // position (m)
-  double bx[kPlaneRestLanes], by[kPlaneRestLanes], bz[kPlaneRestLanes];
-  double vx[kPlaneRestLanes], vy[kPlaneRestLanes], vz[kPlaneRestLanes];
-  double ax[kPlaneRestLanes], ay[kPlaneRestLanes], az[kPlaneRestLanes];
+  // in: end-of-step position (m) and velocity (m/s) as integrated and stored (floats), mass (kg),
+  // radius (m), the particle's step dt = min(age, h) (s), and, for integrators that store it,
+  // the start-of-step position (m)
+  float bx[kPlaneRestLanes], by[kPlaneRestLanes], bz[kPlaneRestLanes];
+  float vx[kPlaneRestLanes], vy[kPlaneRestLanes], vz[kPlaneRestLanes];
+  float ax[kPlaneRestLanes], ay[kPlaneRestLanes], az[kPlaneRestLanes];
   double m[kPlaneRestLanes], r[kPlaneRestLanes], dt[kPlaneRestLanes];
   // out: position and velocity after the contact, rounded to float as they are stored (the
   // input, exactly, where ok is 0)

@@ -6,6 +6,8 @@
 // factor, the curl) are spread over them, with single-source permutes.
 #include "particles/row_lanes.hpp"
 
+#include <type_traits>
+
 #include "core/vector_clones.hpp"
 
 #if SIMREEL_HAS_VECTOR_CLONES
@@ -72,6 +74,16 @@ void rows_to_columns_clones(const float* __restrict rows, std::size_t len, doubl
 }
 
 SIMREEL_VECTOR_CLONES
+void rows_to_columns_clones(const float* __restrict rows, std::size_t len, float* __restrict x,
+                            float* __restrict y, float* __restrict z) {
+  for (std::size_t k = 0; k < len; ++k) {
+    x[k] = rows[3 * k];
+    y[k] = rows[3 * k + 1];
+    z[k] = rows[3 * k + 2];
+  }
+}
+
+SIMREEL_VECTOR_CLONES
 void columns_to_rows_clones(const float* __restrict x, const float* __restrict y,
                             const float* __restrict z, std::size_t len, float* __restrict rows) {
   for (std::size_t k = 0; k < len; ++k) {
@@ -86,11 +98,18 @@ void columns_to_rows_clones(const float* __restrict x, const float* __restrict y
 /// Four rows of three floats, (a0 a1 a2 a3) = (x0 y0 z0 x1), (b..) = (y1 z1 x2 y2),
 /// (c..) = (z2 x3 y3 z3), to the columns (x0..x3), (y0..y3), (z0..z3): two blends gather each
 /// column's floats into the lanes a permute then puts in order (each permute its own inverse,
-/// which columns_to_rows_avx2() uses the other way).
+/// which columns_to_rows_avx2() uses the other way). Column: float or double.
+template <class Column>
 __attribute__((target("avx2"))) void rows_to_columns_avx2(const float* __restrict rows,
-                                                          std::size_t len, double* __restrict x,
-                                                          double* __restrict y,
-                                                          double* __restrict z) {
+                                                          std::size_t len, Column* __restrict x,
+                                                          Column* __restrict y,
+                                                          Column* __restrict z) {
+  const auto store = [](Column* to, __m128 v) __attribute__((target("avx2"))) {
+    if constexpr (std::is_same_v<Column, double>)
+      _mm256_storeu_pd(to, _mm256_cvtps_pd(v));
+    else
+      _mm_storeu_ps(to, v);
+  };
   std::size_t k = 0;
   for (; k + 4 <= len; k += 4) {
     const __m128 a = _mm_loadu_ps(rows + 3 * k), b = _mm_loadu_ps(rows + 3 * k + 4),
@@ -98,9 +117,9 @@ __attribute__((target("avx2"))) void rows_to_columns_avx2(const float* __restric
     const __m128 tx = _mm_blend_ps(_mm_blend_ps(a, b, 0x4), c, 0x2);  // a0 c1 b2 a3
     const __m128 ty = _mm_blend_ps(_mm_blend_ps(a, b, 0x9), c, 0x4);  // b0 a1 c2 b3
     const __m128 tz = _mm_blend_ps(_mm_blend_ps(a, b, 0x2), c, 0x9);  // c0 b1 a2 c3
-    _mm256_storeu_pd(x + k, _mm256_cvtps_pd(_mm_shuffle_ps(tx, tx, _MM_SHUFFLE(1, 2, 3, 0))));
-    _mm256_storeu_pd(y + k, _mm256_cvtps_pd(_mm_shuffle_ps(ty, ty, _MM_SHUFFLE(2, 3, 0, 1))));
-    _mm256_storeu_pd(z + k, _mm256_cvtps_pd(_mm_shuffle_ps(tz, tz, _MM_SHUFFLE(3, 0, 1, 2))));
+    store(x + k, _mm_shuffle_ps(tx, tx, _MM_SHUFFLE(1, 2, 3, 0)));
+    store(y + k, _mm_shuffle_ps(ty, ty, _MM_SHUFFLE(2, 3, 0, 1)));
+    store(z + k, _mm_shuffle_ps(tz, tz, _MM_SHUFFLE(3, 0, 1, 2)));
   }
   if (k < len) rows_to_columns_clones(rows + 3 * k, len - k, x + k, y + k, z + k);
 }
@@ -401,8 +420,10 @@ void add_noise_drag_rows(std::size_t len, const double* w, const double* ux, con
   add_noise_drag_clones(len, w, ux, uy, uz, q, amplitude, drag, mass, v, a);
 }
 
-void rows_to_columns(const float* rows, std::size_t len, double* x, double* y, double* z,
-                     int lanes) {
+namespace {
+template <class Column>
+void rows_to_columns_any(const float* rows, std::size_t len, Column* x, Column* y, Column* z,
+                         int lanes) {
 #if SIMREEL_HAS_VECTOR_CLONES
   if (lanes == 0) lanes = default_row_lanes();
   if (lanes == 4 && row_lanes_avx2()) return rows_to_columns_avx2(rows, len, x, y, z);
@@ -410,6 +431,17 @@ void rows_to_columns(const float* rows, std::size_t len, double* x, double* y, d
   (void)lanes;
 #endif
   rows_to_columns_clones(rows, len, x, y, z);
+}
+}  // namespace
+
+void rows_to_columns(const float* rows, std::size_t len, double* x, double* y, double* z,
+                     int lanes) {
+  rows_to_columns_any(rows, len, x, y, z, lanes);
+}
+
+void rows_to_columns(const float* rows, std::size_t len, float* x, float* y, float* z,
+                     int lanes) {
+  rows_to_columns_any(rows, len, x, y, z, lanes);
 }
 
 void columns_to_rows(const float* x, const float* y, const float* z, std::size_t len, float* rows,

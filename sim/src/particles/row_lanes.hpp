@@ -37,6 +37,10 @@ void add_noise_drag_rows(std::size_t len, const double* w, const double* ux, con
 void rows_to_columns(const float* rows, std::size_t len, double* x, double* y, double* z,
                      int lanes = 0);
 
+/// The same into three columns of floats.
+void rows_to_columns(const float* rows, std::size_t len, float* x, float* y, float* z,
+                     int lanes = 0);
+
 /// Three columns of floats x, y, z (len each) to rows of three (len x 3). `lanes` as for
 /// rows_to_columns().
 void columns_to_rows(const float* x, const float* y, const float* z, std::size_t len, float* rows,
