@@ -314,7 +314,8 @@ bool resolve(ParticleStore& s, std::size_t i, double dt, const std::vector<Colli
 /// Particles [i0, i0 + len) of s against the one plane colliders[0]: the fast path for those
 /// resting on it, resolve() for the others near it. Most of a block on the plane: every lane goes
 /// through in place; a few: a compacted list of them. `dense`: the previous block's case, a guess
-/// that saves the rejection test's separate pass (updated; the results do not depend on it).
+/// that saves the rejection test's separate pass, and for a settled block the rejection test
+/// itself (updated; the results do not depend on it).
 void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
                  const PlaneRestParams& pp, const std::vector<Collider>& colliders,
                  CollisionContext& ctx, const ForceParams& f, bool& dense) {
@@ -332,7 +333,18 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
   std::uint8_t near[kPlaneRestLanes];
   const bool gathered = dense;
   if (gathered) {
+    // Guessed on the plane: the lanes first. A lane plane_rest() resolves is near the plane
+    // (its d1 < -skin is the rejection test's value), and its other lanes give back their
+    // inputs, so a settled block (every lane resolved and stored outside the plane: one
+    // branch-free pass says so) needs neither the rejection test nor the loop below; it stays
+    // dense. Otherwise the rejection test, and the lanes' results are used in place whether or
+    // not the block turns out dense (each lane's result depends on that lane alone).
     gather();
+    plane_rest(l, len, pp);
+    if (all_resolved_outside(l, len)) {
+      scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
+      return;
+    }
     near_lanes(l, len, pp, near);
   } else {
     near_planes(x + 3 * i0, s.radius.data() + i0, len, colliders.data(), 1, near);
@@ -340,14 +352,13 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
   std::size_t m = 0;
   for (std::size_t k = 0; k < len; ++k) m += near[k];
   dense = 3 * m >= 2 * len;
-  if (m == 0) return;
-  if (dense) {
-    if (!gathered) gather();
-    plane_rest(l, len, pp);
+  if (m == 0) return;  // (no lane resolved, so the block's values are as they were)
+  if (dense || gathered) {
+    if (!gathered) {
+      gather();
+      plane_rest(l, len, pp);
+    }
     scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
-    // A settled block: every lane resolved and stored outside the plane, so the loop below
-    // would do nothing; one branch-free pass says so instead of a branch per lane.
-    if (all_resolved_outside(l, len)) return;
     for (std::size_t k = 0; k < len; ++k) {
       if (l.ok[k] == 0.0) {
         if (near[k]) resolve(s, i0 + k, l.dt[k], colliders, ctx, f);
@@ -363,35 +374,20 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
     if (!near[k]) continue;
     const std::size_t i = i0 + k;
     idx[m] = std::uint32_t(i);
-    if (gathered) {  // in place: m <= k
-      l.bx[m] = l.bx[k];
-      l.by[m] = l.by[k];
-      l.bz[m] = l.bz[k];
-      l.vx[m] = l.vx[k];
-      l.vy[m] = l.vy[k];
-      l.vz[m] = l.vz[k];
-      l.ax[m] = l.ax[k];
-      l.ay[m] = l.ay[k];
-      l.az[m] = l.az[k];
-      l.m[m] = l.m[k];
-      l.r[m] = l.r[k];
-      l.dt[m] = l.dt[k];
-    } else {
-      l.bx[m] = x[3 * i];
-      l.by[m] = x[3 * i + 1];
-      l.bz[m] = x[3 * i + 2];
-      l.vx[m] = vel[3 * i];
-      l.vy[m] = vel[3 * i + 1];
-      l.vz[m] = vel[3 * i + 2];
-      if (prev != nullptr) {
-        l.ax[m] = prev[3 * i];
-        l.ay[m] = prev[3 * i + 1];
-        l.az[m] = prev[3 * i + 2];
-      }
-      l.m[m] = s.mass[i];
-      l.r[m] = s.radius[i];
-      l.dt[m] = std::min(double(s.age[i]), h);
+    l.bx[m] = x[3 * i];
+    l.by[m] = x[3 * i + 1];
+    l.bz[m] = x[3 * i + 2];
+    l.vx[m] = vel[3 * i];
+    l.vy[m] = vel[3 * i + 1];
+    l.vz[m] = vel[3 * i + 2];
+    if (prev != nullptr) {
+      l.ax[m] = prev[3 * i];
+      l.ay[m] = prev[3 * i + 1];
+      l.az[m] = prev[3 * i + 2];
     }
+    l.m[m] = s.mass[i];
+    l.r[m] = s.radius[i];
+    l.dt[m] = std::min(double(s.age[i]), h);
     ++m;
   }
   plane_rest(l, m, pp);
