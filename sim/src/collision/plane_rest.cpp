@@ -2,10 +2,10 @@
 // one case that dominates a settled scene, a particle lying on the ground plane, written as
 // straight-line arithmetic over lanes. The expressions are resolve()'s, in its order, but in
 // float (all but the sweep's two distances and its time of impact, which stay in double), in
-// coordinates relative to the plane's point (taken in double): a float lane holds
-// twice the particles of a double one and takes the same time per operation, and the loop is
-// bound by the number of its operations (docs/benchmarks.md, issue 19 at stop 89). The state is
-// stored as floats, so the result differs from the double path by a few roundings of a float
+// coordinates relative to the plane's point (taken in double): a float lane holds twice the
+// particles of a double one and takes the same time per operation, and the loop is bound by the
+// number of its operations (docs/benchmarks.md, issue 19 at stop 89). The state is stored as
+// floats, so the result differs from the double path by a few roundings of a float
 // (tests/sim/test_plane_rest.cpp bounds the difference). Selects replace resolve()'s branches.
 // Built with -fno-trapping-math -fno-math-errno (sim/CMakeLists.txt) so both sides of a select
 // may be evaluated and the square roots vectorise.
@@ -52,8 +52,8 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     }
   };
   for (std::size_t k = 0; k < count; ++k) {
-    // b, a: end and start of the step relative to q, in double until the sweep's fraction
-    // (below), then in float
+    // b, a: end and start of the step relative to q (kUp: z only), in double until the sweep's
+    // fraction (below), then in float
     const double bzd = double(l.bz[k]) - q2;
     double bxd, byd;
     F bx, by;
