@@ -10,9 +10,11 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "collision/collider_impl.hpp"
+#include "collision/plane_rest.hpp"
 #include "simreel/sim/random.hpp"
 
 namespace simreel::sim {
@@ -203,6 +205,73 @@ TEST(SimPlaneRest, UprightPlaneFormMatchesGeneralPathOnEdgeValues) {
       c.stored = true;
       expect_close_to_general_path(c);
     }
+  }
+}
+
+/// plane_rest()'s loop for lanes that share one mass, radius and step (kUniform in
+/// plane_rest.cpp, which reads lane 0's) gives each lane the bits of the per-lane loop: the same
+/// lanes are run once alone and once beside an extra lane of another mass, which makes the batch
+/// non-uniform. Over every form: upright and tilted planes, the start of the step stored or
+/// recovered, linear and quadratic drag, one or two friction coefficients.
+TEST(SimPlaneRest, SharedMassRadiusAndStepGiveThePerLaneBits) {
+  constexpr std::size_t n = 200;
+  for (int form = 0; form < 16; ++form) {
+    const bool stored = form & 1, quadratic = form & 2, two_mu = form & 4, tilted = form & 8;
+    detail::PlaneRestParams p{};
+    const Vec3 nrm = tilted ? Vec3(0.2, -0.1, 1.0).normalized() : Vec3::UnitZ();
+    const Vec3 q(0.3, -0.2, 0.1);
+    for (int a = 0; a < 3; ++a) {
+      p.n[a] = nrm[a];
+      p.q[a] = q[a];
+    }
+    p.g[2] = -9.81;
+    p.drag = 2e-3;  // (strong, so that the mass counts: k / m = 1 / s)
+    p.drag_quadratic = quadratic ? 3e-4 : 0.0;
+    p.mu = 0.3;
+    p.mu_static = two_mu ? 0.6 : 0.3;
+    p.contact_speed = 0.05;
+    p.start_stored = stored;
+    auto alone = std::make_unique<detail::PlaneRestLanes>();
+    const double h = 1.0 / 240, r = 0.01, m = 2e-3;
+    const Vec3 t1 = nrm.unitOrthogonal(), t2 = nrm.cross(t1);
+    Rng rng(11);
+    for (std::size_t k = 0; k < n; ++k) {
+      // resting (sunk by about g h²), sliding, bouncing and leaving particles
+      const double kind = rng.uniform();
+      const double z = r + rng.uniform(-4e-4, 2e-5);
+      const double vn = kind < 0.7 ? -rng.uniform(0.0, 0.06) : kind < 0.85 ? -rng.uniform(0.5, 5.0) : rng.uniform(0.0, 1.0);
+      const double slide = kind < 0.35 ? 0.0 : rng.uniform(0.0, 5.0);
+      const Vec3 x = q + rng.uniform(-10, 10) * t1 + rng.uniform(-10, 10) * t2 + z * nrm;
+      const Vec3 v = vn * nrm + slide * t1;
+      alone->bx[k] = float(x[0]);
+      alone->by[k] = float(x[1]);
+      alone->bz[k] = float(x[2]);
+      alone->vx[k] = float(v[0]);
+      alone->vy[k] = float(v[1]);
+      alone->vz[k] = float(v[2]);
+      alone->ax[k] = float(x[0] - h * v[0] + 1e-4 * nrm[0]);
+      alone->ay[k] = float(x[1] - h * v[1] + 1e-4 * nrm[1]);
+      alone->az[k] = float(x[2] - h * v[2] + 1e-4 * nrm[2]);
+      alone->m[k] = m;
+      alone->r[k] = r;
+      alone->dt[k] = h;
+    }
+    auto beside = std::make_unique<detail::PlaneRestLanes>(*alone);
+    beside->m[n] = 2.0 * m;  // the extra lane: another mass
+    beside->r[n] = r;
+    beside->dt[n] = h;
+    beside->bz[n] = float(q[2] + r);
+    detail::plane_rest(*alone, n, p);
+    detail::plane_rest(*beside, n + 1, p);
+    std::size_t resolved = 0;
+    for (std::size_t k = 0; k < n; ++k) resolved += alone->ok[k] != 0.0;
+    EXPECT_GT(resolved, n / 3) << "form " << form;
+    const auto same = [&](const auto& a, const auto& b) { return std::memcmp(a, b, n * sizeof(a[0])) == 0; };
+    EXPECT_TRUE(same(alone->ox, beside->ox) && same(alone->oy, beside->oy) && same(alone->oz, beside->oz))
+        << "form " << form;
+    EXPECT_TRUE(same(alone->ovx, beside->ovx) && same(alone->ovy, beside->ovy) && same(alone->ovz, beside->ovz))
+        << "form " << form;
+    EXPECT_TRUE(same(alone->ok, beside->ok) && same(alone->gap, beside->gap)) << "form " << form;
   }
 }
 

@@ -12,6 +12,7 @@
 #include "collision/plane_rest.hpp"
 
 #include "collision/narrow_phase.hpp"  // np::kSkin
+#include "core/same_bits.hpp"
 #include "core/vector_clones.hpp"
 
 namespace simreel::sim::detail {
@@ -32,7 +33,12 @@ inline float dot3(float x0, float x1, float x2, float y0, float y1, float y2) {
 /// origin; the result is put back (q + the relative position) in double before its rounding to
 /// the stored float. A lane whose outputs are not all finite (an overflow of the float
 /// arithmetic, or a non-finite input) goes to the general path, which works in double.
-template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp>
+/// kUniform: every lane has lane 0's mass, radius and step (the usual case: an emitter's
+/// particles share them and are older than a step), so the loop reads them as scalars and the
+/// compiler takes what depends on them alone (the drag over the mass, the start-of-step factors:
+/// two divisions a lane) out of the loop; the same operations on the same values, so the same
+/// bits.
+template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp, bool kUniform>
 SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
   using F = float;
   const F n0 = kUp ? 0.0f : F(p.n[0]), n1 = kUp ? 0.0f : F(p.n[1]), n2 = kUp ? 1.0f : F(p.n[2]);
@@ -69,7 +75,8 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     }
     const F bz = F(bzd);
     const F vx = l.vx[k], vy = l.vy[k], vz = l.vz[k];
-    const F m = F(l.m[k]), r = F(l.r[k]), dt = F(l.dt[k]);
+    const std::size_t u = kUniform ? 0 : k;  // the lane of the mass, radius and step
+    const F m = F(l.m[u]), r = F(l.r[u]), dt = F(l.dt[u]);
     // step_acceleration(): A = g - (k / m) v with k = drag_at(v)
     const F speed = __builtin_sqrtf(dot3(vx, vy, vz, vx, vy, vz));
     const F kd = kQuadratic ? drag + c2 * speed : drag;
@@ -88,7 +95,7 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     } else {
       const F d = m / (m + dt * kd);
       const F coef = 0.5f * dt * dt * d * d;
-      const double dtd = l.dt[k];
+      const double dtd = l.dt[u];
       if constexpr (kUp) {
         ax = (bx - dt * vx) + coef * Ax;
         ay = (by - dt * vy) + coef * Ay;
@@ -107,7 +114,7 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     // the fraction of the step at the contact is their ratio, which float would leave wrong by
     // a float's epsilon times |x - q| / (d0 - d1) (a time of impact off by a part in a thousand
     // for a slow approach across a plane tilted under particles metres from its point).
-    const double rd = l.r[k];
+    const double rd = l.r[u];
     const double d0 = (kUp ? azd : (dn0 * axd + dn1 * ayd) + dn2 * azd) - rd;
     const double d1 = (kUp ? bzd : (dn0 * bxd + dn1 * byd) + dn2 * bzd) - rd;
     const double frac = d0 / (d0 - d1);
@@ -205,12 +212,26 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
   }
 }
 
+/// Lanes [0, count) all have lane 0's mass, radius and step, bit for bit (a clone of its own so
+/// that the scans run in the widest vectors).
+SIMREEL_VECTOR_CLONES bool uniform_scalars(const PlaneRestLanes& l, std::size_t count) {
+  return same_bits(l.m, count) && same_bits(l.r, count) && same_bits(l.dt, count);
+}
+
+template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp>
+void pick_uniform(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
+  if (uniform_scalars(l, count))
+    lanes<kStored, kQuadratic, kTwoMu, kUp, true>(l, count, p);
+  else
+    lanes<kStored, kQuadratic, kTwoMu, kUp, false>(l, count, p);
+}
+
 template <bool kStored, bool kQuadratic, bool kTwoMu>
 void pick_up(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
   if (p.n[0] == 0.0 && p.n[1] == 0.0 && p.n[2] == 1.0)
-    lanes<kStored, kQuadratic, kTwoMu, true>(l, count, p);
+    pick_uniform<kStored, kQuadratic, kTwoMu, true>(l, count, p);
   else
-    lanes<kStored, kQuadratic, kTwoMu, false>(l, count, p);
+    pick_uniform<kStored, kQuadratic, kTwoMu, false>(l, count, p);
 }
 
 template <bool kStored, bool kQuadratic>
