@@ -30,12 +30,15 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
 
 const std::size_t kLengths[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 15, 16, 17, 64, 255, 256};
 
+// `shared`: every particle of the batch has one mass (the hand-written forms then divide once).
 TEST(SimRowLanes, SemiImplicitLinearAvx2EqualsClonesBitForBit) {
   Rng rng(11);
+  for (bool shared : {false, true})
   for (std::size_t len : kLengths) {
     for (double drag : {0.0, 0.02, 3.5}) {
       std::vector<double> m = random_rows(rng, len, 1e-4, 2.0);
       for (std::size_t i = 0; i < len; i += 5) m[i] = 1e-12;  // emitter.cpp's mass floor
+      if (shared) m.assign(len, len % 2 == 0 ? 0.37 : 1e-12);
       const std::vector<double> x0 = random_rows(rng, 3 * len, -50.0, 50.0);
       std::vector<double> v0 = random_rows(rng, 3 * len, -20.0, 20.0);
       for (std::size_t c = 0; c < 3 * len; c += 7) v0[c] = -0.0;
@@ -48,10 +51,10 @@ TEST(SimRowLanes, SemiImplicitLinearAvx2EqualsClonesBitForBit) {
                                         v4.data(), a.data(), 4);
       detail::semi_implicit_linear_rows(len, h, drag, 0.3, -0.7, -9.81, m.data(), x8.data(),
                                         v8.data(), a.data(), 8);
-      EXPECT_TRUE(same_bits(x1, x4)) << "len " << len << " drag " << drag;
-      EXPECT_TRUE(same_bits(v1, v4)) << "len " << len << " drag " << drag;
-      EXPECT_TRUE(same_bits(x1, x8)) << "AVX-512, len " << len << " drag " << drag;
-      EXPECT_TRUE(same_bits(v1, v8)) << "AVX-512, len " << len << " drag " << drag;
+      EXPECT_TRUE(same_bits(x1, x4)) << "len " << len << " drag " << drag << " shared " << shared;
+      EXPECT_TRUE(same_bits(v1, v4)) << "len " << len << " drag " << drag << " shared " << shared;
+      EXPECT_TRUE(same_bits(x1, x8)) << "AVX-512, len " << len << " drag " << drag << " shared " << shared;
+      EXPECT_TRUE(same_bits(v1, v8)) << "AVX-512, len " << len << " drag " << drag << " shared " << shared;
       if (len > 0) {
         EXPECT_FALSE(same_bits(x0, x4)) << "nothing moved";
       }
@@ -87,16 +90,21 @@ TEST(SimRowLanes, NoiseDragAvx2EqualsClonesBitForBit) {
   // A rotation about an oblique axis, row-major.
   const double c = std::cos(0.7), s = std::sin(0.7);
   const double q[9] = {c, -s, 0.0, s * 0.6, c * 0.6, -0.8, s * 0.8, c * 0.8, 0.6};
+  // shared: 0 each particle its own weight and mass; 1, 2, 3 one mass for all and one weight
+  // for all (1 everywhere, 0 or -0 outside the region: the hand-written forms divide once)
+  for (int shared : {0, 1, 2, 3})
   for (std::size_t len : kLengths)
     for (double amplitude : {0.0, 1.7}) {
       std::vector<double> w = random_rows(rng, len, 0.0, 1.0);
       for (std::size_t k = 0; k < len; k += 3) w[k] = 0.0;   // outside the region
       for (std::size_t k = 1; k < len; k += 4) w[k] = -0.0;  // outside too (-0 == 0)
       for (std::size_t k = 2; k < len; k += 5) w[k] = 1.0;
+      if (shared > 0) w.assign(len, shared == 1 ? 1.0 : shared == 2 ? 0.0 : -0.0);
       const std::vector<double> ux = random_rows(rng, len, -1.0, 1.0),
                                 uy = random_rows(rng, len, -1.0, 1.0),
-                                uz = random_rows(rng, len, -1.0, 1.0),
-                                mass = random_rows(rng, len, 1e-4, 2.0);
+                                uz = random_rows(rng, len, -1.0, 1.0);
+      std::vector<double> mass = random_rows(rng, len, 1e-4, 2.0);
+      if (shared > 0) mass.assign(len, 0.0731);
       std::vector<double> v = random_rows(rng, 3 * len, -5.0, 5.0);
       for (std::size_t k = 0; k < 3 * len; k += 4) v[k] = 0.0;  // u - v = 0 where amplitude = 0
       std::vector<double> a0 = random_rows(rng, 3 * len, -10.0, 10.0);
@@ -108,8 +116,8 @@ TEST(SimRowLanes, NoiseDragAvx2EqualsClonesBitForBit) {
                                   0.8, mass.data(), v.data(), a4.data(), 4);
       detail::add_noise_drag_rows(len, w.data(), ux.data(), uy.data(), uz.data(), q, amplitude,
                                   0.8, mass.data(), v.data(), a8.data(), 8);
-      EXPECT_TRUE(same_bits(a1, a4)) << "len " << len << " amplitude " << amplitude;
-      EXPECT_TRUE(same_bits(a1, a8)) << "AVX-512, len " << len << " amplitude " << amplitude;
+      EXPECT_TRUE(same_bits(a1, a4)) << "len " << len << " amplitude " << amplitude << " shared " << shared;
+      EXPECT_TRUE(same_bits(a1, a8)) << "AVX-512, len " << len << " amplitude " << amplitude << " shared " << shared;
       // and the drag itself, per particle: (w k_d / m) (amplitude R u - v), none outside
       for (std::size_t k = 0; k < len; ++k)
         for (int r = 0; r < 3; ++r) {
