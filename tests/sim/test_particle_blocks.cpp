@@ -10,10 +10,12 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "collision/collider_impl.hpp"
 #include "collision/particle_blocks.hpp"
+#include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
 #include "sim_test_util.hpp"
 #include "simreel/sim/body.hpp"
@@ -173,6 +175,81 @@ TEST(SimParticleBlocks, NearPlanesDecidesAsTheParticleTest) {
   // Both answers are common (the check above is not one-sided).
   EXPECT_GT(near_count, total / 10);
   EXPECT_LT(near_count, total - total / 10);
+}
+
+TEST(SimParticleBlocks, GatherBlockSharesTheScalarsOnlyWhereEveryLaneHasLaneZerosBits) {
+  // gather_block() fills lane 0 of m, r and dt alone, and says so (l.shared), when it finds from
+  // the stored floats that every lane's double would have lane 0's bits: one mass, one radius,
+  // and every age at least h (the step min(age, h) is then h). plane_rest() and plane_block()
+  // then read lane 0. Checked against the lanes written out as doubles (m, r, min(age, h)):
+  // shared only where they all match bit for bit, lane 0 right, every lane right otherwise.
+  // Steps where float(h) falls below h and above it, and ages one float either side of h,
+  // catch a threshold rounded the wrong way; a mass or radius one ulp off, in the first lane
+  // or the last, a wrong "shared".
+  const auto bits = [](double d) { return __builtin_bit_cast(std::uint64_t, d); };
+  const auto up = [](float a) { return std::nextafter(a, std::numeric_limits<float>::infinity()); };
+  const auto down = [](float a) { return std::nextafter(a, -std::numeric_limits<float>::infinity()); };
+  bool below = false, above = false;
+  int shared_count = 0, cases = 0;
+  Rng rng(5, 9);
+  auto l = std::make_unique<detail::PlaneRestLanes>();
+  for (const double h : {1.0 / 240, 1.0 / 100, 1.0 / 25, 0.1, 1.0 / 60}) {
+    below = below || double(float(h)) < h;
+    above = above || double(float(h)) > h;
+    for (int c = 0; c < 14; ++c) {
+      const std::size_t len = c == 13 ? 1 : c % 3 == 2 ? 37 : detail::kPlaneRestLanes;
+      std::vector<float> x(3 * len, 0.5f), v(3 * len, -0.25f), mass(len, 2.5e-3f), radius(len, 0.02f),
+          age(len);
+      for (float& a : age) a = float(rng.uniform(h, 3.0)) + float(h);
+      const std::size_t at = c % 2 == 0 ? len - 1 : 0;
+      switch (c) {
+        case 1: mass[at] = up(mass[at]); break;
+        case 2: radius[at] = down(radius[at]); break;
+        case 3: age[at] = float(h); break;               // shared where float(h) >= h
+        case 4: age[at] = down(float(h)); break;
+        case 5: age[at] = up(float(h)); break;
+        case 6: age[at] = std::numeric_limits<float>::quiet_NaN(); break;
+        case 7: age[at] = 0.0f; break;                   // a newborn
+        case 8: mass[at] = down(mass[at]); break;
+        case 9: std::fill(age.begin(), age.end(), down(float(h))); break;  // one step, all below h
+        case 10: std::fill(age.begin(), age.end(), float(h)); break;
+        case 11: radius[at] = up(radius[at]); break;
+        case 13: age[0] = float(h); break;
+        default: break;
+      }
+      // Stale values in the lanes from an earlier block must not matter.
+      for (std::size_t k = 0; k < detail::kPlaneRestLanes; ++k) l->m[k] = l->r[k] = l->dt[k] = -1.0;
+      detail::gather_block(x.data(), v.data(), nullptr, mass.data(), radius.data(), age.data(), h, len, *l);
+      bool all_same = true;
+      for (std::size_t k = 0; k < len; ++k) {
+        const double m = mass[k], r = radius[k], a = age[k], dt = std::min(a, h);
+        all_same = all_same && bits(m) == bits(double(mass[0])) && bits(r) == bits(double(radius[0])) &&
+                   bits(dt) == bits(std::min(double(age[0]), h));
+        if (!l->shared) {
+          ASSERT_EQ(bits(l->m[k]), bits(m)) << "h " << h << ", case " << c << ", lane " << k;
+          ASSERT_EQ(bits(l->r[k]), bits(r)) << "h " << h << ", case " << c << ", lane " << k;
+          ASSERT_EQ(bits(l->dt[k]), bits(dt)) << "h " << h << ", case " << c << ", lane " << k;
+        }
+      }
+      // Every lane's step h: the only shared step the floats can show (a block of equal ages
+      // below h may go either way; here it must not be called shared, its step is not h).
+      const bool expect = all_same && bits(std::min(double(age[0]), h)) == bits(h);
+      ASSERT_EQ(l->shared, expect) << "h " << h << ", case " << c << ", len " << len;
+      if (l->shared) {
+        EXPECT_EQ(bits(l->m[0]), bits(double(mass[0])));
+        EXPECT_EQ(bits(l->r[0]), bits(double(radius[0])));
+        EXPECT_EQ(bits(l->dt[0]), bits(h));
+        ++shared_count;
+      }
+      ++cases;
+      // The lanes are always read in full where not shared.
+      EXPECT_EQ(l->bx[len - 1], 0.5f);
+    }
+  }
+  EXPECT_TRUE(below);  // both roundings of h were tried
+  EXPECT_TRUE(above);
+  EXPECT_GT(shared_count, cases / 4);  // both answers are common
+  EXPECT_LT(shared_count, cases - cases / 4);
 }
 
 }  // namespace

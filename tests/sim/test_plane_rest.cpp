@@ -275,6 +275,72 @@ TEST(SimPlaneRest, SharedMassRadiusAndStepGiveThePerLaneBits) {
   }
 }
 
+TEST(SimPlaneRest, BlocksThatShareMassAndRadiusGiveEachParticleItsOwnBits) {
+  // An emitter's particles share one mass and radius: collide() then gathers only lane 0 of
+  // them (and of the step) for a block, and every later reading of a lane's radius or step
+  // (the near test, the general path for an impact, the step out of the plane) must take lane
+  // 0's. The lanes are kept between blocks, so a reading of lane k would find an earlier
+  // block's values: a block of newborns of other radii and steps goes first to leave them
+  // there. Each particle collided in a block must get the bits it gets collided alone.
+  const double h = 1.0 / 240;
+  const Vec3 q(0.3, -0.2, 0.1);
+  detail::Collider ground;
+  ground.point = q;
+  ground.material = Material(0.5, 0.3);
+  detail::ForceParams f{};
+  f.gravity[2] = -9.81f;
+  f.drag = 2e-4f;
+  detail::CollisionContext ctx;
+  ctx.threads = 1;  // one thread: the lanes the newborns leave are the ones read next
+  detail::ParticleStore newborns = make_store(detail::kPlaneRestLanes, detail::kPlaneRestLanes, q,
+                                              Vec3::UnitZ(), false, h, true);
+  Rng rng(23);
+  for (std::size_t i = 0; i < newborns.count; ++i) newborns.age[i] = float(h * rng.uniform(0.1, 0.9));
+  detail::collide(newborns, 0, newborns.count, h, {ground}, ctx, f);
+  const std::size_t n = 3000;
+  detail::ParticleStore blocked;
+  blocked.reserve(n);
+  blocked.append(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float r = 0.02f;
+    const bool impact = rng.uniform() < 0.3;  // bounces: the general path, with the lane's step
+    const double vn = impact ? -rng.uniform(0.5, 5.0) : -rng.uniform(0.0, 0.06);
+    const double slide = rng.uniform(0.0, 3.0), phi = rng.uniform(0.0, 6.283185307179586);
+    const Vec3 p(q.x() + rng.uniform(-10, 10), q.y() + rng.uniform(-10, 10), q.z() + r + rng.uniform(-4e-4, 2e-5));
+    const Vec3 v(slide * std::cos(phi), slide * std::sin(phi), vn);
+    for (int a = 0; a < 3; ++a) {
+      blocked.position[3 * i + std::size_t(a)] = float(p[a]);
+      blocked.velocity[3 * i + std::size_t(a)] = float(v[a]);
+    }
+    blocked.radius[i] = r;
+    blocked.mass[i] = 3e-3f;
+    blocked.age[i] = 10.0f;
+    blocked.lifetime[i] = 100.0f;
+  }
+  detail::ParticleStore alone = blocked;
+  detail::collide(blocked, 0, n, h, {ground}, ctx, f);
+  for (std::size_t i = 0; i < n; ++i) detail::collide(alone, i, i + 1, h, {ground}, ctx, f);
+  std::size_t differ = 0, bounced = 0, rest = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    differ += std::memcmp(&blocked.position[3 * i], &alone.position[3 * i], 3 * sizeof(float)) != 0 ||
+              std::memcmp(&blocked.velocity[3 * i], &alone.velocity[3 * i], 3 * sizeof(float)) != 0;
+    bounced += alone.velocity[3 * i + 2] > 0.1f;
+    rest += alone.velocity[3 * i + 2] == 0.0f;
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(bounced, n / 5);  // the impacts bounced (the general path ran) ...
+  EXPECT_GT(rest, n / 2);     // ... and the rest came to rest on the plane (the lanes ran)
+  // Then sparse blocks of particles each with its own mass and radius (the compacted list, which
+  // fills every lane it uses): the shared block before them must not make them read lane 0.
+  detail::ParticleStore sparse = make_store(n, 0, q, Vec3::UnitZ(), false, h);
+  detail::ParticleStore sparse_alone = sparse;
+  detail::collide(blocked, 0, n, h, {ground}, ctx, f);  // a shared block last
+  detail::collide(sparse, 0, n, h, {ground}, ctx, f);
+  for (std::size_t i = 0; i < n; ++i) detail::collide(sparse_alone, i, i + 1, h, {ground}, ctx, f);
+  EXPECT_EQ(std::memcmp(sparse.position.data(), sparse_alone.position.data(), 3 * n * sizeof(float)), 0);
+  EXPECT_EQ(std::memcmp(sparse.velocity.data(), sparse_alone.velocity.data(), 3 * n * sizeof(float)), 0);
+}
+
 TEST(SimPlaneRest, LargeSystemIsTheSameAtAnyThreadCount) {
   const double h = 1.0 / 240;
   detail::Collider ground;

@@ -475,6 +475,31 @@ void gather_scalars(const float* __restrict mass, const float* __restrict radius
   }
 }
 
+/// True when particles [0, len) (len >= 1) share mass[0] and radius[0] bit for bit and are all at
+/// least `step_floor` old (so each one's step min(age, h) is h): then their lanes' m, r and dt
+/// are lane 0's, bit for bit (a float's bits give its double's). Read from the stored floats in
+/// one pass, which costs less than filling every lane's doubles and comparing those.
+SIMREEL_VECTOR_CLONES
+bool shared_scalars(const float* __restrict mass, const float* __restrict radius,
+                    const float* __restrict age, float step_floor, std::size_t len) {
+  const std::uint32_t m0 = __builtin_bit_cast(std::uint32_t, mass[0]);
+  const std::uint32_t r0 = __builtin_bit_cast(std::uint32_t, radius[0]);
+  std::uint32_t diff = 0;
+  for (std::size_t k = 0; k < len; ++k)
+    diff |= (__builtin_bit_cast(std::uint32_t, mass[k]) ^ m0) |
+            (__builtin_bit_cast(std::uint32_t, radius[k]) ^ r0) |
+            std::uint32_t(!(age[k] >= step_floor));  // NaN: not shared
+  return diff == 0;
+}
+
+/// The least float a with double(a) >= h (+inf where no finite float reaches h): for a float age,
+/// age >= step_floor(h) exactly when double(age) >= h.
+float step_floor(double h) {
+  float t = float(h);
+  if (double(t) < h) t = std::nextafter(t, std::numeric_limits<float>::infinity());
+  return t;
+}
+
 /// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
 /// positions or null; mass, radius, age: len), each lane's step min(age, h). The rows go
 /// through rows_to_columns(), whose AVX2 form does not take them apart value by value.
@@ -484,7 +509,14 @@ void gather_block(const float* __restrict x, const float* __restrict v,
                   std::size_t len, PlaneRestLanes& l) {
   rows_to_columns(x, len, l.bx, l.by, l.bz);
   rows_to_columns(v, len, l.vx, l.vy, l.vz);
-  gather_scalars(mass, radius, age, h, len, l);
+  l.shared = len > 0 && shared_scalars(mass, radius, age, step_floor(h), len);
+  if (l.shared) {
+    l.m[0] = mass[0];
+    l.r[0] = radius[0];
+    l.dt[0] = h;
+  } else {
+    gather_scalars(mass, radius, age, h, len, l);
+  }
   if (prev != nullptr) rows_to_columns(prev, len, l.ax, l.ay, l.az);
 }
 
@@ -509,9 +541,10 @@ SIMREEL_VECTOR_CLONES
 void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams& p,
                 std::uint8_t* __restrict near) {
   const double n0 = p.n[0], n1 = p.n[1], n2 = p.n[2], q0 = p.q[0], q1 = p.q[1], q2 = p.q[2];
+  const bool shared = l.shared;
   for (std::size_t k = 0; k < len; ++k)
     near[k] = std::uint8_t(n0 * (l.bx[k] - q0) + n1 * (l.by[k] - q1) + n2 * (l.bz[k] - q2) -
-                               l.r[k] < 0.0);
+                               l.r[shared ? 0 : k] < 0.0);
 }
 
 }  // namespace simreel::sim::detail

@@ -76,7 +76,9 @@ void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          int lanes = 8);
 
 /// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
-/// positions or null; mass, radius, age: len), each lane's step min(age, h).
+/// positions or null; mass, radius, age: len), each lane's step min(age, h). Where the block's
+/// particles share one mass and radius and are all at least h old, only lane 0 of m, r and dt
+/// is filled and l.shared is set (PlaneRestLanes::shared).
 void gather_block(const float* __restrict x, const float* __restrict v,
                   const float* __restrict prev, const float* __restrict mass,
                   const float* __restrict radius, const float* __restrict age, double h,
@@ -93,7 +95,7 @@ void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x
                    float* __restrict v);
 
 /// near[k] = 1 when lane k of `l` ends the step closer than its radius to the plane (the test of
-/// near_planes(), on the same values).
+/// near_planes(), on the same values; the radius lane 0's where l.shared).
 void near_lanes(const PlaneRestLanes& l, std::size_t len, const PlaneRestParams& p,
                 std::uint8_t* __restrict near);
 

@@ -360,15 +360,17 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
     }
     scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
     for (std::size_t k = 0; k < len; ++k) {
+      const std::size_t u = l.shared ? 0 : k;  // the lane of the step and radius
       if (l.ok[k] == 0.0) {
-        if (near[k]) resolve(s, i0 + k, l.dt[k], colliders, ctx, f);
+        if (near[k]) resolve(s, i0 + k, l.dt[u], colliders, ctx, f);
       } else if (!(l.gap[k] >= 0.0)) {
-        keep_stored_out(c0, &s.position[3 * (i0 + k)], l.r[k]);
+        keep_stored_out(c0, &s.position[3 * (i0 + k)], l.r[u]);
       }
     }
     return;
   }
   std::uint32_t idx[kPlaneRestLanes];
+  l.shared = false;  // every lane's own m, r and dt below
   m = 0;
   for (std::size_t k = 0; k < len; ++k) {
     if (!near[k]) continue;

@@ -220,7 +220,7 @@ SIMREEL_VECTOR_CLONES bool uniform_scalars(const PlaneRestLanes& l, std::size_t 
 
 template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp>
 void pick_uniform(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
-  if (uniform_scalars(l, count))
+  if (l.shared || uniform_scalars(l, count))
     lanes<kStored, kQuadratic, kTwoMu, kUp, true>(l, count, p);
   else
     lanes<kStored, kQuadratic, kTwoMu, kUp, false>(l, count, p);

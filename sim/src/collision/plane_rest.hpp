@@ -38,6 +38,10 @@ struct PlaneRestLanes {
   /// when it is not >= 0, rounding put the centre a hair inside, and the caller steps it out as
   /// the general path does.
   double gap[kPlaneRestLanes];
+  /// Input: true when every lane's m, r and dt are lane 0's, bit for bit, and only lane 0 of them
+  /// need be filled (gather_block() sets it when it finds the block's stored floats so); false:
+  /// each lane holds its own, and plane_rest() checks whether they are shared.
+  bool shared = false;
 };
 
 /// The plane, its material and the system's forces, as plane_rest() needs them.
@@ -52,7 +56,8 @@ struct PlaneRestParams {
   bool start_stored;      ///< the ax/ay/az lanes hold the start of the step (else recovered)
 };
 
-/// Resolves lanes [0, count) of `l` (count <= kPlaneRestLanes) against the plane `p`.
+/// Resolves lanes [0, count) of `l` (count <= kPlaneRestLanes) against the plane `p`. Where
+/// `l.shared`, reads m, r and dt from lane 0 alone.
 void plane_rest(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p);
 
 }  // namespace simreel::sim::detail
