@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
+#include "particles/particle_store.hpp"
 #include "sim_test_util.hpp"
+#include "simreel/sim/random.hpp"
 #include "simreel/sim/world.hpp"
 
 namespace simreel::sim {
@@ -54,6 +57,52 @@ TEST(SimIntegration, SemiImplicitEulerFreeFallIsExact) {
     const State e = exact(T, x0, v0, kG, 0.0, 1.0);
     EXPECT_LT((s.x - e.x).norm(), 1e-4) << h;  // float storage at 10 m (ulp 1e-6), not the method
     EXPECT_LT((s.v - e.v).norm(), 2e-5) << h;
+  }
+}
+
+TEST(SimIntegration, ChunksThatShareOneMassGiveEachParticleItsOwnBits) {
+  // Semi-implicit Euler with linear drag divides d = m / (m + h k_d) once for a chunk whose
+  // particles share one mass (an emitter's), and per particle otherwise: every particle must get
+  // the same bits either way. The same particles integrated with the last of every chunk of 128
+  // given another mass (each chunk then mixed), at several masses, with drag strong enough
+  // (h k_d / m from 0.01 to 0.4) that a one-ulp change in d shows.
+  const double h = 1.0 / 240;
+  detail::ForceParams f{};
+  f.gravity[2] = -9.81f;
+  f.drag = 0.05f;
+  const std::size_t n = 1000;
+  for (const float mass : {2e-3f, 1.3e-3f, 7.7e-4f, 5.1e-4f, 3.3e-3f, 1.9e-2f}) {
+    detail::ParticleStore shared;
+    shared.reserve(n);
+    shared.append(n);
+    Rng rng(11);
+    for (std::size_t i = 0; i < 3 * n; ++i) {
+      shared.position[i] = float(rng.uniform(-3, 3));
+      shared.velocity[i] = float(rng.uniform(-8, 8));
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      shared.mass[i] = mass;
+      shared.age[i] = 0.0f;
+    }
+    const detail::ParticleStore start = shared;
+    detail::ParticleStore mixed = shared;
+    for (std::size_t i = 127; i < n; i += 128) mixed.mass[i] = 2.0f * mass;
+    for (int step = 0; step < 5; ++step) {
+      ASSERT_FALSE(detail::integrate(shared, 0, n, h, f, Integrator::semi_implicit_euler, 1));
+      ASSERT_FALSE(detail::integrate(mixed, 0, n, h, f, Integrator::semi_implicit_euler, 1));
+    }
+    std::size_t differ = 0, compared = 0, slowed = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      // The drag acted: the horizontal speed fell by (1 + h k_d / m)^-5.
+      slowed += std::abs(shared.velocity[3 * i]) < 0.96f * std::abs(start.velocity[3 * i]);
+      if (i % 128 == 127) continue;
+      differ += std::memcmp(&shared.position[3 * i], &mixed.position[3 * i], 3 * sizeof(float)) != 0 ||
+                std::memcmp(&shared.velocity[3 * i], &mixed.velocity[3 * i], 3 * sizeof(float)) != 0;
+      ++compared;
+    }
+    EXPECT_EQ(differ, 0u) << "mass " << mass;
+    EXPECT_GT(compared, n - n / 50);
+    EXPECT_GT(slowed, n - n / 50) << "mass " << mass;
   }
 }
 

@@ -17,4 +17,13 @@ inline bool same_bits(const double* p, std::size_t len) {
   return diff == 0;
 }
 
+/// same_bits() for floats (the stored per-particle values).
+inline bool same_bits(const float* p, std::size_t len) {
+  if (len == 0) return true;
+  const std::uint32_t first = __builtin_bit_cast(std::uint32_t, p[0]);
+  std::uint32_t diff = 0;
+  for (std::size_t i = 1; i < len; ++i) diff |= __builtin_bit_cast(std::uint32_t, p[i]) ^ first;
+  return diff == 0;
+}
+
 }  // namespace simreel::sim::detail

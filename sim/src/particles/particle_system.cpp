@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/same_bits.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"
 #include "particles/particle_store.hpp"
@@ -231,9 +232,15 @@ SIMREEL_VECTOR_CLONES unsigned semi_implicit_euler(ParticleStore& s, std::size_t
     float* __restrict vb = v + 3 * i0;
     alignas(16) float damp3[3 * kChunk];  // d = m / (m + h k_d), per float
     if constexpr (kDrag) {
-      alignas(16) float damp[kChunk];
-      for (std::size_t k = 0; k < n; ++k) damp[k] = m[i0 + k] / (m[i0 + k] + hk);
-      spread3(damp, n, damp3);
+      if (same_bits(m + i0, n)) {
+        // One mass for the chunk (an emitter's particles): one division gives every particle
+        // the bits of its own.
+        std::fill(damp3, damp3 + 3 * n, m[i0] / (m[i0] + hk));
+      } else {
+        alignas(16) float damp[kChunk];
+        for (std::size_t k = 0; k < n; ++k) damp[k] = m[i0 + k] / (m[i0 + k] + hk);
+        spread3(damp, n, damp3);
+      }
     }
     for (std::size_t j = 0; j < 3 * n; ++j) {
       const float v0 = vb[j];
