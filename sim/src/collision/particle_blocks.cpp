@@ -531,7 +531,7 @@ void scatter_block(const PlaneRestLanes& l, std::size_t len, float* __restrict x
 SIMREEL_VECTOR_CLONES
 bool all_resolved_outside(const PlaneRestLanes& l, std::size_t len) {
   unsigned open = 0;
-  for (std::size_t k = 0; k < len; ++k) open |= unsigned(l.ok[k] == 0.0) | unsigned(!(l.gap[k] >= 0.0));
+  for (std::size_t k = 0; k < len; ++k) open |= unsigned(l.ok[k] != 1.0f);
   return open == 0;
 }
 

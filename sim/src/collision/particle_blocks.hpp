@@ -84,9 +84,8 @@ void gather_block(const float* __restrict x, const float* __restrict v,
                   const float* __restrict radius, const float* __restrict age, double h,
                   std::size_t len, PlaneRestLanes& l);
 
-/// True when every lane of l's first len was resolved by plane_rest() (ok) and stored outside
-/// the plane (gap >= 0; false for NaN): a settled block, whose per-lane follow-up in
-/// plane_block() would do nothing.
+/// True when every lane of l's first len was resolved by plane_rest() and stored outside the
+/// plane (ok == 1): a settled block, whose per-lane follow-up in plane_block() would do nothing.
 bool all_resolved_outside(const PlaneRestLanes& l, std::size_t len);
 
 /// The lanes' outputs back into the block (x, v: len x 3): the results of the lanes that

@@ -361,9 +361,9 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
     scatter_block(l, len, s.position.data() + 3 * i0, s.velocity.data() + 3 * i0);
     for (std::size_t k = 0; k < len; ++k) {
       const std::size_t u = l.shared ? 0 : k;  // the lane of the step and radius
-      if (l.ok[k] == 0.0) {
+      if (l.ok[k] == 0.0f) {
         if (near[k]) resolve(s, i0 + k, l.dt[u], colliders, ctx, f);
-      } else if (!(l.gap[k] >= 0.0)) {
+      } else if (l.ok[k] != 1.0f) {
         keep_stored_out(c0, &s.position[3 * (i0 + k)], l.r[u]);
       }
     }
@@ -395,7 +395,7 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
   plane_rest(l, m, pp);
   for (std::size_t k = 0; k < m; ++k) {
     const std::size_t i = idx[k];
-    if (l.ok[k] == 0.0) {
+    if (l.ok[k] == 0.0f) {
       resolve(s, i, l.dt[k], colliders, ctx, f);
       continue;
     }
@@ -407,7 +407,7 @@ void plane_block(ParticleStore& s, std::size_t i0, std::size_t len, double h,
     vf[0] = l.ovx[k];
     vf[1] = l.ovy[k];
     vf[2] = l.ovz[k];
-    if (!(l.gap[k] >= 0.0)) keep_stored_out(c0, pf, l.r[k]);
+    if (l.ok[k] != 1.0f) keep_stored_out(c0, pf, l.r[k]);
   }
 }
 

@@ -207,8 +207,7 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     l.ovx[k] = yes ? v1x : vx;
     l.ovy[k] = yes ? v1y : vy;
     l.ovz[k] = yes ? v1z : vz;
-    l.gap[k] = gap;
-    l.ok[k] = ok;
+    l.ok[k] = gap >= 0.0 ? ok : 2.0f * ok;
   }
 }
 

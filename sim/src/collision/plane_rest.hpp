@@ -30,14 +30,14 @@ struct PlaneRestLanes {
   // input, exactly, where ok is 0)
   float ox[kPlaneRestLanes], oy[kPlaneRestLanes], oz[kPlaneRestLanes];
   float ovx[kPlaneRestLanes], ovy[kPlaneRestLanes], ovz[kPlaneRestLanes];
-  /// 1.0: the lane's particle touched the plane this step in a resting contact (§3.6.3) and the
-  /// outputs hold its result; 0.0: anything else (no contact, an impact that bounces, a second
-  /// contact within the step, a non-finite value): the caller runs the general path instead.
-  double ok[kPlaneRestLanes];
-  /// (m) the gap between the plane and the sphere at the output position as stored (floats):
-  /// when it is not >= 0, rounding put the centre a hair inside, and the caller steps it out as
-  /// the general path does.
-  double gap[kPlaneRestLanes];
+  /// The lane's verdict. 0: anything but a resting contact (no contact, an impact that bounces, a
+  /// second contact within the step, a non-finite value): the caller runs the general path
+  /// instead. 1: the particle touched the plane this step in a resting contact (§3.6.3), the
+  /// outputs hold its result, and the sphere at the output position as stored (floats) clears
+  /// the plane. 2: the same, but rounding put the stored centre a hair inside (its gap, in
+  /// double, not >= 0): the caller steps it out as the general path does. (One float for both
+  /// answers, so that a settled block is checked on one array.)
+  float ok[kPlaneRestLanes];
   /// Input: true when every lane's m, r and dt are lane 0's, bit for bit, and only lane 0 of them
   /// need be filled (gather_block() sets it when it finds the block's stored floats so); false:
   /// each lane holds its own, and plane_rest() checks whether they are shared.
