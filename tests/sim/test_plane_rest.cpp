@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "collision/collider_impl.hpp"
+#include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "simreel/sim/random.hpp"
 
@@ -273,6 +274,65 @@ TEST(SimPlaneRest, SharedMassRadiusAndStepGiveThePerLaneBits) {
         << "form " << form;
     EXPECT_TRUE(same(alone->ok, beside->ok)) << "form " << form;
   }
+}
+
+TEST(SimPlaneRest, GroundThroughTheOriginFormGivesTheUprightFormsBits) {
+  // An upright plane through z = +0 (every scene's ground left where it is) takes a loop that
+  // drops the arithmetic around the plane's point; it must give the general upright loop's bits,
+  // lane for lane, in every upright form (the start stored or recovered, linear or quadratic
+  // drag, one or two friction coefficients), with per-lane and shared scalars, on edge values
+  // (signed zeros, a zero radius at z = 0, infinities, NaNs, the largest floats) as well as
+  // resting, sliding, bouncing and leaving particles. Planes at -0, above and below the origin
+  // must not take it (they would differ).
+  const double h = 1.0 / 240;
+  std::size_t resolved = 0, compared = 0;
+  for (const double q2 : {0.0, -0.0, 1e-3, -2.5}) {
+    for (int form = 0; form < 16; ++form) {
+      const bool stored = form & 1, quadratic = form & 2, two_mu = form & 4, shared = form & 8;
+      const Vec3 q(0.0, 0.0, q2);
+      detail::ParticleStore st = make_store(detail::kPlaneRestLanes, detail::kPlaneRestLanes / 2, q,
+                                            Vec3::UnitZ(), stored, h);
+      if (shared) {
+        for (std::size_t i = 0; i < st.count; ++i) {
+          st.mass[i] = 2e-3f;
+          st.radius[i] = 0.01f;
+          st.age[i] = 10.0f;
+        }
+      }
+      give_edge_values(st);
+      for (std::size_t i = 3; i < st.count; i += 29) {  // at z = -0, resting with -0 speeds
+        st.position[3 * i + 2] = -0.0f;
+        st.velocity[3 * i + 2] = i % 2 == 0 ? -0.0f : -0.02f;
+        if (!shared) st.radius[i] = 0.0f;
+      }
+      if (shared) std::fill(st.radius.begin(), st.radius.end(), 0.01f);  // (edge values set some to 0)
+      detail::PlaneRestParams p{};
+      p.n[2] = 1.0;
+      p.q[2] = q2;
+      p.g[2] = -9.81;
+      p.drag = 2e-4;
+      p.drag_quadratic = quadratic ? 3e-5 : 0.0;
+      p.mu = 0.3;
+      p.mu_static = two_mu ? 0.6 : 0.3;
+      p.contact_speed = 0.05;
+      p.start_stored = stored;
+      auto a = std::make_unique<detail::PlaneRestLanes>();
+      const std::size_t n = st.count;
+      detail::gather_block(st.position.data(), st.velocity.data(), stored ? st.prev_position.data() : nullptr,
+                           st.mass.data(), st.radius.data(), st.age.data(), h, n, *a);
+      ASSERT_EQ(a->shared, shared);
+      auto b = std::make_unique<detail::PlaneRestLanes>(*a);
+      detail::plane_rest(*a, n, p);
+      detail::plane_rest(*b, n, p, false);
+      const auto same = [&](const auto& x, const auto& y) { return std::memcmp(x, y, n * sizeof(x[0])) == 0; };
+      EXPECT_TRUE(same(a->ox, b->ox) && same(a->oy, b->oy) && same(a->oz, b->oz)) << "q2 " << q2 << ", form " << form;
+      EXPECT_TRUE(same(a->ovx, b->ovx) && same(a->ovy, b->ovy) && same(a->ovz, b->ovz)) << "q2 " << q2 << ", form " << form;
+      EXPECT_TRUE(same(a->ok, b->ok)) << "q2 " << q2 << ", form " << form;
+      for (std::size_t k = 0; k < n; ++k) resolved += a->ok[k] != 0.0f;
+      compared += n;
+    }
+  }
+  EXPECT_GT(resolved, compared / 6);  // the lanes resolved many particles (not all sent away)
 }
 
 TEST(SimPlaneRest, BlocksThatShareMassAndRadiusGiveEachParticleItsOwnBits) {

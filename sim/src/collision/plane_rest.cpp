@@ -33,12 +33,16 @@ inline float dot3(float x0, float x1, float x2, float y0, float y1, float y2) {
 /// origin; the result is put back (q + the relative position) in double before its rounding to
 /// the stored float. A lane whose outputs are not all finite (an overflow of the float
 /// arithmetic, or a non-finite input) goes to the general path, which works in double.
+/// kOrigin (with kUp only): the plane passes through z = +0 (q = 0 along the normal: every
+/// ground left where a scene puts it), so z relative to the plane is the stored float itself
+/// and the double round trips around q drop out: x - (+0) is x exactly (-0 included), and
+/// float(double(e) + 0) is e + 0 in float (-0 becomes +0 both ways); the same bits.
 /// kUniform: every lane has lane 0's mass, radius and step (the usual case: an emitter's
 /// particles share them and are older than a step), so the loop reads them as scalars and the
 /// compiler takes what depends on them alone (the drag over the mass, the start-of-step factors:
 /// two divisions a lane) out of the loop; the same operations on the same values, so the same
 /// bits.
-template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp, bool kUniform>
+template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp, bool kUniform, bool kOrigin>
 SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
   using F = float;
   const F n0 = kUp ? 0.0f : F(p.n[0]), n1 = kUp ? 0.0f : F(p.n[1]), n2 = kUp ? 1.0f : F(p.n[2]);
@@ -60,7 +64,7 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
   for (std::size_t k = 0; k < count; ++k) {
     // b, a: end and start of the step relative to q (kUp: z only), in double until the sweep's
     // fraction (below), then in float
-    const double bzd = double(l.bz[k]) - q2;
+    const double bzd = kOrigin ? double(l.bz[k]) : double(l.bz[k]) - q2;
     double bxd, byd;
     F bx, by;
     if constexpr (kUp) {
@@ -73,7 +77,7 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
       bx = F(bxd);
       by = F(byd);
     }
-    const F bz = F(bzd);
+    const F bz = kOrigin ? l.bz[k] : F(bzd);
     const F vx = l.vx[k], vy = l.vy[k], vz = l.vz[k];
     const std::size_t u = kUniform ? 0 : k;  // the lane of the mass, radius and step
     const F m = F(l.m[u]), r = F(l.r[u]), dt = F(l.dt[u]);
@@ -89,7 +93,7 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
     if constexpr (kStored) {
       axd = l.ax[k] - q0;
       ayd = l.ay[k] - q1;
-      azd = l.az[k] - q2;
+      azd = kOrigin ? double(l.az[k]) : l.az[k] - q2;
       ax = F(axd);
       ay = F(ayd);
     } else {
@@ -193,10 +197,11 @@ SIMREEL_VECTOR_CLONES void lanes(PlaneRestLanes& l, std::size_t count, const Pla
       fx = float(double(ex) + q0);
       fy = float(double(ey) + q1);
     }
-    const float fz = float(double(ez) + q2);
+    const float fz = kOrigin ? ez + 0.0f : float(double(ez) + q2);
     // The stored floats must be outside the plane too (resolve()'s last step), in double.
     const double gap =
-        kUp ? (double(fz) - q2) - rd
+        kOrigin ? double(fz) - rd
+        : kUp   ? (double(fz) - q2) - rd
             : ((dn0 * (double(fx) - q0) + dn1 * (double(fy) - q1)) + dn2 * (double(fz) - q2)) -
                   rd;
     // Lanes not resolved here give back their input (exactly: the inputs are floats).
@@ -217,45 +222,49 @@ SIMREEL_VECTOR_CLONES bool uniform_scalars(const PlaneRestLanes& l, std::size_t 
   return same_bits(l.m, count) && same_bits(l.r, count) && same_bits(l.dt, count);
 }
 
-template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp>
+template <bool kStored, bool kQuadratic, bool kTwoMu, bool kUp, bool kOrigin>
 void pick_uniform(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
   if (l.shared || uniform_scalars(l, count))
-    lanes<kStored, kQuadratic, kTwoMu, kUp, true>(l, count, p);
+    lanes<kStored, kQuadratic, kTwoMu, kUp, true, kOrigin>(l, count, p);
   else
-    lanes<kStored, kQuadratic, kTwoMu, kUp, false>(l, count, p);
+    lanes<kStored, kQuadratic, kTwoMu, kUp, false, kOrigin>(l, count, p);
 }
 
 template <bool kStored, bool kQuadratic, bool kTwoMu>
-void pick_up(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
-  if (p.n[0] == 0.0 && p.n[1] == 0.0 && p.n[2] == 1.0)
-    pick_uniform<kStored, kQuadratic, kTwoMu, true>(l, count, p);
-  else
-    pick_uniform<kStored, kQuadratic, kTwoMu, false>(l, count, p);
+void pick_up(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p, bool origin_form) {
+  if (p.n[0] == 0.0 && p.n[1] == 0.0 && p.n[2] == 1.0) {
+    if (origin_form && __builtin_bit_cast(std::uint64_t, p.q[2]) == 0)  // +0 exactly
+      pick_uniform<kStored, kQuadratic, kTwoMu, true, true>(l, count, p);
+    else
+      pick_uniform<kStored, kQuadratic, kTwoMu, true, false>(l, count, p);
+  } else {
+    pick_uniform<kStored, kQuadratic, kTwoMu, false, false>(l, count, p);
+  }
 }
 
 template <bool kStored, bool kQuadratic>
-void pick_mu(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
+void pick_mu(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p, bool origin_form) {
   if (p.mu_static != p.mu)
-    pick_up<kStored, kQuadratic, true>(l, count, p);
+    pick_up<kStored, kQuadratic, true>(l, count, p, origin_form);
   else
-    pick_up<kStored, kQuadratic, false>(l, count, p);
+    pick_up<kStored, kQuadratic, false>(l, count, p, origin_form);
 }
 
 template <bool kStored>
-void pick_drag(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
+void pick_drag(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p, bool origin_form) {
   if (p.drag_quadratic != 0.0)
-    pick_mu<kStored, true>(l, count, p);
+    pick_mu<kStored, true>(l, count, p, origin_form);
   else
-    pick_mu<kStored, false>(l, count, p);
+    pick_mu<kStored, false>(l, count, p, origin_form);
 }
 
 }  // namespace
 
-void plane_rest(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p) {
+void plane_rest(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p, bool origin_form) {
   if (p.start_stored)
-    pick_drag<true>(l, count, p);
+    pick_drag<true>(l, count, p, origin_form);
   else
-    pick_drag<false>(l, count, p);
+    pick_drag<false>(l, count, p, origin_form);
 }
 
 }  // namespace simreel::sim::detail

@@ -57,7 +57,10 @@ struct PlaneRestParams {
 };
 
 /// Resolves lanes [0, count) of `l` (count <= kPlaneRestLanes) against the plane `p`. Where
-/// `l.shared`, reads m, r and dt from lane 0 alone.
-void plane_rest(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p);
+/// `l.shared`, reads m, r and dt from lane 0 alone. `origin_form`: an upright plane through
+/// z = +0 takes the loop that drops the arithmetic around the plane's point (the same bits;
+/// false, for tests, runs the general upright loop instead).
+void plane_rest(PlaneRestLanes& l, std::size_t count, const PlaneRestParams& p,
+                bool origin_form = true);
 
 }  // namespace simreel::sim::detail
