@@ -209,6 +209,26 @@ TEST(SimPlaneRest, UprightPlaneFormMatchesGeneralPathOnEdgeValues) {
   }
 }
 
+/// plane_rest()'s parameters for the plane through q with unit normal nrm: gravity -9.81 m/s² along
+/// z, linear drag k_d (kg/s) and, when quadratic, c_2 = 0.15 k_d (kg/m), Coulomb coefficient 0.3
+/// (static 0.6 when two_mu), contact speed 0.05 m/s, the start of the step stored or not.
+detail::PlaneRestParams plane_params(const Vec3& q, const Vec3& nrm, double drag, bool quadratic,
+                                     bool two_mu, bool stored) {
+  detail::PlaneRestParams p{};
+  for (int a = 0; a < 3; ++a) {
+    p.n[a] = nrm[a];
+    p.q[a] = q[a];
+  }
+  p.g[2] = -9.81;
+  p.drag = drag;
+  p.drag_quadratic = quadratic ? 0.15 * drag : 0.0;
+  p.mu = 0.3;
+  p.mu_static = two_mu ? 0.6 : 0.3;
+  p.contact_speed = 0.05;
+  p.start_stored = stored;
+  return p;
+}
+
 /// plane_rest()'s loop for lanes that share one mass, radius and step (kUniform in
 /// plane_rest.cpp, which reads lane 0's) gives each lane the bits of the per-lane loop: the same
 /// lanes are run once alone and once beside an extra lane of another mass, which makes the batch
@@ -218,20 +238,10 @@ TEST(SimPlaneRest, SharedMassRadiusAndStepGiveThePerLaneBits) {
   constexpr std::size_t n = 200;
   for (int form = 0; form < 16; ++form) {
     const bool stored = form & 1, quadratic = form & 2, two_mu = form & 4, tilted = form & 8;
-    detail::PlaneRestParams p{};
     const Vec3 nrm = tilted ? Vec3(0.2, -0.1, 1.0).normalized() : Vec3::UnitZ();
     const Vec3 q(0.3, -0.2, 0.1);
-    for (int a = 0; a < 3; ++a) {
-      p.n[a] = nrm[a];
-      p.q[a] = q[a];
-    }
-    p.g[2] = -9.81;
-    p.drag = 2e-3;  // (strong, so that the mass counts: k / m = 1 / s)
-    p.drag_quadratic = quadratic ? 3e-4 : 0.0;
-    p.mu = 0.3;
-    p.mu_static = two_mu ? 0.6 : 0.3;
-    p.contact_speed = 0.05;
-    p.start_stored = stored;
+    // (a strong drag, so that the mass counts: k / m = 1 / s)
+    const detail::PlaneRestParams p = plane_params(q, nrm, 2e-3, quadratic, two_mu, stored);
     auto alone = std::make_unique<detail::PlaneRestLanes>();
     const double h = 1.0 / 240, r = 0.01, m = 2e-3;
     const Vec3 t1 = nrm.unitOrthogonal(), t2 = nrm.cross(t1);
@@ -306,16 +316,7 @@ TEST(SimPlaneRest, GroundThroughTheOriginFormGivesTheUprightFormsBits) {
         if (!shared) st.radius[i] = 0.0f;
       }
       if (shared) std::fill(st.radius.begin(), st.radius.end(), 0.01f);  // (edge values set some to 0)
-      detail::PlaneRestParams p{};
-      p.n[2] = 1.0;
-      p.q[2] = q2;
-      p.g[2] = -9.81;
-      p.drag = 2e-4;
-      p.drag_quadratic = quadratic ? 3e-5 : 0.0;
-      p.mu = 0.3;
-      p.mu_static = two_mu ? 0.6 : 0.3;
-      p.contact_speed = 0.05;
-      p.start_stored = stored;
+      const detail::PlaneRestParams p = plane_params(q, Vec3::UnitZ(), 2e-4, quadratic, two_mu, stored);
       auto a = std::make_unique<detail::PlaneRestLanes>();
       const std::size_t n = st.count;
       detail::gather_block(st.position.data(), st.velocity.data(), stored ? st.prev_position.data() : nullptr,
