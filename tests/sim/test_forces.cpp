@@ -754,23 +754,13 @@ detail::Dynamics pair_dynamics(const std::vector<double>& mass, const std::vecto
 // Dense grids take each pair once, in one defined order: the particles ordered by (cell, index)
 // over cells of side = cut-off (x-major keys); in a first pass the particles whose cell's x is
 // even, then those whose cell's x is odd, each meets the particles after it in that order within
-// its 27 cells, and the pair's force F = coef (x_i - x_j) is added to i and subtracted from j. A
-// brute-force loop over all particles in that order gives the same bits, at 1, 2, 3 and 4
-// threads, eight, four and one candidate at a time (as the CPU allows), with the neighbour runs
-// read in place (AVX-512 or AVX2 CPUs) or copied first (3,000
-// particles: above the split threshold; cells of both signs, so both parities; plus a clump of
-// 200 in a few cells, whose runs are longer than a block of eight).
-TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
-  const std::size_t n = 3200;
-  Rng rng(5);
-  std::vector<double> x(3 * n), mass(n), charge(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d)
-      x[3 * i + std::size_t(d)] = i < 3000 ? rng.uniform(-2.3, 2.9) : rng.uniform(0.1, 0.6);
-    mass[i] = rng.uniform(0.5, 2.0);
-    charge[i] = rng.uniform(-1.0, 1.0);
-  }
-  const PairForceDef pf{0.7, 1.3, 0.45, 1e-3};
+// its 27 cells, and the pair's force F = coef (x_i - x_j) is added to i and subtracted from j.
+// This is that order as a brute-force loop over all particles: 0.25 + F_i / m_i for each
+// component (charge null: every charge 0).
+std::vector<double> ordered_pair_accelerations(const std::vector<double>& x,
+                                               const std::vector<double>& mass,
+                                               const double* charge, const PairForceDef& pf) {
+  const std::size_t n = mass.size();
   const double inv = 1.0 / pf.cutoff;
   auto cell = [&](std::size_t i, int d) { return std::int64_t(std::floor(x[3 * i + std::size_t(d)] * inv)); };
   std::vector<std::size_t> order(n);
@@ -782,6 +772,7 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
   });
   std::vector<double> f(3 * n, 0.0);
   const double cut2 = pf.cutoff * pf.cutoff, eps2 = pf.softening * pf.softening;
+  const auto q = [&](std::size_t i) { return charge != nullptr ? charge[i] : 0.0; };
   for (std::int64_t pass = 0; pass < 2; ++pass)
     for (std::size_t a = 0; a < n; ++a) {
       const std::size_t i = order[a];
@@ -796,7 +787,7 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
         const double r2 = dx * dx + dy * dy + dz * dz;
         if (!(r2 < cut2)) continue;
         const double s2 = r2 + eps2;
-        const double coef = (pf.coulomb_K * charge[i] * charge[j] - pf.gravitational_G * mass[i] * mass[j]) /
+        const double coef = (pf.coulomb_K * q(i) * q(j) - pf.gravitational_G * mass[i] * mass[j]) /
                             (s2 * std::sqrt(s2));
         const double fx = coef * dx, fy = coef * dy, fz = coef * dz;
         f[3 * i] += fx;
@@ -809,7 +800,26 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
     }
   std::vector<double> want(3 * n, 0.25);  // the pair forces add to what is there
   for (std::size_t k = 0; k < 3 * n; ++k) want[k] += f[k] / mass[k / 3];
-  // Eight (AVX-512VL), four (AVX2) and one candidate at a time, as the CPU allows.
+  return want;
+}
+
+// add_pair_forces() gives ordered_pair_accelerations()' bits at 1, 2, 3 and 4 threads, eight,
+// four and one candidate at a time (as the CPU allows), with the neighbour runs read in place
+// (AVX-512 or AVX2 CPUs) or copied first (3,000 particles: above the split threshold; cells of
+// both signs, so both parities; plus a clump of 200 in a few cells, whose runs are longer than a
+// block of eight).
+TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
+  const std::size_t n = 3200;
+  Rng rng(5);
+  std::vector<double> x(3 * n), mass(n), charge(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d)
+      x[3 * i + std::size_t(d)] = i < 3000 ? rng.uniform(-2.3, 2.9) : rng.uniform(0.1, 0.6);
+    mass[i] = rng.uniform(0.5, 2.0);
+    charge[i] = rng.uniform(-1.0, 1.0);
+  }
+  const PairForceDef pf{0.7, 1.3, 0.45, 1e-3};
+  const std::vector<double> want = ordered_pair_accelerations(x, mass, charge.data(), pf);
   for (const int lanes : {8, 4, 1})
     for (const bool in_place : {true, false})
       for (int threads : {1, 2, 3, 4}) {
@@ -820,6 +830,53 @@ TEST(SimForces, PairForcesEqualOrderedBruteForceBitForBit) {
         dyn.add_pair_forces(x.data(), got.data());
         ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0)
             << threads << " threads, runs in place " << in_place << ", lanes " << lanes;
+      }
+}
+
+// Where every particle has one mass and one charge (bit for bit) the grid writes them instead
+// of gathering them and gives every dense-grid pair one numerator: the same bits as the
+// brute-force order, on a dense grid and a sparse one (two clouds 1 km apart), with and without
+// charges, and where one particle's mass or charge is one ulp off (the first, the last, one in
+// the middle), which must take each particle's own.
+TEST(SimForces, PairForcesOfOneMassAndChargeEqualOrderedBruteForceBitForBit) {
+  const std::size_t n = 2400;  // (above the split threshold at 2 threads)
+  const PairForceDef pf{0.7, 1.3, 0.45, 1e-3};
+  enum class Odd { none, first_mass, last_mass, middle_charge, first_charge, last_charge };
+  for (const double apart : {0.0, 1000.0})
+    for (const bool charged : {true, false})
+      for (const Odd odd : {Odd::none, Odd::first_mass, Odd::last_mass, Odd::middle_charge,
+                            Odd::first_charge, Odd::last_charge}) {
+        if (!charged && odd >= Odd::middle_charge) continue;
+        Rng rng(8);
+        std::vector<double> x(3 * n), mass(n, 1.75), charge(n, -0.6);
+        for (std::size_t i = 0; i < n; ++i) {
+          for (int d = 0; d < 3; ++d) x[3 * i + std::size_t(d)] = rng.uniform(-2.0, 2.5);
+          if (i % 2 == 1) x[3 * i] += apart;
+        }
+        const auto up = [](double& v) { v = std::nextafter(v, 10.0); };
+        if (odd == Odd::first_mass) up(mass[0]);
+        if (odd == Odd::last_mass) up(mass[n - 1]);
+        if (odd == Odd::middle_charge) up(charge[n / 2]);
+        if (odd == Odd::first_charge) up(charge[0]);
+        if (odd == Odd::last_charge) up(charge[n - 1]);
+        const std::vector<double> want =
+            ordered_pair_accelerations(x, mass, charged ? charge.data() : nullptr, pf);
+        for (int threads : {1, 2}) {
+          detail::Dynamics dyn = pair_dynamics(mass, charge, pf, threads);
+          if (!charged) dyn.charge = nullptr;
+          std::vector<double> got(3 * n, 0.25);
+          dyn.add_pair_forces(x.data(), got.data());
+          if (apart == 0.0) {
+            ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0)
+                << "charged " << charged << ", odd " << int(odd) << ", threads " << threads;
+          } else {
+            // The sparse grid gathers each particle's own sum (a different order): against the
+            // brute force within rounding, and each particle's own mass must divide it.
+            for (std::size_t k = 0; k < 3 * n; ++k)
+              ASSERT_NEAR(got[k], want[k], 1e-9 * (1.0 + std::abs(want[k])))
+                  << "charged " << charged << ", odd " << int(odd) << ", component " << k;
+          }
+        }
       }
 }
 

@@ -268,6 +268,13 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
     alignas(64) double x[3 * B], v[3 * B], a[3 * B];
     float* px = s.position.data() + 3 * (begin + b);
     float* pv = s.velocity.data() + 3 * (begin + b);
+    // The pair accelerations lie in cell order, so a block's rows are reads at random: the next
+    // block's are asked for now, to arrive while this block is integrated.
+    for (std::size_t i = b + B; i < std::min(n, b + 2 * B); ++i) {
+      const double* o = dyn.pair_acceleration(i);
+      __builtin_prefetch(o);
+      __builtin_prefetch(o + 2);
+    }
     widen_lanes(3 * len, px, pv, x, v);
     dyn.eval_block(t0, len, x, v, mass + b, a, false);
     for (std::size_t i = 0; i < len; ++i) {

@@ -10,6 +10,7 @@
 
 #include "core/compress_avx2.hpp"  // compress_width()
 #include "core/key_runs.hpp"
+#include "core/same_bits.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/forces.hpp"
 #include "particles/pair_lists.hpp"
@@ -79,6 +80,23 @@ void pair_coefficients_once(double eps2, const double* __restrict r2, const doub
     const double s2 = r2[u] + eps2;
     coef[u] = num[u] / (s2 * std::sqrt(s2));
   }
+}
+
+/// pair_coefficients_once() for pairs that all share one numerator (every particle of one mass
+/// and one charge): coef[u] = num / s³, the same operation on the same operands, so the same bits.
+SIMREEL_VECTOR_CLONES
+void pair_coefficients_shared(double eps2, const double* __restrict r2, double num, std::size_t len,
+                              double* __restrict coef) {
+  for (std::size_t u = 0; u < len; ++u) {
+    const double s2 = r2[u] + eps2;
+    coef[u] = num / (s2 * std::sqrt(s2));
+  }
+}
+
+/// True when p[0..len) is one value repeated, bit for bit (or p is null: no charges, all 0),
+/// looking at a first stretch before the whole run, so varied values cost a few reads.
+bool one_value(const double* p, std::size_t len) {
+  return p == nullptr || (same_bits(p, std::min<std::size_t>(len, 64)) && same_bits(p, len));
 }
 
 /// The cells of particles [0, len): c[3i + d] = ⌊x[3i + d] inv⌋ (the cell's integer coordinate
@@ -309,16 +327,35 @@ void Dynamics::pair_forces_over_grid(const T* x) {
   // contiguous, and the distance pass over a cell's candidates reads them as vectors. Each
   // sorted place reads its particle (a gather: independent loads, each written once in order;
   // the scatter to the ranks was 9-16 % slower on the whole step, on Intel Xeon).
+  //
+  // Every particle of one mass and one charge (an emitter's, where neither is drawn from a
+  // range): q and m are written, not gathered, so a sorted place reads one particle's line at
+  // random instead of three (the copy was ~15 % of the 100k-particle step, waiting on those
+  // reads), and every pair of the dense path has one numerator K q q - G m m.
+  const bool one_mass_charge = one_value(mass, n) && one_value(charge, n);
+  const double q0 = charge != nullptr && n > 0 ? charge[0] : 0.0, m0 = n > 0 ? mass[0] : 0.0;
   sorted_.resize(5 * n + kCopyBlock, 0.0);  // (+ a block: the dense path's copies overshoot)
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
+  if (one_mass_charge) {
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
-  for (std::size_t s = 0; s < n; ++s) {
-    const std::size_t i = order[s];
-    sx[s] = double(x[3 * i]);
-    sy[s] = double(x[3 * i + 1]);
-    sz[s] = double(x[3 * i + 2]);
-    sq[s] = charge ? charge[i] : 0.0;
-    sm[s] = mass[i];
+    for (std::size_t s = 0; s < n; ++s) {
+      const std::size_t i = order[s];
+      sx[s] = double(x[3 * i]);
+      sy[s] = double(x[3 * i + 1]);
+      sz[s] = double(x[3 * i + 2]);
+      sq[s] = q0;
+      sm[s] = m0;
+    }
+  } else {
+#pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
+    for (std::size_t s = 0; s < n; ++s) {
+      const std::size_t i = order[s];
+      sx[s] = double(x[3 * i]);
+      sy[s] = double(x[3 * i + 1]);
+      sz[s] = double(x[3 * i + 2]);
+      sq[s] = charge ? charge[i] : 0.0;
+      sm[s] = mass[i];
+    }
   }
   const double G = pair.gravitational_G, K = pair.coulomb_K;
   accel_.resize(3 * n);
@@ -452,11 +489,15 @@ void Dynamics::pair_forces_over_grid(const T* x) {
   // The recorded pairs' coefficients in one vectorised pass, then their forces in record order.
   const auto flush = [&](PairGather& g) {
     const std::size_t np = g.pairs;
-    for (std::size_t u = 0; u < np; ++u) {
-      const std::size_t i = g.pi[u], j = g.pj[u];
-      g.pnum[u] = K * sq[i] * sq[j] - G * sm[i] * sm[j];
+    if (one_mass_charge) {
+      pair_coefficients_shared(eps2, g.pr2.data(), K * q0 * q0 - G * m0 * m0, np, g.pcoef.data());
+    } else {
+      for (std::size_t u = 0; u < np; ++u) {
+        const std::size_t i = g.pi[u], j = g.pj[u];
+        g.pnum[u] = K * sq[i] * sq[j] - G * sm[i] * sm[j];
+      }
+      pair_coefficients_once(eps2, g.pr2.data(), g.pnum.data(), np, g.pcoef.data());
     }
-    pair_coefficients_once(eps2, g.pr2.data(), g.pnum.data(), np, g.pcoef.data());
     const std::uint32_t *pi = g.pi.data(), *pj = g.pj.data();
     const double* pc = g.pcoef.data();
     for (std::size_t u = 0; u < np; ++u) {
