@@ -104,11 +104,14 @@ bool one_value(const double* p, std::size_t len) {
 /// |⌊x inv⌋| >= kCellBias or is NaN (the caller then takes the 64-bit form, whose clamping a
 /// key needs; what is written here then goes unused). Element-wise, and min, max and "and" are
 /// exact in any order, so every clone gives the same values (the baseline cannot vectorise
-/// floor: SSE4.1's roundpd is the first to round a vector).
-SIMREEL_VECTOR_CLONES
-bool floor_cells(const double* __restrict x, std::size_t len, double inv,
-                 std::int32_t* __restrict c, std::int32_t* __restrict lo,
-                 std::int32_t* __restrict hi) {
+/// floor: SSE4.1's roundpd is the first to round a vector). T: double, or float (the store's
+/// positions, each taken to double exactly in the loop, where a widening copy first was a third
+/// of this pass).
+template <class T>
+[[gnu::always_inline]] inline bool floor_cells_body(const T* __restrict x, std::size_t len,
+                                                    double inv, std::int32_t* __restrict c,
+                                                    std::int32_t* __restrict lo,
+                                                    std::int32_t* __restrict hi) {
   constexpr double kClamp = double(2 * kCellBias);  // (so the conversion is defined)
   // One flat loop over the 3 len coordinates (no taking rows apart), the bounds kept per place
   // in a period of twelve (four rows: axes x y z x, y z x y, z x y z), folded by axis at the end.
@@ -120,7 +123,7 @@ bool floor_cells(const double* __restrict x, std::size_t len, double inv,
   }
   unsigned ok = 1;
   const auto cell = [&](std::size_t k) {
-    const double f = std::floor(x[k] * inv);
+    const double f = std::floor(double(x[k]) * inv);
     ok &= unsigned(std::abs(f) < double(kCellBias));  // (false for NaN)
     const double g = f < -kClamp ? -kClamp : f > kClamp ? kClamp : f == f ? f : 0.0;
     return std::int32_t(g);
@@ -146,24 +149,18 @@ bool floor_cells(const double* __restrict x, std::size_t len, double inv,
   return ok != 0;
 }
 
-/// floor_cells() of double positions (the grid's two callers' forms, by position type).
-bool floor_cells_of(const double* x, std::size_t len, double inv, std::int32_t* c,
-                    std::int32_t* lo, std::int32_t* hi) {
-  return floor_cells(x, len, inv, c, lo, hi);
+/// floor_cells_body() of double positions and of float ones (the grid's two callers' forms).
+SIMREEL_VECTOR_CLONES
+bool floor_cells(const double* __restrict x, std::size_t len, double inv,
+                 std::int32_t* __restrict c, std::int32_t* __restrict lo,
+                 std::int32_t* __restrict hi) {
+  return floor_cells_body(x, len, inv, c, lo, hi);
 }
-
-/// floor_cells() of float positions, taken to double (exactly) a piece at a time.
-bool floor_cells_of(const float* x, std::size_t len, double inv, std::int32_t* c,
-                    std::int32_t* lo, std::int32_t* hi) {
-  constexpr std::size_t kPiece = 256;
-  double wide[3 * kPiece];
-  bool ok = true;
-  for (std::size_t b = 0; b < len; b += kPiece) {
-    const std::size_t m = std::min(len - b, kPiece);
-    for (std::size_t k = 0; k < 3 * m; ++k) wide[k] = x[3 * b + k];
-    ok = floor_cells(wide, m, inv, c + 3 * b, lo, hi) && ok;
-  }
-  return ok;
+SIMREEL_VECTOR_CLONES
+bool floor_cells(const float* __restrict x, std::size_t len, double inv,
+                 std::int32_t* __restrict c, std::int32_t* __restrict lo,
+                 std::int32_t* __restrict hi) {
+  return floor_cells_body(x, len, inv, c, lo, hi);
 }
 
 /// f[3u + k] /= m[u] for u < len, k < 3: each particle's pair force over its mass, in place.
@@ -241,7 +238,7 @@ void Dynamics::pair_forces_over_grid(const T* x) {
       l[d] = std::numeric_limits<std::int32_t>::max();
       u[d] = std::numeric_limits<std::int32_t>::min();
     }
-    finite = floor_cells_of(x + 3 * b, len, inv, cell32_.data() + 3 * b, l, u) && finite;
+    finite = floor_cells(x + 3 * b, len, inv, cell32_.data() + 3 * b, l, u) && finite;
     for (int d = 0; d < 3; ++d) {
       lo32[d] = std::min(lo32[d], l[d]);
       hi32[d] = std::max(hi32[d], u[d]);
