@@ -333,23 +333,20 @@ void Dynamics::pair_forces_over_grid(const T* x) {
   const double q0 = charge != nullptr && n > 0 ? charge[0] : 0.0, m0 = n > 0 ? mass[0] : 0.0;
   sorted_.resize(5 * n + kCopyBlock, 0.0);  // (+ a block: the dense path's copies overshoot)
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
-  if (one_mass_charge) {
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
-    for (std::size_t s = 0; s < n; ++s) {
-      const std::size_t i = order[s];
-      sx[s] = double(x[3 * i]);
-      sy[s] = double(x[3 * i + 1]);
-      sz[s] = double(x[3 * i + 2]);
-      sq[s] = q0;
-      sm[s] = m0;
-    }
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::size_t i = order[s];
+    sx[s] = double(x[3 * i]);
+    sy[s] = double(x[3 * i + 1]);
+    sz[s] = double(x[3 * i + 2]);
+  }
+  if (one_mass_charge) {
+    std::fill(sq, sq + n, q0);
+    std::fill(sm, sm + n, m0);
   } else {
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
     for (std::size_t s = 0; s < n; ++s) {
       const std::size_t i = order[s];
-      sx[s] = double(x[3 * i]);
-      sy[s] = double(x[3 * i + 1]);
-      sz[s] = double(x[3 * i + 2]);
       sq[s] = charge ? charge[i] : 0.0;
       sm[s] = mass[i];
     }
