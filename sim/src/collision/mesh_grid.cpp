@@ -163,6 +163,8 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   level_[0] = -std::numeric_limits<double>::infinity();
   level_[255] = std::numeric_limits<double>::infinity();
   for (int q = 1; q < 255; ++q) level_[q] = z0 + q * step;
+  level_z0_ = z0;
+  level_step_ = step;
   // Two bytes past the last column: a 32-bit gather at a column's two bytes (ColumnTable) may
   // read them.
   column_.assign(2 * columns + 2, 0);

@@ -137,7 +137,9 @@ class MeshGrid {
   /// clear_of()'s data, for a form of it that answers several boxes at once
   /// (columns_clear_block()): the mesh's bounds (m), columns per metre, columns per row, the
   /// last column's index on x and y, the column table (2 bytes per column, row order, then 2
-  /// bytes of padding) and the levels (m). `empty`: no cells (clear_of() answers false).
+  /// bytes of padding), the levels (m), and their base z0 and step (m): level q for 1 <= q <= 254
+  /// is z0 + q step, those very operations, so lanes can compute a level instead of reading it.
+  /// `empty`: no cells (clear_of() answers false).
   struct ColumnTable {
     const double* lo;
     const double* hi;
@@ -146,11 +148,13 @@ class MeshGrid {
     const double* last;
     const std::uint8_t* column;
     const double* level;
+    double level_z0;
+    double level_step;
     bool empty;
   };
   [[nodiscard]] ColumnTable column_table() const {
-    return {lo_.data(), hi_.data(), inv_column_, column_dim_[0],
-            column_last_, column_.data(), level_, cell_.empty()};
+    return {lo_.data(), hi_.data(), inv_column_, column_dim_[0], column_last_, column_.data(),
+            level_,     level_z0_,  level_step_, cell_.empty()};
   }
 
   /// Calls f(triangle with its edge data, its index in the mesh) for every triangle whose own
@@ -328,6 +332,8 @@ class MeshGrid {
   std::vector<std::uint8_t> column_;
   /// (m) level q's height: -inf for 0, lo_z + q (hi_z - lo_z) / 254 for 1..254, +inf for 255.
   double level_[256] = {};
+  double level_z0_ = 0.0;    ///< (m) lo_z, the levels' base
+  double level_step_ = 0.0;  ///< (m) the levels' step, (hi_z - lo_z) / 254 (at least 1e-9 / 254)
   std::vector<Block> blocks_;                   ///< the cells' runs, in Z-order of the cells
   double halo_ = 0.0;                           ///< (m) kHaloCells cells; 0: no halo lists
   double cell_size_ = 0.0;                      ///< (m) a cell's side (0: no cells)

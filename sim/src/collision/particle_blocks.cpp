@@ -226,6 +226,18 @@ __attribute__((target("avx512f,avx512vl"), always_inline)) inline __m256i column
   return _mm512_maskz_cvttpd_epi32(0xff, v);
 }
 
+/// MeshGrid's level q (0..255) in lanes, computed rather than read from its table: z0 + q step
+/// (the table's own operations, so its bits) for 1..254, -inf for 0 and +inf for 255.
+__attribute__((target("avx512f,avx512vl"), always_inline)) inline __m512d level_lanes(
+    __m256i q, const MeshGrid::ColumnTable& t) {
+  const __m512d z = _mm512_add_pd(_mm512_set1_pd(t.level_z0),
+                                  _mm512_mul_pd(_mm512_maskz_cvtepi32_pd(0xff, q), _mm512_set1_pd(t.level_step)));
+  const __m512d lowest = _mm512_mask_blend_pd(_mm256_cmpeq_epi32_mask(q, _mm256_setzero_si256()), z,
+                                              _mm512_set1_pd(-std::numeric_limits<double>::infinity()));
+  return _mm512_mask_blend_pd(_mm256_cmpeq_epi32_mask(q, _mm256_set1_epi32(255)), lowest,
+                              _mm512_set1_pd(std::numeric_limits<double>::infinity()));
+}
+
 /// columns_clear_scalar() for eight particles at a time in AVX-512 lanes: overlaps() and
 /// MeshGrid::clear_of() with the same double operations in each lane (the clamps as the
 /// comparisons std::max / std::min make, truncation to int), the 2 x 2 columns always read (a
@@ -239,7 +251,6 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
   const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
   const double* center = c.aabb_center.data();
   const double* half = c.aabb_half.data();
-  const __m512d zero = _mm512_setzero_pd();
   const __m512i sign = _mm512_set1_epi64(std::int64_t(0x8000000000000000ull));
   const __m256i dim_x = _mm256_set1_epi32(int(t.dim_x)), one = _mm256_set1_epi32(1);
   const __m256i byte = _mm256_set1_epi32(0xff);
@@ -283,13 +294,17 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
       }
       __mmask8 clear_lanes = outside;
       if (ask != 0) {
+        // Two gathers, not four: a word at a column holds its two bytes (low, high level) and
+        // the next column's two, and the columns spanned on x are c0 and c0 or c0 + 1, so the
+        // words at c0 of both rows hold all (at most) four; the second column's bytes are those
+        // of a word shifted right by 16 (c1 = c0 + 1) or by 0 (c1 = c0: the same column twice,
+        // which changes no minimum or maximum).
         const __m256i row0 = _mm256_mullo_epi32(c0[1], dim_x), row1 = _mm256_mullo_epi32(c1[1], dim_x);
         const __m256i none = _mm256_setzero_si256();
+        const __m256i shift = _mm256_slli_epi32(_mm256_sub_epi32(c1[0], c0[0]), 4);
         const __m256i w00 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row0, c0[0]), t.column, 2);
-        const __m256i w10 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row0, c1[0]), t.column, 2);
         const __m256i w01 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c0[0]), t.column, 2);
-        const __m256i w11 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c1[0]), t.column, 2);
-        // Each word holds a column's two bytes (low, high level) and the next column's two.
+        const __m256i w10 = _mm256_srlv_epi32(w00, shift), w11 = _mm256_srlv_epi32(w01, shift);
         // (Macros: a lambda here would not take this function's target.)
 #define SIMREEL_LOW(w) _mm256_and_si256(w, byte)
 #define SIMREEL_HIGH(w) _mm256_and_si256(_mm256_srli_epi32(w, 8), byte)
@@ -299,8 +314,8 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
                                              _mm256_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
 #undef SIMREEL_LOW
 #undef SIMREEL_HIGH
-        const __m512d level_hi = _mm512_mask_i32gather_pd(zero, ask, qhi, t.level, 8);
-        const __m512d level_lo = _mm512_mask_i32gather_pd(zero, ask, qlo, t.level, 8);
+        const __m512d level_hi = level_lanes(qhi, t);
+        const __m512d level_lo = level_lanes(qlo, t);
         clear_lanes |= ask & (_mm512_cmp_pd_mask(lo[2], level_hi, _CMP_GT_OQ) |
                               _mm512_cmp_pd_mask(hi[2], level_lo, _CMP_LT_OQ));
       }
@@ -330,6 +345,18 @@ __attribute__((target("avx2"), always_inline)) inline __m128i column_cell4(__m25
   v = _mm256_blendv_pd(v, zero, _mm256_cmp_pd(v, zero, _CMP_LT_OQ));
   v = _mm256_blendv_pd(v, last, _mm256_cmp_pd(last, v, _CMP_LT_OQ));
   return _mm256_cvttpd_epi32(v);
+}
+
+/// level_lanes() in AVX2's four lanes.
+__attribute__((target("avx2"), always_inline)) inline __m256d level_lanes4(
+    __m128i q, const MeshGrid::ColumnTable& t) {
+  const __m256d z = _mm256_add_pd(_mm256_set1_pd(t.level_z0),
+                                  _mm256_mul_pd(_mm256_cvtepi32_pd(q), _mm256_set1_pd(t.level_step)));
+  const __m256d at0 = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_cmpeq_epi32(q, _mm_setzero_si128())));
+  const __m256d at255 = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_cmpeq_epi32(q, _mm_set1_epi32(255))));
+  const __m256d lowest =
+      _mm256_blendv_pd(z, _mm256_set1_pd(-std::numeric_limits<double>::infinity()), at0);
+  return _mm256_blendv_pd(lowest, _mm256_set1_pd(std::numeric_limits<double>::infinity()), at255);
 }
 
 /// The compare of four doubles as a 4-bit mask.
@@ -405,11 +432,12 @@ void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
           for (int j = 0; j < 4; ++j) std::memcpy(&w[j], t.column + 2 * std::ptrdiff_t(at[j]), 4);
           return _mm_setr_epi32(w[0], w[1], w[2], w[3]);
         };
+        // Two words, not four (columns_clear_avx512()): the second column's bytes are a word's
+        // shifted right by 16 (c1 = c0 + 1) or by 0.
+        const __m128i shift = _mm_slli_epi32(_mm_sub_epi32(c1[0], c0[0]), 4);
         const __m128i w00 = words(_mm_add_epi32(row0, c0[0]));
-        const __m128i w10 = words(_mm_add_epi32(row0, c1[0]));
         const __m128i w01 = words(_mm_add_epi32(row1, c0[0]));
-        const __m128i w11 = words(_mm_add_epi32(row1, c1[0]));
-        // Each word holds a column's two bytes (low, high level) and the next column's two.
+        const __m128i w10 = _mm_srlv_epi32(w00, shift), w11 = _mm_srlv_epi32(w01, shift);
 #define SIMREEL_LOW(w) _mm_and_si128(w, byte)
 #define SIMREEL_HIGH(w) _mm_and_si128(_mm_srli_epi32(w, 8), byte)
         const __m128i qlo = _mm_min_epu32(_mm_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
@@ -418,11 +446,8 @@ void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
                                           _mm_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
 #undef SIMREEL_LOW
 #undef SIMREEL_HIGH
-        alignas(16) std::int32_t ql[4], qh[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(ql), qlo);
-        _mm_store_si128(reinterpret_cast<__m128i*>(qh), qhi);
-        const __m256d level_hi = _mm256_setr_pd(t.level[qh[0]], t.level[qh[1]], t.level[qh[2]], t.level[qh[3]]);
-        const __m256d level_lo = _mm256_setr_pd(t.level[ql[0]], t.level[ql[1]], t.level[ql[2]], t.level[ql[3]]);
+        const __m256d level_hi = level_lanes4(qhi, t);
+        const __m256d level_lo = level_lanes4(qlo, t);
         clear_lanes |= ask & (bits4(_mm256_cmp_pd(lo[2], level_hi, _CMP_GT_OQ)) |
                               bits4(_mm256_cmp_pd(hi[2], level_lo, _CMP_LT_OQ)));
       }
