@@ -632,7 +632,9 @@ TEST(SimForces, CurlNoiseDragsParticlesTowardTheFlow) {
 // 8 neighbours each), with a uniform wind and a curl-noise field, linear and quadratic drag,
 // three steps, at 1 and 2 threads (the split is from 2,048 particles); near the origin, and
 // 600 km out (beyond the 32-bit cell coordinates' 472 km at 0.45 m: the grid's 64-bit form,
-// from the float store's positions on the blocked path).
+// from the float store's positions on the blocked path). Varied masses and charges, then one
+// mass and one charge for all (an emitter's default: the blocked path then binds no per-particle
+// mass or charge, Dynamics::one_mass_charge).
 TEST(SimForces, SemiImplicitPairBlocksEqualTheGeneralPathBitForBit) {
   const std::size_t n = 3000;
   const double side = std::cbrt(double(n) / 16.0), h = 1.0 / 240;
@@ -657,9 +659,16 @@ TEST(SimForces, SemiImplicitPairBlocksEqualTheGeneralPathBitForBit) {
   curl.amplitude = 1.5;
   curl.frequency = 0.4;
   curl.drag = 0.2;
-  const auto run = [&](bool pair_blocks, double drag_quadratic, int threads, float offset) {
+  const auto run = [&](bool pair_blocks, double drag_quadratic, int threads, float offset,
+                       bool one_mass_charge) {
     detail::ParticleStore s = start;
-    for (std::size_t i = 0; i < n; ++i) s.position[3 * i] += offset;
+    for (std::size_t i = 0; i < n; ++i) {
+      s.position[3 * i] += offset;
+      if (one_mass_charge) {
+        s.mass[i] = 1.25f;
+        s.charge[i] = -0.15f;
+      }
+    }
     detail::FieldState f1{wind, detail::GradientNoise(3)}, f2{curl, detail::GradientNoise(3)};
     detail::Dynamics dyn;
     dyn.gravity = Vec3(0.0, 0.0, -9.81);
@@ -678,19 +687,21 @@ TEST(SimForces, SemiImplicitPairBlocksEqualTheGeneralPathBitForBit) {
     out.insert(out.end(), s.velocity.data(), s.velocity.data() + 3 * n);
     return out;
   };
-  for (const float offset : {0.0f, 6e5f})
-    for (const double c2 : {0.0, 0.01}) {
-      const std::vector<float> general = run(false, c2, 1, offset);
-      int moved = 0;
-      for (std::size_t k = 1; k < 3 * n; k += 3) moved += general[k] != start.position[k];
-      ASSERT_GT(moved, int(n) / 2);
-      for (int threads : {1, 2}) {
-        const std::vector<float> blocks = run(true, c2, threads, offset);
-        for (std::size_t k = 0; k < general.size(); ++k)
-          ASSERT_EQ(blocks[k], general[k]) << "entry " << k << ", c_2 " << c2 << ", " << threads
-                                           << " threads, offset " << offset;
+  for (const bool one : {false, true})
+    for (const float offset : {0.0f, 6e5f})
+      for (const double c2 : {0.0, 0.01}) {
+        const std::vector<float> general = run(false, c2, 1, offset, one);
+        int moved = 0;
+        for (std::size_t k = 1; k < 3 * n; k += 3) moved += general[k] != start.position[k];
+        ASSERT_GT(moved, int(n) / 2);
+        for (int threads : {1, 2}) {
+          const std::vector<float> blocks = run(true, c2, threads, offset, one);
+          for (std::size_t k = 0; k < general.size(); ++k)
+            ASSERT_EQ(blocks[k], general[k]) << "entry " << k << ", c_2 " << c2 << ", " << threads
+                                             << " threads, offset " << offset << ", one mass "
+                                             << one;
+        }
       }
-    }
 }
 
 // ---------------------------------------------------------------------------------------------

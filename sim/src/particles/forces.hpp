@@ -46,6 +46,11 @@ struct Dynamics {
   std::size_t n = 0;
   const double* mass = nullptr;     // (n)
   const double* charge = nullptr;   // (n) or nullptr
+  /// Every particle of mass mass0 (kg) and charge charge0 (C), bit for bit, and `mass` and
+  /// `charge` not bound (null): set by the pair-block integrator for the pair forces alone, so
+  /// that an emitter's particles (one mass, one charge) are not copied to double arrays each step.
+  bool one_mass_charge = false;
+  double mass0 = 0.0, charge0 = 0.0;
   Vec3 gravity = Vec3::Zero();
   double drag = 0.0;
   double drag_quadratic = 0.0;  ///< c_2 (kg/m): F = -c_2 |v| v

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <initializer_list>
 
+#include "core/same_bits.hpp"
 #include "core/vector_clones.hpp"
 #include "particles/row_lanes.hpp"
 
@@ -234,6 +235,7 @@ void bind_mass_charge(const ParticleStore& s, std::size_t begin, std::size_t n, 
   dyn.n = n;
   dyn.mass = w.m.data();
   dyn.charge = nullptr;
+  dyn.one_mass_charge = false;
   if (s.has_charge) {
     if (w.q.size() < n) w.q.resize(n);
     for (std::size_t i = 0; i < n; ++i) w.q[i] = s.charge[begin + i];
@@ -254,13 +256,33 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
                                double h, Dynamics& dyn, IntegratorWorkspace& w, bool par) {
   constexpr std::size_t B = Dynamics::kBlock;
   const std::size_t n = end - begin, blocks = (n + B - 1) / B;
-  bind_mass_charge(s, begin, n, dyn, w);
+  // One mass and one charge (an emitter's default), told from the store's floats (equal bits
+  // there give equal doubles): nothing is copied, the pair forces take mass0 and charge0 and the
+  // blocks one row of mass0. Else double copies of both (bind_mass_charge()).
+  const float* fm = s.mass.data() + begin;
+  const float* fq = s.has_charge ? s.charge.data() + begin : nullptr;
+  const auto one_value = [n](const float* p) {
+    return p == nullptr || (same_bits(p, std::min<std::size_t>(n, 64)) && same_bits(p, n));
+  };
+  const bool one = n > 0 && one_value(fm) && one_value(fq);
+  alignas(64) double mass_row[B];
+  if (one) {
+    dyn.n = n;
+    dyn.mass = nullptr;
+    dyn.charge = nullptr;
+    dyn.one_mass_charge = true;
+    dyn.mass0 = fm[0];
+    dyn.charge0 = fq != nullptr ? double(fq[0]) : 0.0;
+    std::fill(mass_row, mass_row + B, dyn.mass0);
+  } else {
+    bind_mass_charge(s, begin, n, dyn, w);
+  }
   if (s.track_prev)
     std::memcpy(&s.prev_position[3 * begin], &s.position[3 * begin], 3 * n * sizeof(float));
   dyn.pose_fields(t0);
   dyn.compute_pair_forces(s.position.data() + 3 * begin);
   const bool linear = dyn.drag_quadratic == 0.0;
-  const double* mass = w.m.data();
+  const double* mass = one ? nullptr : w.m.data();
   unsigned bad = 0;
 #pragma omp parallel for schedule(static) num_threads(dyn.threads) reduction(| : bad) if (par)
   for (std::size_t blk = 0; blk < blocks; ++blk) {
@@ -275,8 +297,9 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
       __builtin_prefetch(o);
       __builtin_prefetch(o + 2);
     }
+    const double* mb = one ? mass_row : mass + b;
     widen_lanes(3 * len, px, pv, x, v);
-    dyn.eval_block(t0, len, x, v, mass + b, a, false);
+    dyn.eval_block(t0, len, x, v, mb, a, false);
     for (std::size_t i = 0; i < len; ++i) {
       const double* o = dyn.pair_acceleration(b + i);
       a[3 * i] += o[0];
@@ -285,12 +308,13 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
     }
     if (linear)
       semi_implicit_linear_rows(len, h, dyn.drag, dyn.gravity.x(), dyn.gravity.y(),
-                                 dyn.gravity.z(), mass + b, x, v, a);
+                                 dyn.gravity.z(), mb, x, v, a);
     else
       for (std::size_t i = 0; i < len; ++i)
-        semi_implicit_particle(dyn, h, mass[b + i], x + 3 * i, v + 3 * i, a + 3 * i);
+        semi_implicit_particle(dyn, h, mb[i], x + 3 * i, v + 3 * i, a + 3 * i);
     bad |= unsigned(narrow_lanes(3 * len, x, v, dyn.max_distance, dyn.max_speed, px, pv));
   }
+  dyn.one_mass_charge = false;  // (mass and charge unbound: only this step's pair forces knew)
   return bad != 0;
 }
 

@@ -163,6 +163,13 @@ bool floor_cells(const float* __restrict x, std::size_t len, double inv,
   return floor_cells_body(x, len, inv, c, lo, hi);
 }
 
+/// divide_rows() for particles of one mass m (the same operation on the same operands as
+/// dividing by a row of m, so the same bits).
+SIMREEL_VECTOR_CLONES
+void divide_rows(double* __restrict f, double m, std::size_t len) {
+  for (std::size_t k = 0; k < 3 * len; ++k) f[k] /= m;
+}
+
 /// f[3u + k] /= m[u] for u < len, k < 3: each particle's pair force over its mass, in place.
 /// Element-wise (one IEEE divide each, as the scalar form), so every clone gives the same bits;
 /// the divides, one a component, were most of the write-back's time when taken one by one.
@@ -329,8 +336,13 @@ void Dynamics::pair_forces_over_grid(const T* x) {
   // range): q and m are written, not gathered, so a sorted place reads one particle's line at
   // random instead of three (the copy was ~15 % of the 100k-particle step, waiting on those
   // reads), and every pair of the dense path has one numerator K q q - G m m.
-  const bool one_mass_charge = one_value(mass, n) && one_value(charge, n);
-  const double q0 = charge != nullptr && n > 0 ? charge[0] : 0.0, m0 = n > 0 ? mass[0] : 0.0;
+  //
+  // Where the caller said so (Dynamics::one_mass_charge: no arrays bound), the dense path reads
+  // neither q nor m by particle, so neither is written; the sparse path's are filled.
+  const bool one_mass_charge =
+      this->one_mass_charge || (one_value(mass, n) && one_value(charge, n));
+  const double q0 = this->one_mass_charge ? charge0 : charge != nullptr && n > 0 ? charge[0] : 0.0;
+  const double m0 = this->one_mass_charge ? mass0 : n > 0 ? mass[0] : 0.0;
   sorted_.resize(5 * n + kCopyBlock, 0.0);  // (+ a block: the dense path's copies overshoot)
   double *sx = sorted_.data(), *sy = sx + n, *sz = sy + n, *sq = sz + n, *sm = sq + n;
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
@@ -341,8 +353,10 @@ void Dynamics::pair_forces_over_grid(const T* x) {
     sz[s] = double(x[3 * i + 2]);
   }
   if (one_mass_charge) {
-    std::fill(sq, sq + n, q0);
-    std::fill(sm, sm + n, m0);
+    if (!dense) {
+      std::fill(sq, sq + n, q0);
+      std::fill(sm, sm + n, m0);
+    }
   } else {
 #pragma omp parallel for schedule(static) num_threads(parts) if (parts > 1)
     for (std::size_t s = 0; s < n; ++s) {
@@ -528,7 +542,10 @@ void Dynamics::pair_forces_over_grid(const T* x) {
       const auto write_back = [&](std::size_t ix) {  // force over mass (to a's rows below)
         if (ix >= nx) return;
         const std::size_t b = cnt[ix * nyz], e = cnt[(ix + 1) * nyz];
-        divide_rows(sacc + 3 * b, sm + b, e - b);
+        if (one_mass_charge)
+          divide_rows(sacc + 3 * b, m0, e - b);
+        else
+          divide_rows(sacc + 3 * b, sm + b, e - b);
       };
       const auto parity = [&](std::size_t ix) { return (lo[0] + std::int64_t(ix)) & 1; };
       for (std::int64_t pass = 0; pass < 2; ++pass) {
