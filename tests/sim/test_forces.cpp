@@ -685,6 +685,7 @@ TEST(SimForces, SemiImplicitPairBlocksEqualTheGeneralPathBitForBit) {
                                             Integrator::semi_implicit_euler, 1e-6, state, w));
     std::vector<float> out(s.position.data(), s.position.data() + 3 * n);
     out.insert(out.end(), s.velocity.data(), s.velocity.data() + 3 * n);
+    out.insert(out.end(), s.age.data(), s.age.data() + n);  // (each advanced by h, 3 times)
     return out;
   };
   for (const bool one : {false, true})

@@ -250,10 +250,11 @@ void bind_mass_charge(const ParticleStore& s, std::size_t begin, std::size_t n, 
 /// semi_implicit_particle() and back to the store, so positions, velocities and accelerations
 /// are never written as (n x 3) double arrays (the 100k-particle pair-force step took ~15 % less
 /// time without those passes, at 1 and 2 threads). Bit for bit integrate_system()'s general
-/// path, where eval() adds each row's pair acceleration to the same local sum once. Returns true
-/// on a non-finite or diverging value.
+/// path, where eval() adds each row's pair acceleration to the same local sum once. Adds h to
+/// each age (s) when age_particles. Returns true on a non-finite or diverging value.
 bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t end, double t0,
-                               double h, Dynamics& dyn, IntegratorWorkspace& w, bool par) {
+                               double h, Dynamics& dyn, IntegratorWorkspace& w, bool par,
+                               bool age_particles) {
   constexpr std::size_t B = Dynamics::kBlock;
   const std::size_t n = end - begin, blocks = (n + B - 1) / B;
   // One mass and one charge (an emitter's default), told from the store's floats (equal bits
@@ -283,6 +284,7 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
   dyn.compute_pair_forces(s.position.data() + 3 * begin);
   const bool linear = dyn.drag_quadratic == 0.0;
   const double* mass = one ? nullptr : w.m.data();
+  const float hf = float(h);
   unsigned bad = 0;
 #pragma omp parallel for schedule(static) num_threads(dyn.threads) reduction(| : bad) if (par)
   for (std::size_t blk = 0; blk < blocks; ++blk) {
@@ -313,6 +315,10 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
       for (std::size_t i = 0; i < len; ++i)
         semi_implicit_particle(dyn, h, mb[i], x + 3 * i, v + 3 * i, a + 3 * i);
     bad |= unsigned(narrow_lanes(3 * len, x, v, dyn.max_distance, dyn.max_speed, px, pv));
+    if (age_particles) {  // (here, not in a pass of its own over the ages)
+      float* age = s.age.data() + begin + b;
+      for (std::size_t i = 0; i < len; ++i) age[i] += hf;
+    }
   }
   dyn.one_mass_charge = false;  // (mass and charge unbound: only this step's pair forces knew)
   return bad != 0;
@@ -342,12 +348,8 @@ bool integrate_system(ParticleStore& s, std::size_t begin, std::size_t end, doub
   }
   if (integrator == Integrator::semi_implicit_euler && dyn.pair.enabled() && dyn.springs.empty() &&
       dyn.pulls.empty() && dyn.pair_blocks) {
-    const bool bad = semi_implicit_pair_blocks(s, begin, end, t0, h, dyn, w, par);
+    const bool bad = semi_implicit_pair_blocks(s, begin, end, t0, h, dyn, w, par, age_particles);
     ++state.substeps;
-    if (age_particles) {
-      const float hf = float(h);
-      for (std::size_t i = begin; i < end; ++i) s.age[i] += hf;
-    }
     return bad;
   }
   // Only the stages this integrator reads are grown: resize() writes every element, and for a
