@@ -41,9 +41,14 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
   Rng rng(31, 2);
   constexpr std::size_t kN = detail::SweptBounds::kBlock;
   int cleared = 0, kept = 0, near_aabb_count = 0;
+  // Column memos (ColumnMemo) kept over the rounds, so a slot meets other particles too; the
+  // second call of a round finds every asked particle's own key in its slot.
+  detail::ColumnMemo memo8, memo4;
   for (int round = 0; round < 40; ++round) {
     std::vector<float> x(3 * kN), v(3 * kN), age(kN), r(kN);
     std::uint8_t pend[kN], clear[kN], clear4[kN], clear_scalar[kN];
+    std::uint8_t memo_clear[4][kN];
+    for (auto& m : memo_clear) std::fill(m, m + kN, std::uint8_t{1});
     for (std::size_t k = 0; k < kN; ++k) {
       const double px = rng.uniform(-2.3, 2.3), py = rng.uniform(-2.3, 2.3);
       const double dz = k % 9 == 0 ? 0.0 : rng.uniform(-0.3, 0.6) * (k % 3 == 0 ? 0.1 : 1.0);
@@ -74,6 +79,12 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
     detail::columns_clear_block(b, len, c, pend, clear);
     detail::columns_clear_block(b, len, c, pend, clear4, 4);
     detail::columns_clear_block(b, len, c, pend, clear_scalar, 1);
+    for (int call = 0; call < 2; ++call) {
+      detail::columns_clear_block(b, len, c, pend, memo_clear[call], 8,
+                                  memo8.for_grid(c.mesh->grid, kN));
+      detail::columns_clear_block(b, len, c, pend, memo_clear[2 + call], 4,
+                                  memo4.for_grid(c.mesh->grid, kN));
+    }
     for (std::size_t k = 0; k < kN; ++k) {
       // collide()'s own test for particle k, as start_of_step(), near_aabb and columns_clear()
       // compute it.
@@ -92,16 +103,89 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
       ASSERT_EQ(clear[k] != 0, expect) << round << " " << k;
       ASSERT_EQ(clear4[k] != 0, expect) << round << " " << k;
       ASSERT_EQ(clear_scalar[k] != 0, expect) << round << " " << k;
+      for (int m = 0; m < 4; ++m) ASSERT_EQ(memo_clear[m][k] != 0, expect) << round << " " << k << " memo " << m;
       near_aabb_count += in_aabb;
       if (k < len && pend[k] != 0 && in_aabb) (columns ? cleared : kept) += 1;
     }
   }
-  // Both answers are given many times, not one of them always.
+  const std::size_t filled = std::size_t(std::count_if(
+      memo8.slot.begin(), memo8.slot.end(), [](std::uint64_t e) { return e != detail::ColumnMemo::kNone; }));
+  // Both answers are given many times, not one of them always; the slots were written.
+  EXPECT_GT(filled, kN / 4);
   EXPECT_GT(cleared, 600);
   EXPECT_GT(kept, 600);
   EXPECT_LT(near_aabb_count, 40 * int(kN) - 500);  // and some particles are beside the AABB
 }
 
+
+TEST(SimParticleBlocks, ColumnMemoSlotsAnswerAsTheColumnsDo) {
+  // ColumnMemo slots filled by one step's boxes, then asked by boxes moved a little (drops
+  // drifting across the terrain's columns: the same first column with one column or row more
+  // or less, or another first column): every answer as the scalar test's (itself checked
+  // against MeshGrid::clear_of() above), in the AVX-512 and AVX2 forms. Then a slot is voided by
+  // another grid, and not by the same one.
+  const auto height = [](double x, double y) { return 0.3 * std::sin(3.1 * x) * std::cos(2.4 * y); };
+  ShapeDef def;
+  def.type = ShapeType::mesh;
+  test::fill_height_field(def, 48, 2.0, height);
+  detail::Collider c = detail::make_collider(def, "terrain");
+  c.set_pose(Transform{});
+  c.note_pose();
+  ASSERT_TRUE(c.unposed);
+  const double h = 1.0 / 240;
+  const double g[3] = {0.0, 0.0, -9.81};
+  Rng rng(7, 3);
+  constexpr std::size_t kN = detail::SweptBounds::kBlock;
+  detail::ColumnMemo memo8, memo4;
+  int differ = 0, asked = 0;
+  for (int round = 0; round < 60; ++round) {
+    std::vector<float> x(3 * kN), v(3 * kN), age(kN, 1.0f), r(kN);
+    for (std::size_t k = 0; k < kN; ++k) {
+      const double px = rng.uniform(-1.9, 1.9), py = rng.uniform(-1.9, 1.9);
+      x[3 * k] = float(px);
+      x[3 * k + 1] = float(py);
+      x[3 * k + 2] = float(height(px, py) + rng.uniform(-0.02, 0.12));
+      v[3 * k + 2] = float(rng.uniform(-3.0, 0.0));
+      r[k] = float(rng.uniform(0.003, 0.03));
+    }
+    std::uint8_t pend[kN];
+    std::fill(pend, pend + kN, std::uint8_t{1});
+    for (int step = 0; step < 3; ++step) {
+      if (step > 0)
+        for (std::size_t k = 0; k < kN; ++k)
+          for (int a = 0; a < 2; ++a) x[3 * k + std::size_t(a)] += float(rng.uniform(-0.03, 0.03));
+      detail::SweptBounds b;
+      detail::swept_bounds_plain(x.data(), v.data(), age.data(), r.data(), kN, h, g, b);
+      std::uint8_t scalar[kN], m8[kN], m4[kN];
+      std::fill(scalar, scalar + kN, std::uint8_t{1});
+      std::fill(m8, m8 + kN, std::uint8_t{1});
+      std::fill(m4, m4 + kN, std::uint8_t{1});
+      detail::columns_clear_block(b, kN, c, pend, scalar, 1);
+      detail::columns_clear_block(b, kN, c, pend, m8, 8, memo8.for_grid(c.mesh->grid, kN));
+      detail::columns_clear_block(b, kN, c, pend, m4, 4, memo4.for_grid(c.mesh->grid, kN));
+      for (std::size_t k = 0; k < kN; ++k) {
+        ASSERT_EQ(m8[k], scalar[k]) << round << " " << step << " " << k;
+        ASSERT_EQ(m4[k], scalar[k]) << round << " " << step << " " << k;
+        differ += scalar[k] == 0;
+        ++asked;
+      }
+    }
+  }
+  // Both answers, many times each.
+  EXPECT_GT(differ, asked / 10);
+  EXPECT_LT(differ, asked - asked / 10);
+  // Another grid (another terrain) voids every slot; the same grid, or a copy of it, keeps them.
+  const std::uint64_t kept = memo8.slot[0];
+  ASSERT_NE(kept, detail::ColumnMemo::kNone);
+  const detail::MeshGrid copy = c.mesh->grid;
+  EXPECT_EQ(memo8.for_grid(copy, kN)[0], kept);
+  ShapeDef other = def;
+  test::fill_height_field(other, 40, 2.0, height);
+  const detail::Collider c2 = detail::make_collider(other, "other");
+  ASSERT_NE(c2.mesh->grid.serial(), c.mesh->grid.serial());
+  const std::uint64_t* slots = memo8.for_grid(c2.mesh->grid, kN);
+  for (std::size_t k = 0; k < kN; ++k) ASSERT_EQ(slots[k], detail::ColumnMemo::kNone) << k;
+}
 
 TEST(SimParticleBlocks, NearPlanesDecidesAsTheParticleTest) {
   // near_planes() reads one coordinate for a plane whose normal is ±e_a (a ground, a wall) and

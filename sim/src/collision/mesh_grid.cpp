@@ -3,6 +3,7 @@
 #include "collision/mesh_grid.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -165,6 +166,8 @@ MeshGrid::MeshGrid(const std::vector<Triangle>& tris, const std::vector<std::uin
   for (int q = 1; q < 255; ++q) level_[q] = z0 + q * step;
   level_z0_ = z0;
   level_step_ = step;
+  static std::atomic<std::uint64_t> built{0};
+  serial_ = ++built;
   // Two bytes past the last column: a 32-bit gather at a column's two bytes (ColumnTable) may
   // read them.
   column_.assign(2 * columns + 2, 0);

@@ -152,6 +152,9 @@ class MeshGrid {
     double level_step;
     bool empty;
   };
+  /// A number no other grid built in this process has (copies share it, and their tables): what
+  /// a cache of column answers (ColumnMemo) is valid for. 0 for an empty grid.
+  [[nodiscard]] std::uint64_t serial() const { return serial_; }
   [[nodiscard]] ColumnTable column_table() const {
     return {lo_.data(), hi_.data(), inv_column_, column_dim_[0], column_last_, column_.data(),
             level_,     level_z0_,  level_step_, cell_.empty()};
@@ -332,6 +335,7 @@ class MeshGrid {
   std::vector<std::uint8_t> column_;
   /// (m) level q's height: -inf for 0, lo_z + q (hi_z - lo_z) / 254 for 1..254, +inf for 255.
   double level_[256] = {};
+  std::uint64_t serial_ = 0;  ///< see serial()
   double level_z0_ = 0.0;    ///< (m) lo_z, the levels' base
   double level_step_ = 0.0;  ///< (m) the levels' step, (hi_z - lo_z) / 254 (at least 1e-9 / 254)
   std::vector<Block> blocks_;                   ///< the cells' runs, in Z-order of the cells

@@ -247,7 +247,8 @@ __attribute__((target("avx512f,avx512vl"), always_inline)) inline __m512d level_
 /// particle's answers cost the rain benchmark's first second about a fifth of its time.
 __attribute__((target("avx512f,avx512vl")))
 void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c,
-                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
+                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
+                          std::uint64_t* __restrict memo) {
   const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
   const double* center = c.aabb_center.data();
   const double* half = c.aabb_half.data();
@@ -294,26 +295,51 @@ void columns_clear_avx512(const SweptBounds& b, std::size_t n, const Collider& c
       }
       __mmask8 clear_lanes = outside;
       if (ask != 0) {
-        // Two gathers, not four: a word at a column holds its two bytes (low, high level) and
-        // the next column's two, and the columns spanned on x are c0 and c0 or c0 + 1, so the
-        // words at c0 of both rows hold all (at most) four; the second column's bytes are those
-        // of a word shifted right by 16 (c1 = c0 + 1) or by 0 (c1 = c0: the same column twice,
-        // which changes no minimum or maximum).
         const __m256i row0 = _mm256_mullo_epi32(c0[1], dim_x), row1 = _mm256_mullo_epi32(c1[1], dim_x);
         const __m256i none = _mm256_setzero_si256();
-        const __m256i shift = _mm256_slli_epi32(_mm256_sub_epi32(c1[0], c0[0]), 4);
-        const __m256i w00 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row0, c0[0]), t.column, 2);
-        const __m256i w01 = _mm256_mmask_i32gather_epi32(none, ask, _mm256_add_epi32(row1, c0[0]), t.column, 2);
-        const __m256i w10 = _mm256_srlv_epi32(w00, shift), w11 = _mm256_srlv_epi32(w01, shift);
-        // (Macros: a lambda here would not take this function's target.)
+        const __m256i dx = _mm256_sub_epi32(c1[0], c0[0]), at0 = _mm256_add_epi32(row0, c0[0]);
+        // The lanes' columns as ColumnMemo keys, and the lanes whose slot holds that key.
+        const __m256i key = _mm256_or_si256(
+            _mm256_or_si256(_mm256_slli_epi32(at0, 2), _mm256_slli_epi32(dx, 1)),
+            _mm256_sub_epi32(c1[1], c0[1]));
+        __m512i entry = _mm512_setzero_si512();
+        __mmask8 hit = 0;
+        if (memo != nullptr) {
+          entry = _mm512_maskz_loadu_epi64(ask, memo + k0);
+          hit = _mm256_mask_cmpeq_epi32_mask(ask, _mm512_maskz_cvtepi64_epi32(0xff, entry), key);
+        }
+        const __mmask8 miss = ask & __mmask8(~hit);
+        __m256i qlo = _mm512_maskz_cvtepi64_epi32(0xff, _mm512_and_si512(_mm512_maskz_srli_epi64(0xff, entry, 32), _mm512_set1_epi64(0xff)));
+        __m256i qhi = _mm512_maskz_cvtepi64_epi32(0xff, _mm512_and_si512(_mm512_maskz_srli_epi64(0xff, entry, 40), _mm512_set1_epi64(0xff)));
+        if (miss != 0) {
+          // Two gathers, not four: a word at a column holds its two bytes (low, high level) and
+          // the next column's two, and the columns spanned on x are c0 and c0 or c0 + 1, so
+          // the words at c0 of both rows hold all (at most) four; the second column's bytes are
+          // those of a word shifted right by 16 (c1 = c0 + 1) or by 0 (c1 = c0: the same column
+          // twice, which changes no minimum or maximum).
+          const __m256i shift = _mm256_slli_epi32(dx, 4);
+          const __m256i w00 = _mm256_mmask_i32gather_epi32(none, miss, at0, t.column, 2);
+          const __m256i w01 = _mm256_mmask_i32gather_epi32(none, miss, _mm256_add_epi32(row1, c0[0]), t.column, 2);
+          const __m256i w10 = _mm256_srlv_epi32(w00, shift), w11 = _mm256_srlv_epi32(w01, shift);
+          // (Macros: a lambda here would not take this function's target.)
 #define SIMREEL_LOW(w) _mm256_and_si256(w, byte)
 #define SIMREEL_HIGH(w) _mm256_and_si256(_mm256_srli_epi32(w, 8), byte)
-        const __m256i qlo = _mm256_min_epu32(_mm256_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
-                                             _mm256_min_epu32(SIMREEL_LOW(w01), SIMREEL_LOW(w11)));
-        const __m256i qhi = _mm256_max_epu32(_mm256_max_epu32(SIMREEL_HIGH(w00), SIMREEL_HIGH(w10)),
-                                             _mm256_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
+          const __m256i lo_q = _mm256_min_epu32(_mm256_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
+                                                _mm256_min_epu32(SIMREEL_LOW(w01), SIMREEL_LOW(w11)));
+          const __m256i hi_q = _mm256_max_epu32(_mm256_max_epu32(SIMREEL_HIGH(w00), SIMREEL_HIGH(w10)),
+                                                _mm256_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
 #undef SIMREEL_LOW
 #undef SIMREEL_HIGH
+          qlo = _mm256_mask_blend_epi32(miss, qlo, lo_q);
+          qhi = _mm256_mask_blend_epi32(miss, qhi, hi_q);
+          if (memo != nullptr) {
+            const __m512i fresh = _mm512_or_si512(
+                _mm512_maskz_cvtepu32_epi64(0xff, key),
+                _mm512_or_si512(_mm512_maskz_slli_epi64(0xff, _mm512_maskz_cvtepu32_epi64(0xff, lo_q), 32),
+                                _mm512_maskz_slli_epi64(0xff, _mm512_maskz_cvtepu32_epi64(0xff, hi_q), 40)));
+            _mm512_mask_storeu_epi64(memo + k0, miss, fresh);
+          }
+        }
         const __m512d level_hi = level_lanes(qhi, t);
         const __m512d level_lo = level_lanes(qlo, t);
         clear_lanes |= ask & (_mm512_cmp_pd_mask(lo[2], level_hi, _CMP_GT_OQ) |
@@ -370,13 +396,13 @@ __attribute__((target("avx2"), always_inline)) inline unsigned bits4(__m256d m) 
 /// EPYC the scalar loop's branches held a quarter of the rain benchmark's time.
 __attribute__((target("avx2")))
 void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
-                        const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear) {
+                        const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
+                        std::uint64_t* __restrict memo) {
   const MeshGrid::ColumnTable t = c.mesh->grid.column_table();
   const double* center = c.aabb_center.data();
   const double* half = c.aabb_half.data();
   const __m256d sign = _mm256_castsi256_pd(_mm256_set1_epi64x(std::int64_t(0x8000000000000000ull)));
   const __m128i dim_x = _mm_set1_epi32(int(t.dim_x)), one = _mm_set1_epi32(1);
-  const __m128i byte = _mm_set1_epi32(0xff);
   for (std::size_t k0 = 0; k0 < n; k0 += 4) {
     const std::size_t lanes = std::min<std::size_t>(4, n - k0);
     unsigned asked = 0;
@@ -421,31 +447,42 @@ void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
       }
       unsigned clear_lanes = outside;
       if (ask != 0) {
-        // Four lanes' loads one by one: AVX2's gathers cost more than the loads on the AMD
-        // EPYC. Lanes not asked read column 0 (their index zeroed) and are not kept.
-        const __m128i ask32 = mask_lanes32(ask);
+        // Four lanes one by one: AVX2's gathers cost more than the loads on the AMD EPYC. A
+        // lane's ColumnMemo slot answers when it holds the lane's key; else two words (as in
+        // columns_clear_avx512(): the second column's bytes are a word's shifted right by 16
+        // when c1 = c0 + 1, by 0 when c1 = c0), and the slot takes their answer.
+        alignas(16) std::int32_t at0[4], at1[4], dx[4], key[4], ql[4], qh[4];
         const __m128i row0 = _mm_mullo_epi32(c0[1], dim_x), row1 = _mm_mullo_epi32(c1[1], dim_x);
-        const auto words = [&](__m128i idx) {
-          alignas(16) std::int32_t at[4];
-          _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm_and_si128(idx, ask32));
-          std::int32_t w[4];
-          for (int j = 0; j < 4; ++j) std::memcpy(&w[j], t.column + 2 * std::ptrdiff_t(at[j]), 4);
-          return _mm_setr_epi32(w[0], w[1], w[2], w[3]);
-        };
-        // Two words, not four (columns_clear_avx512()): the second column's bytes are a word's
-        // shifted right by 16 (c1 = c0 + 1) or by 0.
-        const __m128i shift = _mm_slli_epi32(_mm_sub_epi32(c1[0], c0[0]), 4);
-        const __m128i w00 = words(_mm_add_epi32(row0, c0[0]));
-        const __m128i w01 = words(_mm_add_epi32(row1, c0[0]));
-        const __m128i w10 = _mm_srlv_epi32(w00, shift), w11 = _mm_srlv_epi32(w01, shift);
-#define SIMREEL_LOW(w) _mm_and_si128(w, byte)
-#define SIMREEL_HIGH(w) _mm_and_si128(_mm_srli_epi32(w, 8), byte)
-        const __m128i qlo = _mm_min_epu32(_mm_min_epu32(SIMREEL_LOW(w00), SIMREEL_LOW(w10)),
-                                          _mm_min_epu32(SIMREEL_LOW(w01), SIMREEL_LOW(w11)));
-        const __m128i qhi = _mm_max_epu32(_mm_max_epu32(SIMREEL_HIGH(w00), SIMREEL_HIGH(w10)),
-                                          _mm_max_epu32(SIMREEL_HIGH(w01), SIMREEL_HIGH(w11)));
-#undef SIMREEL_LOW
-#undef SIMREEL_HIGH
+        const __m128i d = _mm_sub_epi32(c1[0], c0[0]), a0 = _mm_add_epi32(row0, c0[0]);
+        _mm_store_si128(reinterpret_cast<__m128i*>(at0), a0);
+        _mm_store_si128(reinterpret_cast<__m128i*>(at1), _mm_add_epi32(row1, c0[0]));
+        _mm_store_si128(reinterpret_cast<__m128i*>(dx), d);
+        _mm_store_si128(reinterpret_cast<__m128i*>(key),
+                        _mm_or_si128(_mm_or_si128(_mm_slli_epi32(a0, 2), _mm_slli_epi32(d, 1)),
+                                     _mm_sub_epi32(c1[1], c0[1])));
+        for (int j = 0; j < 4; ++j) {
+          ql[j] = qh[j] = 0;
+          if ((ask >> j & 1u) == 0) continue;
+          const std::uint64_t e = memo != nullptr ? memo[k0 + std::size_t(j)] : ColumnMemo::kNone;
+          if (std::uint32_t(e) == std::uint32_t(key[j])) {
+            ql[j] = std::int32_t(e >> 32 & 0xff);
+            qh[j] = std::int32_t(e >> 40 & 0xff);
+            continue;
+          }
+          std::uint32_t w00, w01;
+          std::memcpy(&w00, t.column + 2 * std::ptrdiff_t(at0[j]), 4);
+          std::memcpy(&w01, t.column + 2 * std::ptrdiff_t(at1[j]), 4);
+          const unsigned sh = 16u * unsigned(dx[j]);
+          const std::uint32_t w10 = w00 >> sh, w11 = w01 >> sh;
+          ql[j] = std::int32_t(std::min(std::min(w00 & 0xff, w10 & 0xff), std::min(w01 & 0xff, w11 & 0xff)));
+          qh[j] = std::int32_t(std::max(std::max(w00 >> 8 & 0xff, w10 >> 8 & 0xff),
+                                        std::max(w01 >> 8 & 0xff, w11 >> 8 & 0xff)));
+          if (memo != nullptr)
+            memo[k0 + std::size_t(j)] = std::uint64_t(std::uint32_t(key[j])) |
+                                        std::uint64_t(ql[j]) << 32 | std::uint64_t(qh[j]) << 40;
+        }
+        const __m128i qlo = _mm_load_si128(reinterpret_cast<const __m128i*>(ql));
+        const __m128i qhi = _mm_load_si128(reinterpret_cast<const __m128i*>(qh));
         const __m256d level_hi = level_lanes4(qhi, t);
         const __m256d level_lo = level_lanes4(qlo, t);
         clear_lanes |= ask & (bits4(_mm256_cmp_pd(lo[2], level_hi, _CMP_GT_OQ)) |
@@ -461,7 +498,7 @@ void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
 
 void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
-                         int lanes) {
+                         int lanes, std::uint64_t* __restrict memo) {
 #if SIMREEL_HAS_VECTOR_CLONES
   static const bool avx512 = cpu_has_avx512vl();
   static const bool avx2 = cpu_has_avx2();
@@ -469,7 +506,7 @@ void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
   // The lanes' column index is a 32-bit integer.
   const bool fits = (t.last[0] + 1.0) * (t.last[1] + 1.0) < 0x1p30;
   if (lanes >= 8 && avx512 && fits) {
-    columns_clear_avx512(b, n, c, pend, clear);
+    columns_clear_avx512(b, n, c, pend, clear, memo);
     return;
   }
   if (lanes >= 4 && avx2 && fits) {
@@ -478,12 +515,13 @@ void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
     std::size_t asked = 0;
     for (std::size_t k = 0; k < n; ++k) asked += pend[k] != 0;
     if (4 * asked >= n) {
-      columns_clear_avx2(b, n, c, pend, clear);
+      columns_clear_avx2(b, n, c, pend, clear, memo);
       return;
     }
   }
 #else
   (void)lanes;
+  (void)memo;
 #endif
   columns_clear_scalar(b, n, c, pend, clear);
 }

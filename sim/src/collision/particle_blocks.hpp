@@ -66,14 +66,40 @@ void near_block_plain(const float* __restrict x, const float* __restrict v,
                       double h, const double* g, const std::vector<Collider>& colliders,
                       SweptBounds& b, std::uint8_t* __restrict near, std::uint8_t* __restrict pend);
 
+/// Column answers of earlier steps, for columns_clear_block(): one slot per particle index
+/// holding the key of the columns a particle's box last spanned there (the first column's index
+/// times 4, plus 2 when it spans the next column on x, plus 1 for the next row) with the lowest
+/// and highest level over them as the grid's table gives them (bits 32-39, 40-47). A slot is a
+/// function of its key and the grid alone, so it stays right whichever particle later has the
+/// index; only another grid voids it (MeshGrid::serial()). A drop falling through the same
+/// columns step after step reads its own slot, in index order, instead of a line of the table
+/// at random (what the columns' test mostly waited on). No answer depends on it.
+struct ColumnMemo {
+  static constexpr std::uint64_t kNone = 0xffffffffu;  ///< no key (2^30 columns at most)
+  std::uint64_t serial = 0;          ///< the grid the slots were filled from (0: none)
+  std::vector<std::uint64_t> slot;
+  /// The slots of particles [0, n) for grid g: all emptied first when they were g's.
+  std::uint64_t* for_grid(const MeshGrid& g, std::size_t n) {
+    if (serial != g.serial()) {
+      slot.assign(std::max(n, slot.size()), kNone);
+      serial = g.serial();
+    } else if (slot.size() < n) {
+      slot.resize(n, kNone);
+    }
+    return slot.data();
+  }
+};
+
 /// clear[k] = 0 for each k with pend[k] set whose bounds overlap column-tested mesh c's AABB (as
 /// near_solid()) and are not cleared by its columns (c.mesh->grid.clear_of() of the bounds grown
 /// by b.grow[k]); the others' entries untouched. collide()'s columns_clear() for a block.
 /// `lanes`: the most particles at once, as the CPU runs them: 8 (AVX-512VL), 4 (AVX2) or 1 (the
-/// same answers at each; the tests compare them).
+/// same answers at each; the tests compare them). `memo`: null, or the block's particles'
+/// ColumnMemo slots for c's grid (n of them), read and written by the 8- and 4-lane forms (the
+/// same answers with or without).
 void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
-                         int lanes = 8);
+                         int lanes = 8, std::uint64_t* __restrict memo = nullptr);
 
 /// Lanes [0, len) of `l` from a block of particles (x, v: len x 3; prev: the start-of-step
 /// positions or null; mass, radius, age: len), each lane's step min(age, h). Where the block's

@@ -618,6 +618,14 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       std::uint8_t near[kChunk], pend[kChunk], clear[kChunk];
       thread_local SweptBounds bounds;
       const bool plain = !s.track_prev && f.drag == 0.0f && f.drag_quadratic == 0.0f;
+      // The first column-tested mesh's answers of earlier steps, slot i for particle i (this
+      // thread's; right whichever particle a slot met before: ColumnMemo).
+      thread_local ColumnMemo column_memo;
+      const Collider* memo_mesh = nullptr;
+      for (const Collider& c : colliders)
+        if (memo_mesh == nullptr && column_tested(c)) memo_mesh = &c;
+      std::uint64_t* slots =
+          plain && memo_mesh != nullptr ? column_memo.for_grid(memo_mesh->mesh->grid, e) : nullptr;
       const double g[3] = {f.gravity[0], f.gravity[1], f.gravity[2]};
       for (std::size_t i0 = b; i0 < e; i0 += kChunk) {
         const std::size_t len = std::min(kChunk, e - i0);
@@ -646,7 +654,9 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
         std::fill(clear, clear + len, std::uint8_t{1});
         if (plain)
           for (const Collider& c : colliders)
-            if (column_tested(c)) columns_clear_block(bounds, len, c, pend, clear);
+            if (column_tested(c))
+              columns_clear_block(bounds, len, c, pend, clear, 8,
+                                  &c == memo_mesh ? slots + i0 : nullptr);
         for (std::size_t k = 0; k < len; ++k) {
           const std::size_t i = i0 + k;
           if (near[k] != 0 || (pend[k] != 0 && !(plain ? clear[k] != 0 : columns_clear(i))))
