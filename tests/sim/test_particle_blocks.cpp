@@ -24,18 +24,25 @@
 namespace simreel::sim {
 namespace {
 
+/// An open height field of n x n squares over [-2, 2]² at rest, as a collider: a terrain, which
+/// collide() tests by its columns (column_tested()).
+template <class Height>
+detail::Collider terrain(const Height& height, int n = 48) {
+  ShapeDef def;
+  def.type = ShapeType::mesh;
+  test::fill_height_field(def, n, 2.0, height);
+  detail::Collider c = detail::make_collider(def, "terrain");
+  c.set_pose(Transform{});
+  c.note_pose();
+  return c;
+}
+
 TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
   // An open height field (a terrain: the columns apply) and a block of particles above,
   // through and below it, beside it, newborns (age < h), fast and slow, and a few on its faces.
   const auto height = [](double x, double y) { return 0.2 * std::sin(2.1 * x) * std::cos(1.4 * y); };
-  ShapeDef def;
-  def.type = ShapeType::mesh;
-  test::fill_height_field(def, 48, 2.0, height);
-  detail::Collider c = detail::make_collider(def, "terrain");
-  c.set_pose(Transform{});
-  c.note_pose();
-  ASSERT_TRUE(c.unposed);
-  ASSERT_FALSE(c.mesh->closed);
+  const detail::Collider c = terrain(height);
+  ASSERT_TRUE(detail::column_tested(c));
   const double h = 1.0 / 240;
   const double g[3] = {0.3, -0.2, -9.81};
   Rng rng(31, 2);
@@ -125,13 +132,8 @@ TEST(SimParticleBlocks, ColumnMemoSlotsAnswerAsTheColumnsDo) {
   // against MeshGrid::clear_of() above), in the AVX-512 and AVX2 forms. Then a slot is voided by
   // another grid, and not by the same one.
   const auto height = [](double x, double y) { return 0.3 * std::sin(3.1 * x) * std::cos(2.4 * y); };
-  ShapeDef def;
-  def.type = ShapeType::mesh;
-  test::fill_height_field(def, 48, 2.0, height);
-  detail::Collider c = detail::make_collider(def, "terrain");
-  c.set_pose(Transform{});
-  c.note_pose();
-  ASSERT_TRUE(c.unposed);
+  const detail::Collider c = terrain(height);
+  ASSERT_TRUE(detail::column_tested(c));
   const double h = 1.0 / 240;
   const double g[3] = {0.0, 0.0, -9.81};
   Rng rng(7, 3);
@@ -179,9 +181,7 @@ TEST(SimParticleBlocks, ColumnMemoSlotsAnswerAsTheColumnsDo) {
   ASSERT_NE(kept, detail::ColumnMemo::kNone);
   const detail::MeshGrid copy = c.mesh->grid;
   EXPECT_EQ(memo8.for_grid(copy, kN)[0], kept);
-  ShapeDef other = def;
-  test::fill_height_field(other, 40, 2.0, height);
-  const detail::Collider c2 = detail::make_collider(other, "other");
+  const detail::Collider c2 = terrain(height, 40);
   ASSERT_NE(c2.mesh->grid.serial(), c.mesh->grid.serial());
   const std::uint64_t* slots = memo8.for_grid(c2.mesh->grid, kN);
   for (std::size_t k = 0; k < kN; ++k) ASSERT_EQ(slots[k], detail::ColumnMemo::kNone) << k;

@@ -496,6 +496,18 @@ void columns_clear_avx2(const SweptBounds& b, std::size_t n, const Collider& c,
 #endif
 }  // namespace
 
+std::uint64_t* column_memo_slots(const std::vector<Collider>& colliders, std::size_t n,
+                                 const Collider*& mesh) {
+  thread_local ColumnMemo memo;
+  mesh = nullptr;
+  for (const Collider& c : colliders)
+    if (column_tested(c)) {
+      mesh = &c;
+      return memo.for_grid(c.mesh->grid, n);
+    }
+  return nullptr;
+}
+
 void columns_clear_block(const SweptBounds& b, std::size_t n, const Collider& c,
                          const std::uint8_t* __restrict pend, std::uint8_t* __restrict clear,
                          int lanes, std::uint64_t* __restrict memo) {

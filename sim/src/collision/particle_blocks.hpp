@@ -90,6 +90,12 @@ struct ColumnMemo {
   }
 };
 
+/// This thread's ColumnMemo slots, slot i for particle i < n, for the first column-tested mesh
+/// among colliders, which `mesh` is set to; null (and mesh null) when there is none. (Per thread:
+/// a slot is right whichever particle met it before, so threads need not share.)
+std::uint64_t* column_memo_slots(const std::vector<Collider>& colliders, std::size_t n,
+                                 const Collider*& mesh);
+
 /// clear[k] = 0 for each k with pend[k] set whose bounds overlap column-tested mesh c's AABB (as
 /// near_solid()) and are not cleared by its columns (c.mesh->grid.clear_of() of the bounds grown
 /// by b.grow[k]); the others' entries untouched. collide()'s columns_clear() for a block.

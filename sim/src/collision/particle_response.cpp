@@ -618,14 +618,8 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
       std::uint8_t near[kChunk], pend[kChunk], clear[kChunk];
       thread_local SweptBounds bounds;
       const bool plain = !s.track_prev && f.drag == 0.0f && f.drag_quadratic == 0.0f;
-      // The first column-tested mesh's answers of earlier steps, slot i for particle i (this
-      // thread's; right whichever particle a slot met before: ColumnMemo).
-      thread_local ColumnMemo column_memo;
       const Collider* memo_mesh = nullptr;
-      for (const Collider& c : colliders)
-        if (memo_mesh == nullptr && column_tested(c)) memo_mesh = &c;
-      std::uint64_t* slots =
-          plain && memo_mesh != nullptr ? column_memo.for_grid(memo_mesh->mesh->grid, e) : nullptr;
+      std::uint64_t* slots = plain ? column_memo_slots(colliders, e, memo_mesh) : nullptr;
       const double g[3] = {f.gravity[0], f.gravity[1], f.gravity[2]};
       for (std::size_t i0 = b; i0 < e; i0 += kChunk) {
         const std::size_t len = std::min(kChunk, e - i0);
@@ -695,13 +689,4 @@ void collide(ParticleStore& s, std::size_t begin, std::size_t end, double h,
   if (memo != nullptr) memo->reused = reused;
 }
 
-void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
-                            const std::vector<Collider>& colliders) {
-  float* pf = &s.position[3 * i];
-  const Vec3 to(pf[0], pf[1], pf[2]);
-  Hit hit;
-  for (const Collider& c : colliders) sweep(c, from, to, s.radius[i], false, hit);
-  if (hit.collider == nullptr) return;
-  for (int k = 0; k < 3; ++k) pf[k] = float(hit.point[k]);
-}
 }  // namespace simreel::sim::detail

@@ -281,4 +281,14 @@ bool sweep_collider(const Collider& c, const Vec3& a, const Vec3& b, double r, b
   return true;
 }
 
+void constrain_displacement(ParticleStore& s, std::size_t i, const Vec3& from,
+                            const std::vector<Collider>& colliders) {
+  float* pf = &s.position[3 * i];
+  const Vec3 to(pf[0], pf[1], pf[2]);
+  Hit hit;
+  for (const Collider& c : colliders) sweep(c, from, to, s.radius[i], false, hit);
+  if (hit.collider == nullptr) return;
+  for (int k = 0; k < 3; ++k) pf[k] = float(hit.point[k]);
+}
+
 }  // namespace simreel::sim::detail
