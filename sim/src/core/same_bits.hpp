@@ -21,4 +21,12 @@ inline bool same_bits(const T* p, std::size_t len) {
   return diff == 0;
 }
 
+/// True when p[0..len) is one value repeated, bit for bit, or p is null (no such array: a
+/// charge that all particles lack), looking at a first stretch of 64 before the whole run, so
+/// that varied values cost a few reads. T: float or double.
+template <class T>
+inline bool one_value(const T* p, std::size_t len) {
+  return p == nullptr || (same_bits(p, len < 64 ? len : 64) && same_bits(p, len));
+}
+
 }  // namespace simreel::sim::detail

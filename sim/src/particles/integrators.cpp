@@ -262,10 +262,7 @@ bool semi_implicit_pair_blocks(ParticleStore& s, std::size_t begin, std::size_t 
   // blocks one row of mass0. Else double copies of both (bind_mass_charge()).
   const float* fm = s.mass.data() + begin;
   const float* fq = s.has_charge ? s.charge.data() + begin : nullptr;
-  const auto one_value = [n](const float* p) {
-    return p == nullptr || (same_bits(p, std::min<std::size_t>(n, 64)) && same_bits(p, n));
-  };
-  const bool one = n > 0 && one_value(fm) && one_value(fq);
+  const bool one = n > 0 && one_value(fm, n) && one_value(fq, n);
   alignas(64) double mass_row[B];
   if (one) {
     dyn.n = n;

@@ -93,12 +93,6 @@ void pair_coefficients_shared(double eps2, const double* __restrict r2, double n
   }
 }
 
-/// True when p[0..len) is one value repeated, bit for bit (or p is null: no charges, all 0),
-/// looking at a first stretch before the whole run, so varied values cost a few reads.
-bool one_value(const double* p, std::size_t len) {
-  return p == nullptr || (same_bits(p, std::min<std::size_t>(len, 64)) && same_bits(p, len));
-}
-
 /// The cells of particles [0, len): c[3i + d] = ⌊x[3i + d] inv⌋ (the cell's integer coordinate
 /// along d), with lo[d] and hi[d] lowered and raised to take them in; returns false when some
 /// |⌊x inv⌋| >= kCellBias or is NaN (the caller then takes the 64-bit form, whose clamping a
