@@ -17,6 +17,7 @@
 #include "collision/particle_blocks.hpp"
 #include "collision/plane_rest.hpp"
 #include "collision/sweep.hpp"
+#include "core/vector_clones.hpp"
 #include "sim_test_util.hpp"
 #include "simreel/sim/body.hpp"
 #include "simreel/sim/random.hpp"
@@ -117,8 +118,15 @@ TEST(SimParticleBlocks, ColumnsClearBlockDecidesAsTheParticleTest) {
   }
   const std::size_t filled = std::size_t(std::count_if(
       memo8.slot.begin(), memo8.slot.end(), [](std::uint64_t e) { return e != detail::ColumnMemo::kNone; }));
-  // Both answers are given many times, not one of them always; the slots were written.
-  EXPECT_GT(filled, kN / 4);
+  // Both answers are given many times, not one of them always; the slots were written where a
+  // vector form ran (the scalar one, all a build without GCC's targets has, leaves them).
+#if SIMREEL_HAS_VECTOR_CLONES
+  if (cpu_has_avx2()) {
+    EXPECT_GT(filled, kN / 4);
+  }
+#else
+  EXPECT_EQ(filled, 0u);
+#endif
   EXPECT_GT(cleared, 600);
   EXPECT_GT(kept, 600);
   EXPECT_LT(near_aabb_count, 40 * int(kN) - 500);  // and some particles are beside the AABB
@@ -177,8 +185,8 @@ TEST(SimParticleBlocks, ColumnMemoSlotsAnswerAsTheColumnsDo) {
   EXPECT_GT(differ, asked / 10);
   EXPECT_LT(differ, asked - asked / 10);
   // Another grid (another terrain) voids every slot; the same grid, or a copy of it, keeps them.
-  const std::uint64_t kept = memo8.slot[0];
-  ASSERT_NE(kept, detail::ColumnMemo::kNone);
+  const std::uint64_t kept = 12345;  // (a slot of any content: the memo does not read them here)
+  memo8.for_grid(c.mesh->grid, kN)[0] = kept;
   const detail::MeshGrid copy = c.mesh->grid;
   EXPECT_EQ(memo8.for_grid(copy, kN)[0], kept);
   const detail::Collider c2 = terrain(height, 40);
