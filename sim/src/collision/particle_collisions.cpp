@@ -176,15 +176,38 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   {
     const std::ptrdiff_t np = std::ptrdiff_t(n);
     const bool one = members.size() == 1;
+    if (one) {
+      // The particles come in no order of their own (as in fill_working()): their lines are
+      // asked for, for writing, some entries ahead, so that the stores' misses overlap.
+      float* pos = members[0].store->position.data();
+      float* vel = members[0].store->velocity.data();
+      const std::uint32_t* perm = perm_.data();
+      constexpr std::size_t kAhead = 16;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+      for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
+        const std::size_t q = std::size_t(qq);
+        if (q + kAhead < n) {
+          const std::size_t f = 3 * std::size_t(perm[q + kAhead]);
+          __builtin_prefetch(pos + f, 1);
+          __builtin_prefetch(vel + f, 1);
+        }
+        const std::size_t i = 3 * std::size_t(perm[q]);
+        for (std::size_t a = 0; a < 3; ++a) {
+          pos[i + a] = float(x[q][a]);
+          vel[i + a] = float(v[q][a]);
+        }
+      }
+    } else {
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
       const std::size_t q = std::size_t(qq);
-      const auto [mi, i] = one ? MemberParticle{0, perm_[q]} : member_particle(std::uint32_t(q));
+      const auto [mi, i] = member_particle(std::uint32_t(q));
       ParticleStore& s = *members[mi].store;
       for (int a = 0; a < 3; ++a) {
         s.position[3 * i + std::size_t(a)] = float(x[q][a]);
         s.velocity[3 * i + std::size_t(a)] = float(v[q][a]);
       }
+    }
     }
   }
   if (any_asleep_) unpermute(asleep, perm_, tmp_byte_, par);

@@ -314,19 +314,21 @@ void ParticleCollider::find_pairs_in(std::size_t cell_begin, std::size_t cell_en
     const std::uint64_t kc = key_of[c];
     run_b[0] = first[c];
     run_e[0] = c + 1 < cells && key_of[c + 1] == kc + 1 ? first[c + 2] : first[c + 1];
+    // The cell's candidates: its own run (the cell and the one above), then the four columns.
+    // Particle si of the cell takes those after its own position, in the same order as a loop
+    // over the runs: one vectorised pass for distances and reaches, a branch-free compaction of
+    // the pairs within reach, then try_pair() in order. m counts them as the runs are found, in
+    // registers (a sum over run_b and run_e afterwards was vectorised into 128-bit loads of the
+    // four-byte stores just made, which the store buffer cannot forward).
+    std::size_t m = run_e[0] - run_b[0];
     for (int col = 0; col < 4; ++col) {
       const std::uint64_t lo = kc + off[col] - 1, hi = kc + off[col] + 1;
       const std::size_t end = key_run(key_of, cells, cursor[col], lo, hi);
       const std::size_t cur = cursor[col];
       run_b[col + 1] = first[cur];
       run_e[col + 1] = first[end];
+      m += first[end] - first[cur];
     }
-    // The cell's candidates: its own run (the cell and the one above), then the four columns.
-    // Particle si of the cell takes those after its own position, in the same order as a loop
-    // over the runs: one vectorised pass for distances and reaches, a branch-free compaction of
-    // the pairs within reach, then try_pair() in order.
-    std::size_t m = 0;
-    for (int col = 0; col < 5; ++col) m += run_e[col] - run_b[col];
     if (ps.cand_s.size() < m + 8) {  // + 8: gather_in_box()'s slack
       ps.cand_s.resize(m + 8);
       ps.hit_u.resize(m + 8);

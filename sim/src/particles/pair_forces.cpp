@@ -444,21 +444,25 @@ void Dynamics::pair_forces_over_grid(const T* x) {
     rb[0] = first;
     re[0] = iz + 1 < nz ? cnt[c + 2] : last;
     const std::size_t z0 = iz > 0 ? iz - 1 : iz, z1 = iz + 1 < nz ? iz + 1 : iz;
+    // The candidates are counted from the runs' ends as each is found, in registers: a sum
+    // over rb and re afterwards was vectorised into 128-bit loads of the four-byte stores just
+    // made, which the store buffer cannot forward (a stall of ~5 % of the 100k-particle step).
+    std::size_t m = re[0] - rb[0];
     const auto column = [&](int r, std::size_t cx, std::size_t cy) {
       if (cx >= nx || cy >= ny) {  // (below 0 wraps to a huge value)
         rb[r] = re[r] = 0;
         return;
       }
       const std::size_t base = (cx * std::size_t(ny) + cy) * std::size_t(nz);
-      rb[r] = cnt[base + z0];
-      re[r] = cnt[base + z1 + 1];
+      const std::uint32_t b = cnt[base + z0], e = cnt[base + z1 + 1];
+      rb[r] = b;
+      re[r] = e;
+      m += e - b;
     };
     column(1, ix, iy + 1);
     column(2, ix + 1, iy - 1);
     column(3, ix + 1, iy);
     column(4, ix + 1, iy + 1);
-    std::size_t m = 0;
-    for (int r = 0; r < 5; ++r) m += re[r] - rb[r];
     if (in_place != nullptr) {
       g.reserve_pairs(g.pairs + std::size_t(last - first) * m + 8);
       g.pairs = in_place(sx, sy, sz, first, last, rb, re, cut2, g.pi.data(), g.pj.data(), g.pr2.data(), g.pairs);
