@@ -199,15 +199,15 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
       }
     } else {
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
-    for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
-      const std::size_t q = std::size_t(qq);
-      const auto [mi, i] = member_particle(std::uint32_t(q));
-      ParticleStore& s = *members[mi].store;
-      for (int a = 0; a < 3; ++a) {
-        s.position[3 * i + std::size_t(a)] = float(x[q][a]);
-        s.velocity[3 * i + std::size_t(a)] = float(v[q][a]);
+      for (std::ptrdiff_t qq = 0; qq < np; ++qq) {
+        const std::size_t q = std::size_t(qq);
+        const auto [mi, i] = member_particle(std::uint32_t(q));
+        ParticleStore& s = *members[mi].store;
+        for (int a = 0; a < 3; ++a) {
+          s.position[3 * i + std::size_t(a)] = float(x[q][a]);
+          s.velocity[3 * i + std::size_t(a)] = float(v[q][a]);
+        }
       }
-    }
     }
   }
   if (any_asleep_) unpermute(asleep, perm_, tmp_byte_, par);
