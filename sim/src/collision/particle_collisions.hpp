@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "core/counting_sort.hpp"
+#include "core/raw_vector.hpp"
 #include "core/run_claims.hpp"
 #include "collision/collider_impl.hpp"
 #include "particles/particle_store.hpp"
@@ -363,17 +364,17 @@ class ParticleCollider {
   /// contacts is then a run of each column, so the SIMD updates load and store a field for all
   /// their lanes at once instead of assembling it lane by lane. A collider contact's surface
   /// velocity is in work_vc_.
-  struct SolverColumns {
-    std::vector<std::uint32_t> i, j;
-    std::vector<double> n[3];
-    std::vector<double> m_eff, target, mu, pn;
-    std::vector<double> pt[3];
+  struct SolverColumns {  // (every column written whole by schedule() before a read)
+    RawVector<std::uint32_t> i, j;
+    RawVector<double> n[3];
+    RawVector<double> m_eff, target, mu, pn;
+    RawVector<double> pt[3];
     void resize(std::size_t m);
   };
   SolverColumns work_;
   std::vector<Vec3> work_vc_;
-  std::vector<double> work_depth_;  ///< Contact::depth in work order (the projection's)
-  std::vector<SolveBody> body_;  ///< solve(): v and inv_mass of each particle during the sweeps
+  RawVector<double> work_depth_;  ///< Contact::depth in work order (the projection's)
+  RawVector<SolveBody> body_;  ///< solve(): v and inv_mass of each particle during the sweeps
   std::vector<std::uint32_t> sched_, wave_;
   /// schedule(): per thread, each particle's latest wave in the current window, and a window's
   /// contacts per wave
@@ -396,7 +397,7 @@ class ParticleCollider {
   std::vector<std::uint64_t> key_flat_;
   std::vector<FlatParticle> flat_;
   std::vector<std::uint32_t> warm_first_;  ///< (flat particle) first cache entry with its key
-  std::vector<double> half_dt_;            ///< (sorted) min(age, h) / 2
+  RawVector<double> half_dt_;              ///< (sorted) min(age, h) / 2
   std::vector<std::size_t> member_base_;  ///< run(): flat index of each member's first particle
   /// run(): every working array in the order perm_ gives, each entry read from its member's
   /// particle (x and radius again: the grid read them in flat order); with `grid`, also the
