@@ -14,7 +14,7 @@
 //            0.05 m/s (simreel's contact speed), each body's restitution sqrt(0.5) and friction
 //            sqrt(0.1) (Bullet multiplies a pair's two), deactivation off, split impulse at
 //            Bullet's default; its spheres rotate (as its users get them). The scene is scaled
-//            100x for it (kBulletScale: Bullet's margins are sized for objects of ~1 m) and its
+//            100x for it (g_bullet_scale: Bullet's margins are sized for objects of ~1 m) and its
 //            results scaled back.
 // Timed, per engine (process CPU time, each step on its own): steps 1-10 from the start (what
 // internal_world/N/1 times) and steps 3-32 (internal_world_steady/N/1); medians over the rounds.
@@ -53,12 +53,13 @@ constexpr double kRestitution = 0.5, kFriction = 0.1, kContactSpeed = 0.05;
 constexpr int kIterations = 16;
 constexpr int kSteps = 32;
 /// Bullet is given the scene 100 times larger (lengths and speeds; masses and times as they are),
-/// which the collisions do not notice, but which puts its 1 cm spheres at 1 m: Bullet's manual
-/// asks for objects of 0.05-10 units, and its absolute margins are sized for ~1 m (the dynamic
-/// AABB tree's 5 cm, the 2 cm contact-breaking threshold). At 1 cm its tree reported 353,000
+/// which the collisions do not notice, but which puts its 1 cm spheres at 1 m: Bullet's wiki
+/// ("Scaling The World") puts moving objects at 0.05-10 units and scales small ones up (its
+/// pool balls by 100), and its absolute margins are sized for ~1 m (the dynamic AABB tree's
+/// 5 cm, the 2 cm contact-breaking threshold). At 1 cm its tree reported 353,000
 /// overlapping pairs among 1,000 spheres and stepped them in ~100 ms; 10,000 spheres held
 /// 74,000, 26,000 and 16,000 pairs scaled by 10, 30 and 100, and stepped in 91, 59 and 57 ms.
-double kBulletScale = 100.0;  // --bullet-scale
+double g_bullet_scale = 100.0;  // --bullet-scale
 
 double cpu_seconds() {
   timespec t{};
@@ -198,7 +199,7 @@ struct BulletCloud {
   btDbvtBroadphase broadphase;
   btSequentialImpulseConstraintSolver solver;
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
-  btSphereShape sphere{btScalar(kBulletScale * kRadius)};
+  btSphereShape sphere{btScalar(g_bullet_scale * kRadius)};
   std::vector<btDefaultMotionState> states;
   std::vector<btRigidBody*> bodies;
 };
@@ -207,12 +208,12 @@ Result run_bullet(const Cloud& c) {
   auto* w = new BulletCloud;  // (never deleted: see BulletCloud)
   w->world.setGravity(btVector3(0, 0, 0));
   w->world.getSolverInfo().m_numIterations = kIterations;
-  w->world.getSolverInfo().m_restitutionVelocityThreshold = btScalar(kBulletScale * kContactSpeed);
+  w->world.getSolverInfo().m_restitutionVelocityThreshold = btScalar(g_bullet_scale * kContactSpeed);
   btVector3 inertia(0, 0, 0);
   w->sphere.calculateLocalInertia(btScalar(kMass), inertia);
   const auto bt = [](const Vec3& a) {
-    return btVector3(btScalar(kBulletScale * a.x()), btScalar(kBulletScale * a.y()),
-                     btScalar(kBulletScale * a.z()));
+    return btVector3(btScalar(g_bullet_scale * a.x()), btScalar(g_bullet_scale * a.y()),
+                     btScalar(g_bullet_scale * a.z()));
   };
   w->states.resize(c.x.size());
   w->bodies.reserve(c.x.size());
@@ -237,8 +238,8 @@ Result run_bullet(const Cloud& c) {
   for (std::size_t i = 0; i < w->bodies.size(); ++i) {
     const btVector3& o = w->bodies[i]->getWorldTransform().getOrigin();
     const btVector3& u = w->bodies[i]->getLinearVelocity();
-    x[i] = Vec3(o.x(), o.y(), o.z()) / kBulletScale;
-    v[i] = Vec3(u.x(), u.y(), u.z()) / kBulletScale;
+    x[i] = Vec3(o.x(), o.y(), o.z()) / g_bullet_scale;
+    v[i] = Vec3(u.x(), u.y(), u.z()) / g_bullet_scale;
   }
   r.end = measure(x, v);
   r.pairs = std::size_t(w->broadphase.getOverlappingPairCache()->getNumOverlappingPairs());
@@ -270,7 +271,7 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[i], "--n") == 0 && i + 1 < argc)
       n = std::size_t(std::max(2L, std::atol(argv[++i])));
     else if (std::strcmp(argv[i], "--bullet-scale") == 0 && i + 1 < argc)
-      kBulletScale = std::max(1e-3, std::atof(argv[++i]));
+      g_bullet_scale = std::max(1e-3, std::atof(argv[++i]));
     else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc)
       reps = std::max(1, std::atoi(argv[++i]));
     else {
@@ -309,7 +310,7 @@ int main(int argc, char** argv) {
     print_state("Bullet", peer.back());
     std::printf("  Bullet   scene scaled by %g; after %d steps its broadphase held %zu pairs and its "
                 "dispatcher %zu contact manifolds\n",
-                kBulletScale, kSteps, peer.back().pairs, peer.back().manifolds);
+                g_bullet_scale, kSteps, peer.back().pairs, peer.back().manifolds);
   }
   return 0;
 }
