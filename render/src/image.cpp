@@ -160,10 +160,40 @@ std::string format_by_signature(const std::string& head) {
   return "";
 }
 
-/// What a `format` file that stb_image refused with failure `code` is, in words: its terse codes
-/// for a file that ends early named as such.
-std::string undecodable(const std::string& format, const char* code) {
-  const std::string c = code != nullptr ? code : "unknown error";
+/// Whether a PNG file ends before its IEND chunk: inside a chunk, or between chunks (PNG
+/// specification §5.3: each chunk is a 4-byte length, a 4-byte type, the data and a 4-byte CRC).
+/// Only the lengths are read, by seeking past each chunk's data.
+bool png_cut_short(const fs::path& path) {
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) return false;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return false;
+  std::uintmax_t at = kPngSignature.size();
+  bool cut = true;
+  while (at + 8 <= size) {
+    unsigned char head[8];
+    if (std::fseek(f, long(at), SEEK_SET) != 0 || std::fread(head, 1, 8, f) != 8) break;
+    const std::uintmax_t len = std::uintmax_t(head[0]) << 24 | std::uintmax_t(head[1]) << 16 |
+                               std::uintmax_t(head[2]) << 8 | std::uintmax_t(head[3]);
+    at += 12 + len;
+    if (at > size) break;
+    if (std::memcmp(head + 4, "IEND", 4) == 0) {
+      cut = false;
+      break;
+    }
+  }
+  std::fclose(f);
+  return cut;
+}
+
+/// What a `format` file that stb_image refused with failure `code` is, in words: a PNG whose
+/// chunks run past its end (`cut_short`) is named as cut short without stb_image's code, which
+/// for a file cut at or near a chunk's start is empty or a fragment of the chunk's type ("IDA");
+/// otherwise its terse codes for a file that ends early are named as such.
+std::string undecodable(const std::string& format, const char* code, bool cut_short) {
+  if (cut_short) return "a " + format + " file cut short: its data ends early";
+  const std::string c = code != nullptr && *code != '\0' ? code : "no reason given";
   const bool cut = c == "outofdata" || c == "bad file" || c == "unexpected end" || c == "no IDAT" ||
                    c == "not enough pixels";
   return "a " + format + (cut ? " file cut short: its data ends early" : " file that cannot be decoded") +
@@ -222,7 +252,7 @@ Image read_image(const fs::path& path) {
   const auto decode_error = [&](bool loading) {
     if (format.empty())
       return IoError(what + "not an image format simreel reads (PNG, JPEG, BMP, GIF, TGA, PSD, HDR, PNM)");
-    return IoError(what + (loading ? undecodable(format, stbi_failure_reason())
+    return IoError(what + (loading ? undecodable(format, stbi_failure_reason(), format == "PNG" && png_cut_short(path))
                                    : "a " + format + " file whose header is cut short or corrupt"));
   };
   std::uint32_t png_w = 0, png_h = 0;

@@ -209,13 +209,25 @@ TEST(RenderImage, EmptyOversizedAndNonRegularImagesAreRefusedByName) {
   err = read_error(fifo);
   ::close(writer);
   EXPECT_NE(err.find(fifo.string() + ": not a regular file"), std::string::npos) << err;
-  // A PNG cut short in its pixels.
-  const fs::path cut = dir.path() / "cut.png";
-  write_png(cut, pattern(64, 64));
-  fs::resize_file(cut, fs::file_size(cut) / 2);
-  err = read_error(cut);
-  EXPECT_NE(err.find(cut.string() + ": a PNG file cut short: its data ends early (stb_image: "), std::string::npos)
-      << err;
+  // A PNG cut short: in its pixels, between chunks, inside a chunk's type (stb_image's reason
+  // was then a fragment of it: "(stb_image: ID)") or length, a few bytes into the compressed
+  // rows (its reason was empty: "(stb_image: )"), and inside the closing IEND chunk.
+  const fs::path whole = dir.path() / "whole.png";
+  write_png(whole, pattern(64, 64));
+  std::string bytes;
+  {
+    std::ifstream in(whole, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::size_t idat = bytes.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  for (const std::size_t size : {bytes.size() / 2, idat - 4, idat - 2, idat + 2, idat + 10, bytes.size() - 6}) {
+    const fs::path cut = dir.path() / ("cut" + std::to_string(size) + ".png");
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, size);
+    err = read_error(cut);
+    EXPECT_NE(err.find(cut.string() + ": a PNG file cut short: its data ends early"), std::string::npos) << err;
+    EXPECT_EQ(err.find("stb_image"), std::string::npos) << err;
+  }
 }
 
 TEST(RenderImage, RefusedImagesSayWhatIsWrongNotUnknownType) {
