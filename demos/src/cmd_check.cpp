@@ -1,11 +1,13 @@
 // `simreel check`: re-render what golden hash records describe and compare the frames' hashes;
 // --update rewrites the goldens and their reference frames; --junit and --report tell CI.
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <cstring>
 #include <sstream>
 
 #include "check_report.hpp"
@@ -149,9 +151,23 @@ GoldenOutcome check_one(const fs::path& golden_path, const CheckOptions& o, cons
     try {
       return prepare_scene(run, &first);
     } catch (const SceneError& e) {
-      throw SceneError(name + ": /scene: " + run.scene + " is not a valid scene (" +
-                       std::to_string(e.messages().size()) + " error(s), not shown: run `simreel validate " +
-                       run.scene + "` to see them)");
+      // The golden's own overrides go into the command: without them `validate` may pass a
+      // scene that only an override (a key the scene lacks, a value out of range) breaks.
+      const auto quoted = [](const std::string& a) {
+        const bool plain = !a.empty() && std::all_of(a.begin(), a.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) != 0 || std::strchr("_./:=+-@%,", c) != nullptr;
+        });
+        if (plain) return a;
+        std::string q = "'";
+        for (const char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+        return q + "'";
+      };
+      std::string command = "simreel validate " + quoted(run.scene);
+      for (const std::string& o : run.overrides) command += " --set " + quoted(o);
+      throw SceneError(name + ": /scene: " + run.scene + " is not a valid scene" +
+                       (run.overrides.empty() ? "" : " with the golden's /set overrides") + " (" +
+                       std::to_string(e.messages().size()) + " error(s), not shown: run `" + command +
+                       "` to see them)");
     }
   }();
   if (!o.update && golden.frames.empty())

@@ -613,6 +613,19 @@ TEST(Robust, GoldenScenePathsStayInsideTheGoldensFolder) {
   write_file(d / "g" / "golden.json", head + "\"s.json\"}");
   r = run_simreel("check " + (d / "g" / "golden.json").string());
   EXPECT_TRUE(has(r.err, "holds no hashes")) << "the scene loaded, then the empty golden was refused: " << r.err;
+  // A valid scene that only the golden's /set overrides break: the command the message gives
+  // carries them (quoted for the shell), so it shows the error; without them `validate` said ok.
+  write_file(d / "g" / "golden.json", head + R"("s.json", "set": ["/nope=1", "/description=it's"]})");
+  r = run_simreel("check " + (d / "g" / "golden.json").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  const std::size_t at = r.err.find("run `simreel validate ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const std::size_t from = at + std::string("run `simreel ").size();
+  const std::string command = r.err.substr(from, r.err.find('`', from) - from);
+  EXPECT_TRUE(has(command, "--set /nope=1 --set '/description=it'\\''s'")) << command;
+  const auto shown = run_simreel(command);  // (from the same working directory as the check)
+  EXPECT_EQ(shown.code, 2) << shown.err;
+  EXPECT_TRUE(has(shown.err, "/nope: unknown key")) << shown.err;
 }
 
 // --- no temporaries left behind ----------------------------------------------------------------
