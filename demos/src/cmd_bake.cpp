@@ -47,6 +47,7 @@ int bake_command(const BakeOptions& o) {
   const fs::path dir = o.cache;
   if (fs::exists(dir) && !fs::is_directory(dir))
     throw SceneError("--cache " + o.cache + ": is a file, expected a folder");
+  check_outputs({{"--cache", o.cache, true}});  // (a folder above it that is a file)
 
   CacheManifest manifest;
   manifest.id = cache_identity(scene, o.scene, o.overrides);

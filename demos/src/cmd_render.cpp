@@ -128,7 +128,9 @@ int render_command(const RenderOptions& o) {
     check_outputs(checked);
   }
   const auto [sheet_cols, sheet_rows] = parse_grid(o.sheet_grid);
-  if (o.hash_every < 1) throw SceneError("--hash-every " + std::to_string(o.hash_every) + ": expected an integer >= 1");
+  // (the range `check` reads back from the golden)
+  if (o.hash_every < 1 || o.hash_every > 1000000)
+    throw SceneError("--hash-every " + std::to_string(o.hash_every) + ": expected an integer in [1, 1000000]");
   if (!o.bitrate.empty() && !render::video_bitrate(o.bitrate))
     throw SceneError("--bitrate " + o.bitrate + ": expected a number with an optional k or M suffix in [1k, 10000M], e.g. 4M");
 

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "run_options.hpp"
 #include "simreel/sim/ranges.hpp"
 #include "json_reader.hpp"
 #include "scene.hpp"
@@ -251,6 +252,7 @@ int schema_command(const std::string& output) {
     std::cout << text;
     return 0;
   }
+  check_outputs({{"-o", output, false}});
   render::write_file_atomic(output, text);
   std::cout << "wrote " << output << "\n";
   return 0;

@@ -62,8 +62,7 @@ int main(int argc, char** argv) {
   render->add_option("--hash", render_opts.hash_file,
                      "Write the phash/dhash/chash of the rendered frames and how they were made to FILE.json (a golden "
                      "for `simreel check`)");
-  render->add_option("--hash-every", render_opts.hash_every, "Hash every K-th frame of the range (default 1)")
-      ->check(CLI::PositiveNumber);
+  render->add_option("--hash-every", render_opts.hash_every, "Hash every K-th frame of the range (default 1)");
   render->add_flag("--overlay", render_opts.overlay, "Draw the frame number and time onto PNG/video/sheet frames");
   render->add_flag("--sync-writes", render_opts.sync_writes,
                    "Write outputs on the render thread instead of writer threads (for measurements)");

@@ -38,6 +38,18 @@ void check_outputs(const std::vector<OutputPath>& outputs) {
     } else if (const std::string why = render::unreplaceable_output(out.path); !why.empty()) {
       throw SceneError(out.option + " " + out.path + ": " + why);
     }
+    // The nearest folder above it that exists must be a folder: under a regular file (-o
+    // notes.txt/frames) the output could only fail once the render had started.
+    for (fs::path up = fs::path(out.path).parent_path(); !up.empty(); up = up.parent_path()) {
+      const std::string kind = render::file_kind(up);
+      if (kind.empty()) {  // (not there: its own parent decides)
+        if (up == up.parent_path()) break;
+        continue;
+      }
+      if (kind != "a directory")
+        throw SceneError(out.option + " " + out.path + ": " + up.string() + " is " + kind + ", expected a folder");
+      break;
+    }
     // Same path however spelled ("a.gif", "./a.gif", a link to it).
     fs::path key = fs::weakly_canonical(fs::absolute(out.path, ec), ec);
     if (ec) key = fs::absolute(out.path).lexically_normal();

@@ -354,6 +354,30 @@ TEST(Cli, BadOutputOptionsExit2) {
   r = run_simreel(base + "-o " + (d / "v.avi").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_FALSE(fs::exists(d / "v.mp4"));
+  // An output under a regular file is refused before anything is simulated (it failed with
+  // exit 1 once the run was under way), whichever command writes it.
+  write_file(d / "notes.txt", "not a folder");
+  const std::string under = (d / "notes.txt").string();
+  const std::string scene = (d / "s.json").string();
+  for (const std::string& args :
+       {base + "-o " + under + "/frames", base + "-o " + under + "/deeper/v.mp4",
+        base + "-o " + (d / "f").string() + " --contact-sheet " + under + "/s.png",
+        base + "-o " + (d / "f").string() + " --hash " + under + "/h.json",
+        "bake " + scene + " -q --frames 2 --cache " + under + "/cache",
+        "simulate " + scene + " --frames 2 --export " + under + "/p.csv", "schema -o " + under + "/s.json"}) {
+    r = run_simreel(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(under + " is a regular file, expected a folder"), std::string::npos) << args << ": " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "f"));
+  // --hash-every in the range `check` reads back from the golden (CLI11's own check had printed
+  // "Value 0 not in range 0.000000 to 1797693134862315708...").
+  for (const std::string every : {"0", "1000001"}) {
+    r = run_simreel(base + "-o " + (d / "f").string() + " --hash " + (d / "h.json").string() + " --hash-every " + every);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--hash-every " + every + ": expected an integer in [1, 1000000]"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(d / "h.json"));
 }
 
 // Ctrl-C: the frame being made is finished, the video closed so it plays, exit 130.

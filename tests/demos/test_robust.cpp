@@ -505,18 +505,20 @@ TEST(Robust, MeshScaledBeyondFloatRangeIsRefusedAtItsScale) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
+// Bad input, refused before the run (exit 2; they failed with exit 1 once it was under way).
+// Cli.BadOutputOptionsExit2 takes every command that writes an output.
 TEST(Robust, OutputsUnderAFileNameTheOutputAndTheFile) {
   TempDir d;
   write_file(d / "f", "x");
   auto r = run_simreel("simulate demos/scenes/fountain.json --frames 2 --export " + (d / "f" / "o.csv").string());
-  EXPECT_EQ(r.code, 1);
-  EXPECT_TRUE(has(r.err, "cannot write " + (d / "f" / "o.csv").string() + ": " + (d / "f").string() +
-                             " is a file, expected a directory"))
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "--export " + (d / "f" / "o.csv").string() + ": " + (d / "f").string() +
+                             " is a regular file, expected a folder"))
       << r.err;
   r = run_simreel("render demos/scenes/fountain.json --frames 2 --size 32x32 -q -o " + (d / "f" / "v.mp4").string());
-  EXPECT_EQ(r.code, 1);
-  EXPECT_TRUE(has(r.err, "cannot encode " + (d / "f" / "v.mp4").string() + ": " + (d / "f").string() +
-                             " is a file, expected a directory"))
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(has(r.err, "-o " + (d / "f" / "v.mp4").string() + ": " + (d / "f").string() +
+                             " is a regular file, expected a folder"))
       << r.err;
   EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator()), 1) << "nothing but f";
 }
