@@ -28,7 +28,14 @@ scene=$1; shift
 out="" frames="" chunk=50 partition="" simreel=$(command -v simreel || true) size="" seed="" cpus=1 vary="" wait=0
 sheet_frames=3
 sets=()
+# An option's value, or a clear refusal where it is missing (set -u would print "$2: unbound
+# variable").
+value() { [[ $# -ge 2 && $2 != --* ]] || die "$1: expected a value"; }
 while [[ $# -gt 0 ]]; do
+  case $1 in
+    --wait) wait=1; shift; continue ;;
+    --out|--frames|--chunk|--partition|--simreel|--size|--set|--seed|--cpus|--vary|--sheet-frames) value "$@" ;;
+  esac
   case $1 in
     --out) out=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
@@ -41,14 +48,33 @@ while [[ $# -gt 0 ]]; do
     --cpus) cpus=$2; shift 2 ;;
     --vary) vary=$2; shift 2 ;;
     --sheet-frames) sheet_frames=$2; shift 2 ;;
-    --wait) wait=1; shift ;;
     *) die "unknown option $1" ;;
   esac
 done
 [[ -n $out ]] || die "--out DIR is required"
 [[ -f $scene ]] || die "$scene: no such scene file"
 [[ -n $simreel && -x $simreel ]] || die "--simreel: no simreel program (give its path)"
-[[ $chunk =~ ^[1-9][0-9]*$ ]] || die "--chunk $chunk: expected a positive integer"
+positive() { [[ $2 =~ ^[1-9][0-9]{0,6}$ ]] || die "$1 $2: expected a positive integer"; }
+positive --chunk "$chunk"
+positive --cpus "$cpus"
+positive --sheet-frames "$sheet_frames"
+[[ -z $frames ]] || positive --frames "$frames"
+[[ -z $seed || $seed =~ ^[0-9]{1,18}$ ]] || die "--seed $seed: expected an integer >= 0"
+
+# The scene as every job will load it (with the overrides; for a sweep, each variant), checked
+# here so that a bad scene or value is refused before anything is submitted, not in a job.
+check=("$simreel" validate "$scene")
+for s in "${sets[@]}"; do check+=(--set "$s"); done
+if [[ -z $vary ]]; then
+  "${check[@]}" >/dev/null || die "$scene: not a valid scene (simreel's error above)"
+else
+  pointer=${vary%%=*}
+  IFS=, read -r -a values <<< "${vary#*=}"
+  [[ ${#values[@]} -ge 1 && $pointer != "$vary" && $pointer == /* ]] || die "--vary $vary: expected POINTER=V1,V2,..."
+  for v in "${values[@]}"; do
+    "${check[@]}" --set "$pointer=$v" >/dev/null || die "--vary $pointer=$v: not a valid scene (simreel's error above)"
+  done
+fi
 command -v sbatch >/dev/null || die "sbatch not found: is this a Slurm submit host?"
 
 scene=$(realpath "$scene"); simreel=$(realpath "$simreel")
@@ -56,12 +82,20 @@ mkdir -p "$out"; out=$(realpath "$out")
 mkdir -p "$out/logs" "$out/jobs"
 stem=$(basename "$scene" .json)
 
-# The scene's frame count and fps when not given (simreel validate prints nothing we need, so
-# read the JSON with python3, which every Debian node has).
-if [[ -z $frames ]]; then
-  frames=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1])).get("frames", 120))' "$scene")
-fi
-fps=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1])).get("fps", 30))' "$scene")
+# The scene's frame count and fps, as the jobs see them: the file's (simreel validate prints
+# nothing we need, so python3, which every Debian node has, reads the JSON it has just
+# accepted), then the last --set of /frames or /fps; --frames wins over both.
+read -r scene_frames fps < <(python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+print(d.get("frames", 120), d.get("fps", 30))' "$scene")
+for s in "${sets[@]}"; do
+  case $s in
+    /frames=*) scene_frames=${s#/frames=} ;;
+    /fps=*) fps=${s#/fps=} ;;
+  esac
+done
+[[ -n $frames ]] || frames=$scene_frames
 [[ $frames =~ ^[1-9][0-9]*$ ]] || die "--frames $frames: expected a positive integer"
 
 # Shell-quoted common options (scene overrides and seed: the bake and the renders must agree).
@@ -103,9 +137,6 @@ JOB
   result="$out/$stem.mp4"
   echo "bake job $bake; render array $render (${tasks} tasks of $chunk frames); join job after them -> $out/$stem.mp4"
 else
-  pointer=${vary%%=*}
-  IFS=, read -r -a values <<< "${vary#*=}"
-  [[ ${#values[@]} -ge 1 && $pointer != "$vary" ]] || die "--vary $vary: expected POINTER=V1,V2,..."
   tasks=${#values[@]}
   printf '%s\n' "${values[@]}" > "$out/jobs/values.txt"
   # The sheet's frames: evenly over the range.
