@@ -376,6 +376,20 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
       shortest = std::min(shortest, (T.local_rest[T.edges[e]] - T.local_rest[T.edges[e + 1]]).norm());
     self_thickness[k] = std::min(cloths[k].thickness, 0.25 * shortest);
   }
+  // The farthest any pair reaches (pair_delta() below): the pairs' boxes grow by this, not by
+  // the collider margin, which a thick cloth's collider contacts need and its self contacts do
+  // not. Where the two agree (every demo) the pairs share the colliders' tree.
+  double pair_margin = 0.0, others_margin = 0.0;
+  std::size_t with_others = 0;  // (one such cloth has no other to meet)
+  for (std::size_t k = 0; k < cloths.size(); ++k) {
+    if (cloths[k].self) pair_margin = std::max(pair_margin, self_thickness[k]);
+    if (cloths[k].others) {
+      others_margin = std::max(others_margin, cloths[k].thickness);
+      ++with_others;
+    }
+  }
+  if (with_others >= 2) pair_margin = std::max(pair_margin, others_margin);
+  const bool own_pair_tree = pairs && pair_margin < margin;
   auto tri_nodes = [&](std::uint32_t gt, std::uint32_t& k, std::uint32_t id[3]) {
     k = std::uint32_t(std::upper_bound(S.tri_offset.begin(), S.tri_offset.end(), gt) -
                       S.tri_offset.begin() - 1);
@@ -399,6 +413,7 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
   for (int round = 0; round < kRounds + kFailsafeRounds; ++round) {
     // Swept boxes of the triangles, grown by the largest contact distance.
     S.boxes.resize(nt);
+    if (own_pair_tree) S.pair_boxes.resize(nt);
     for (std::uint32_t gt = 0; gt < nt; ++gt) {
       std::uint32_t k, id[3];
       tri_nodes(gt, k, id);
@@ -409,14 +424,28 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
       }
       const Vec3 g = Vec3::Constant(margin);
       S.boxes[gt] = Triangle{b.lo - g, b.hi + g, b.lo - g, Vec3::Zero()};
+      if (own_pair_tree) {
+        const Vec3 gp = Vec3::Constant(pair_margin);
+        S.pair_boxes[gt] = Triangle{b.lo - gp, b.hi + gp, b.lo - gp, Vec3::Zero()};
+      }
     }
-    if (S.rebuild || S.bvh.size() != nt) {
+    const bool rebuilt = S.rebuild || S.bvh.size() != nt;
+    if (rebuilt) {
       S.bvh = Bvh(S.boxes);
       S.rebuild = false;
     } else {
       S.bvh.refit(S.boxes);
     }
+    if (own_pair_tree) {
+      if (rebuilt || S.pair_bvh.size() != nt)
+        S.pair_bvh = Bvh(S.pair_boxes);
+      else
+        S.pair_bvh.refit(S.pair_boxes);
+    }
     const Bvh& bvh = S.bvh;
+    // The pairs' tree and boxes (the colliders' where they reach as far).
+    const Bvh& pair_bvh = own_pair_tree ? S.pair_bvh : S.bvh;
+    const std::vector<Triangle>& pair_boxes = own_pair_tree ? S.pair_boxes : S.boxes;
     S.contacts.clear();
     Contact c;
     // Collider points against triangles.
@@ -486,7 +515,7 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
           if (id2[0] == p || id2[1] == p || id2[2] == p) continue;
           if (S.winv[p] + S.winv[id2[0]] + S.winv[id2[1]] + S.winv[id2[2]] == 0.0) continue;
           const Vec3 lo = S.x0[p].cwiseMin(S.x[p]), hi = S.x0[p].cwiseMax(S.x[p]);
-          if (!boxes_meet(S.boxes[g2].a, S.boxes[g2].b, lo, hi)) continue;
+          if (!boxes_meet(pair_boxes[g2].a, pair_boxes[g2].b, lo, hi)) continue;
           if (vertex_triangle(S, p, id2[0], id2[1], id2[2], delta, Vec3::Zero(), c)) {
             c.friction = friction;
             c.collider = -1;
@@ -494,8 +523,8 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
           }
         }
       };
-      bvh.self_pairs([&](std::uint32_t g1, std::uint32_t g2) {
-        if (!boxes_meet(S.boxes[g1].a, S.boxes[g1].b, S.boxes[g2].a, S.boxes[g2].b)) return;
+      pair_bvh.self_pairs([&](std::uint32_t g1, std::uint32_t g2) {
+        if (!boxes_meet(pair_boxes[g1].a, pair_boxes[g1].b, pair_boxes[g2].a, pair_boxes[g2].b)) return;
         std::uint32_t k1, k2, id1[3], id2[3];
         const std::uint32_t t1 = tri_nodes(g1, k1, id1), t2 = tri_nodes(g2, k2, id2);
         const double delta = pair_delta(k1, std::int32_t(k2));
@@ -542,8 +571,8 @@ ContactStats collide_cloth_features(std::vector<ContactCloth>& cloths,
         if (cloths[kp].topo->vertex_triangle[p - S.offset[kp]] != std::numeric_limits<std::uint32_t>::max())
           continue;
         const Vec3 lo = S.x0[p].cwiseMin(S.x[p]), hi = S.x0[p].cwiseMax(S.x[p]);
-        bvh.query(lo, hi, [&](std::uint32_t gt) {
-          if (!boxes_meet(S.boxes[gt].a, S.boxes[gt].b, lo, hi)) return;  // leaves hold 4
+        pair_bvh.query(lo, hi, [&](std::uint32_t gt) {
+          if (!boxes_meet(pair_boxes[gt].a, pair_boxes[gt].b, lo, hi)) return;  // leaves hold 4
           std::uint32_t k, id[3];
           tri_nodes(gt, k, id);
           const double delta = pair_delta(kp, std::int32_t(k));
