@@ -161,15 +161,17 @@ std::string read_error(const fs::path& path) {
   return "";
 }
 
+/// The bytes of the file at `path`.
+std::string file_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 /// A 4 x 1 PNG whose IHDR chunk is rewritten to declare w x h pixels, its CRC-32 recomputed so
 /// that only the size is wrong.
 void write_declared_png(const fs::path& path, std::uint32_t w, std::uint32_t h) {
   write_png(path, pattern(4, 1));
-  std::string bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  std::string bytes = file_bytes(path);
   ASSERT_EQ(bytes.substr(12, 4), "IHDR");
   for (int k = 0; k < 4; ++k) {
     bytes[std::size_t(16 + k)] = char(w >> (24 - 8 * k));
@@ -214,11 +216,7 @@ TEST(RenderImage, EmptyOversizedAndNonRegularImagesAreRefusedByName) {
   // rows (its reason was empty: "(stb_image: )"), and inside the closing IEND chunk.
   const fs::path whole = dir.path() / "whole.png";
   write_png(whole, pattern(64, 64));
-  std::string bytes;
-  {
-    std::ifstream in(whole, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  const std::string bytes = file_bytes(whole);
   const std::size_t idat = bytes.find("IDAT");
   ASSERT_NE(idat, std::string::npos);
   for (const std::size_t size : {bytes.size() / 2, idat - 4, idat - 2, idat + 2, idat + 10, bytes.size() - 6}) {
@@ -249,11 +247,7 @@ TEST(RenderImage, RefusedImagesSayWhatIsWrongNotUnknownType) {
   // Its compressed data damaged: stb_image's reason, named as its own.
   const fs::path damaged = dir.path() / "damaged.png";
   write_png(damaged, pattern(8, 8));
-  std::string bytes;
-  {
-    std::ifstream in(damaged, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  std::string bytes = file_bytes(damaged);
   const std::size_t idat = bytes.find("IDAT");
   ASSERT_NE(idat, std::string::npos);
   bytes[idat + 4] = char(bytes[idat + 4] ^ 0xff);  // the zlib header's first byte

@@ -711,22 +711,21 @@ bool triangles_intersect(const Vec3 A[3], const Vec3 B[3]) {
   return false;
 }
 
-/// Intersecting pairs among the triangles of the given cloth views (pairs sharing a vertex of
-/// the same cloth excluded), by sweep over x then the exact test. `self`: count pairs within a
-/// cloth; `across`: pairs between cloths.
-std::size_t intersecting_pairs(const std::vector<ClothView>& views, bool self, bool across) {
-  struct T {
-    Vec3 p[3];
-    std::uint32_t id[3];
-    std::size_t cloth;
-    double lo_x, hi_x;
-    Vec3 lo, hi;
-  };
-  std::vector<T> ts;
+/// A triangle of a cloth view: its corners, vertex indices, cloth (index in the views) and box.
+struct ViewTriangle {
+  Vec3 p[3];
+  std::uint32_t id[3];
+  std::size_t cloth;
+  Vec3 lo, hi;
+};
+
+/// Every triangle of the given cloth views, in view and triangle order.
+std::vector<ViewTriangle> view_triangles(const std::vector<ClothView>& views) {
+  std::vector<ViewTriangle> ts;
   for (std::size_t k = 0; k < views.size(); ++k) {
     const ClothView& v = views[k];
     for (std::size_t t = 0; t < v.triangle_count; ++t) {
-      T x;
+      ViewTriangle x;
       x.cloth = k;
       x.lo = Vec3::Constant(1e300);
       x.hi = -x.lo;
@@ -736,16 +735,22 @@ std::size_t intersecting_pairs(const std::vector<ClothView>& views, bool self, b
         x.lo = x.lo.cwiseMin(x.p[j]);
         x.hi = x.hi.cwiseMax(x.p[j]);
       }
-      x.lo_x = x.lo.x();
-      x.hi_x = x.hi.x();
       ts.push_back(x);
     }
   }
-  std::sort(ts.begin(), ts.end(), [](const T& a, const T& b) { return a.lo_x < b.lo_x; });
+  return ts;
+}
+
+/// Intersecting pairs among the triangles of the given cloth views (pairs sharing a vertex of
+/// the same cloth excluded), by sweep over x then the exact test. `self`: count pairs within a
+/// cloth; `across`: pairs between cloths.
+std::size_t intersecting_pairs(const std::vector<ClothView>& views, bool self, bool across) {
+  std::vector<ViewTriangle> ts = view_triangles(views);
+  std::sort(ts.begin(), ts.end(), [](const ViewTriangle& a, const ViewTriangle& b) { return a.lo.x() < b.lo.x(); });
   std::size_t count = 0;
   for (std::size_t i = 0; i < ts.size(); ++i)
-    for (std::size_t j = i + 1; j < ts.size() && ts[j].lo_x <= ts[i].hi_x; ++j) {
-      const T &a = ts[i], &b = ts[j];
+    for (std::size_t j = i + 1; j < ts.size() && ts[j].lo.x() <= ts[i].hi.x(); ++j) {
+      const ViewTriangle &a = ts[i], &b = ts[j];
       if (a.cloth == b.cloth ? !self : !across) continue;
       if (((a.lo.array() > b.hi.array()) || (b.lo.array() > a.hi.array())).any()) continue;
       if (a.cloth == b.cloth) {
@@ -762,26 +767,11 @@ std::size_t intersecting_pairs(const std::vector<ClothView>& views, bool self, b
 /// The smallest distance (m) from a vertex of `v` to a triangle of `v` that does not hold it,
 /// or `reach` (m) if none is nearer (brute force, boxes first).
 double closest_self_approach(const ClothView& v, double reach) {
-  struct T {
-    Vec3 p[3], lo, hi;
-    std::uint32_t id[3];
-  };
-  std::vector<T> ts(v.triangle_count);
-  for (std::size_t t = 0; t < v.triangle_count; ++t) {
-    T& x = ts[t];
-    x.lo = Vec3::Constant(1e300);
-    x.hi = -x.lo;
-    for (int j = 0; j < 3; ++j) {
-      x.id[j] = v.triangles[3 * t + std::size_t(j)];
-      x.p[j] = vertex(v, x.id[j]);
-      x.lo = x.lo.cwiseMin(x.p[j]);
-      x.hi = x.hi.cwiseMax(x.p[j]);
-    }
-  }
+  const std::vector<ViewTriangle> ts = view_triangles({v});
   double best = reach;
   for (std::uint32_t i = 0; i < v.vertex_count; ++i) {
     const Vec3 p = vertex(v, i);
-    for (const T& t : ts) {
+    for (const ViewTriangle& t : ts) {
       if (t.id[0] == i || t.id[1] == i || t.id[2] == i) continue;
       if (((p.array() < t.lo.array() - best) || (p.array() > t.hi.array() + best)).any()) continue;
       const Vec3 w = detail::cg::closest_on_triangle(p, t.p[0], t.p[1], t.p[2]);  // (weights)
