@@ -1581,5 +1581,34 @@ TEST(SimParticleSleep, SleepingPileIsTheSameBitsAtOneAndTwoThreadsAndAfterAResto
   EXPECT_GE(a.still(c.positions()), 320u);  // measured 369
 }
 
+TEST(SimParticleSleep, LargeRestingLayerFallsAsleepTheSameAtOneAndTwoThreads) {
+  // Over kParallelMin the sleep bookkeeping (time at rest, the velocity zeroed on falling asleep)
+  // is split over the threads like every other per-particle pass: a layer of 130 x 130 beads
+  // laid on the ground at rest must fall asleep to the same bits at any thread count.
+  const auto run = [](int threads) {
+    World world(WorldDef{1.0 / 60, 1, 0.05, threads});
+    world.add_plane(PlaneDef{});
+    ParticleSystemDef def = probes();
+    def.collide_particles = true;
+    def.emitter.rate = 0.0;
+    def.emitter.max_particles = 130 * 130;
+    const auto ps = world.add_particle_system(def);
+    for (int i = 0; i < 130; ++i)
+      for (int j = 0; j < 130; ++j)
+        world.spawn_particle(ps, Vec3(0.021 * i, 0.021 * j, 0.01), Vec3::Zero(), 1e-3, 0.01, 100);
+    world.advance(0.75);  // asleep after 0.5 s at rest
+    const ParticleView v = world.particles(ps);
+    std::size_t still = 0;
+    for (std::size_t i = 0; i < v.count; ++i) still += velocity_of(v, i) == Vec3::Zero();
+    return std::pair(world.state_hash(), still);
+  };
+  const auto [hash1, still1] = run(1);
+  const auto [hash2, still2] = run(2);
+  EXPECT_EQ(hash1, hash2);
+  EXPECT_EQ(still1, still2);
+  // Every bead sleeps; without sleep, gravity leaves no stored velocity exactly zero.
+  EXPECT_EQ(still1, 130u * 130u);
+}
+
 }  // namespace
 }  // namespace simreel::sim

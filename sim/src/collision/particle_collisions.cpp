@@ -151,7 +151,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
   if (cache != nullptr) store_warm_start(*cache);
   if (contacts.empty()) {  // nothing changed v
     if (any_asleep_) unpermute(asleep, perm_, tmp_byte_);
-    update_rest(members, h);
+    update_rest(members, h, par);
     return;
   }
   // The position follows the change the contact impulses made to the velocity, taken as a
@@ -211,7 +211,7 @@ void ParticleCollider::run(const std::vector<ParticleGroupMember>& members, doub
     }
   }
   if (any_asleep_) unpermute(asleep, perm_, tmp_byte_, par);
-  update_rest(members, h);
+  update_rest(members, h, par);
 }
 
 ParticleCollider::MemberParticle ParticleCollider::member_particle(std::uint32_t q) const {
@@ -335,7 +335,8 @@ void ParticleCollider::fill_working(const std::vector<ParticleGroupMember>& memb
   }
 }
 
-void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& members, double h) {
+void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& members, double h,
+                                   int par) {
   // Flat order here (run() has written the particles and put `asleep` back). A particle slower
   // than the sleep speed after the solve, or that moved less than the sleep speed times the step
   // since the last step's end, adds the step to its time at rest; reaching kSleepTime it falls
@@ -354,9 +355,15 @@ void ParticleCollider::update_rest(const std::vector<ParticleGroupMember>& membe
       k += s.count;
       continue;
     }
-    for (std::size_t i = 0; i < s.count; ++i, ++k) {
+    // Each particle's test reads and writes its own entries only: split over the threads.
+    const std::size_t base = k;
+    const std::ptrdiff_t count = std::ptrdiff_t(s.count);
+    k += s.count;
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t ii = 0; ii < count; ++ii) {
+      const std::size_t i = std::size_t(ii);
       float* r = &s.rest[4 * i];
-      if (asleep[k] != 0) continue;  // asleep all step: it did not move
+      if (asleep[base + i] != 0) continue;  // asleep all step: it did not move
       const float* x = &s.position[3 * i];
       const float* vf = &s.velocity[3 * i];
       const float dx = x[0] - r[0], dy = x[1] - r[1], dz = x[2] - r[2];

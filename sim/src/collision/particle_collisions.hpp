@@ -426,7 +426,7 @@ class ParticleCollider {
   void find_sleeping_neighbours(const std::vector<std::uint32_t>& woken, double h);
 
   /// After the solve: the members' times at rest, and those that fall asleep (flat order).
-  void update_rest(const std::vector<ParticleGroupMember>& members, double h);
+  void update_rest(const std::vector<ParticleGroupMember>& members, double h, int par);
 
   std::vector<std::uint32_t> bucket_start_, cursor_, sorted_, cell_hash_;
   std::vector<std::int64_t> cell_xyz_;
