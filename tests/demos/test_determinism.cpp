@@ -114,10 +114,14 @@ std::uint64_t run(const fs::path& file, int threads) {
 /// (their goldens re-recorded from looked-at frames where they moved); and again when the grid
 /// cloth's springs, blocks and aerodynamics moved to loops by offset class and grid cell
 /// (other summation orders, S stored as q qᵀ + β I).
+/// Stop 98 re-pinned the four jointed scenes (chandelier, newtons_cradle, ragdolls_stairs,
+/// rope_bridge) on purpose: light links under large joint forces get the geometric stiffness of
+/// those forces in the solve (joint_solver.hpp stiffen_inertia); frames looked at, the ragdolls'
+/// golden re-recorded (their tumble is chaotic), the other goldens held.
 /// Same compiler, flags and CPU family as CI.
 const std::map<std::string, std::uint64_t>& pinned() {
   static const std::map<std::string, std::uint64_t> table = {
-      {"chandelier", 0x16ab202ca2fd7803ull},
+      {"chandelier", 0xa140200895ce61b9ull},  // stop 98: geometric stiffness for light links under large joint forces (joint_solver.hpp stiffen_inertia; frames looked at); 1, 2 and 4 threads agreed
       {"cloth_pile", 0xb0b413d3c30dd175ull},  // issue 14/16: the cloth contacts' tree built once per step and refitted, self pairs from the tree against itself (other contact order); 1, 2 and 4 threads agreed
       {"curtain", 0x22151cfce7b5cd0cull},  // issue 16: springs and aerodynamics by offset class and grid cell (vectorised); 1, 2 and 4 threads agreed
       {"dominoes", 0xb66f1c0fc811f5abull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
@@ -134,13 +138,13 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"fountain", 0x6fd21b514d981ab8ull},
       {"jet", 0x32e133308e45664full},
       {"jet_crates", 0xc7e6ce937c3a3c62ull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
-      {"newtons_cradle", 0x3f0ce88729f53e21ull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
+      {"newtons_cradle", 0x7835201b8b3ae0e2ull},  // stop 98: geometric stiffness for light links under large joint forces (joint_solver.hpp stiffen_inertia; frames looked at); 1, 2 and 4 threads agreed
       {"pour", 0x851a42ed25602bdcull},  // stop 88: a bead rests when slow or when it did not move (a caged bead's velocity that the projection takes back, a bead put back and forth on facets now sleep; frames 60 and 239 looked at); 1, 2 and 4 threads agreed
       {"rain", 0x7c6288ed62a9afcaull},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
-      {"ragdolls_stairs", 0x9c9702f4f9cbf8e3ull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
+      {"ragdolls_stairs", 0xbc74c02456168cc6ull},  // stop 98: geometric stiffness for light links under large joint forces (joint_solver.hpp stiffen_inertia; frames looked at); 1, 2 and 4 threads agreed
       {"ring_toss", 0x61f52866655b662bull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
-      {"rope_bridge", 0xaa5c2472f806d78aull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
+      {"rope_bridge", 0x4fd50aeb460bc9dbull},  // stop 98: geometric stiffness for light links under large joint forces (joint_solver.hpp stiffen_inertia; frames looked at); 1, 2 and 4 threads agreed
       {"sheet_ball", 0x68aa3827f800503dull},  // issue 14/16: the cloth contacts' tree built once per step and refitted, self pairs from the tree against itself (other contact order); 1, 2 and 4 threads agreed
       {"shells", 0x7d0ae63ec5578a8bull},
       {"smoke", 0xc05cc11e2bb86b08ull},

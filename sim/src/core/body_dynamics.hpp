@@ -136,6 +136,9 @@ struct BodyDynamics {
   std::vector<JointModel> joint_models;
   std::vector<JointBodies> joint_bodies;
   std::vector<std::uint32_t> joint_entry;
+  /// (N) each joint's force at the end of the last step (|reading.force|): the geometric
+  /// stiffness of this step's solve (JointSolver::stiffen_inertia).
+  std::vector<double> joint_force_n;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> no_collide;
   std::vector<std::uint8_t> in_contact;  ///< per rigid entry: touched something this step
   /// The rigid entries each body spring joins this step (sleep.cpp treats them as joints do).

@@ -79,6 +79,7 @@ void gather_joints(WorldState& w) {
   d.joint_models.clear();
   d.joint_bodies.clear();
   d.joint_entry.clear();
+  d.joint_force_n.clear();
   d.no_collide.clear();
   for (std::uint32_t i = 0; i < w.joints.size(); ++i) {
     JointEntry& e = w.joints.at(i);
@@ -90,6 +91,7 @@ void gather_joints(WorldState& w) {
     d.joint_models.push_back(e.model);
     d.joint_bodies.push_back({rigid_of(w, e.body_a), rigid_of(w, e.body_b)});
     d.joint_entry.push_back(i);
+    d.joint_force_n.push_back(e.reading.force.norm());
     if (!e.def.collide_connected && !e.body_a.is_null() && !e.body_b.is_null()) {
       const std::uint32_t a = std::uint32_t(w.bodies.index(e.body_a));
       const std::uint32_t b = std::uint32_t(w.bodies.index(e.body_b));

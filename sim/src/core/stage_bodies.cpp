@@ -58,11 +58,17 @@ void soft_step(WorldState& w, double h, int n) {
   ContactSolver& cs = d.solver;
   const double hs = h / n;
   const ContactSolverSettings& set = cs.settings();
+  // Contact rows and joint rows with the same (stiffened) inertias, so that their alternation
+  // solves one system.
+  js.stiffen_inertia(r, d.joint_models, d.joint_bodies, d.joint_force_n, hs);
   cs.prepare_soft(r, d.points, hs);
+  js.restore_inertia(r);
   bool joints = false;
   for (int s = 0; s < n; ++s) {
     integrate_velocities(r, hs);
+    js.stiffen_inertia(r, d.joint_models, d.joint_bodies, d.joint_force_n, hs);
     js.prepare(r, d.joint_models, d.joint_bodies, hs);
+    js.restore_inertia(r);
     joints = !js.empty();
     cs.warm_start_soft(r, d.points);
     if (joints) js.solve_equality(r);
@@ -131,8 +137,12 @@ void stage_bodies(WorldState& w, double t0, double t1) {
   if (w.def.body_substeps > 1) {
     soft_step(w, h, w.def.body_substeps);
   } else {
+  // A light link under a large joint force gets the geometric stiffness of that force added to
+  // its inertia for the solve (joint_solver.hpp), the contact rows as well as the joint rows.
+  js.stiffen_inertia(r, d.joint_models, d.joint_bodies, d.joint_force_n, h);
   d.solver.prepare(r, d.points, h);
   js.prepare(r, d.joint_models, d.joint_bodies, h);
+  js.restore_inertia(r);
   integrate_velocities(r, h);
   if (js.empty()) {
     d.solver.solve(r, d.points);

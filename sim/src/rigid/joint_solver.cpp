@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
+
 #include "rigid/integrate.hpp"
 
 namespace simreel::sim::detail {
@@ -479,6 +481,57 @@ void JointSolver::project_positions(RigidBodies& r, std::span<const JointModel> 
       sync_angular_momentum(r, last);
     }
   }
+}
+
+void JointSolver::stiffen_inertia(RigidBodies& r, std::span<const JointModel> models,
+                                  std::span<const JointBodies> bodies,
+                                  std::span<const double> force_n, double h) {
+  assert(models.size() == bodies.size() && force_n.size() == models.size());
+  saved_inertia_.clear();
+  // x0 = (ω h)² on this estimate: below 0.1 (ω h < 0.3) the step resolves the rotation and
+  // nothing is added, so articulations that were stable keep their bits.
+  constexpr double kResolved = 0.1;
+  stiffness_.resize(r.size());
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const JointBodies j = bodies[i];
+    if (j.a != kStaticBody) stiffness_[j.a] = 0.0;
+    if (j.b != kStaticBody) stiffness_[j.b] = 0.0;
+  }
+  bool any = false;
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const double f = force_n[i];
+    const JointBodies j = bodies[i];
+    if (!(f > 0.0) || (!moves(r, j.a) && !moves(r, j.b))) continue;
+    const JointFrame fr = joint_frame(r, models[i], j);
+    if (moves(r, j.a)) stiffness_[j.a] += f * fr.ra.norm();
+    if (moves(r, j.b)) stiffness_[j.b] += f * fr.rb.norm();
+    any = true;
+  }
+  if (!any) return;
+  const auto stiffen = [&](std::uint32_t b) {
+    const double hk = h * h * stiffness_[b];
+    stiffness_[b] = 0.0;  // each body once
+    if (!(hk > 0.0)) return;
+    Eigen::SelfAdjointEigenSolver<Mat3> eig;
+    eig.computeDirect(r.inertia_body[b], Eigen::EigenvaluesOnly);
+    const double x = hk / eig.eigenvalues()(0);
+    if (!(x > kResolved)) return;
+    const double added = hk * (x - kResolved) / (1.0 + x);
+    saved_inertia_.emplace_back(b, r.inv_inertia_world[b]);
+    const Mat3 R = r.orientation[b].toRotationMatrix();
+    const Mat3 inv = (r.inertia_body[b] + added * Mat3::Identity()).inverse();
+    r.inv_inertia_world[b] = R * inv * R.transpose();
+  };
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const JointBodies j = bodies[i];
+    if (moves(r, j.a)) stiffen(j.a);
+    if (moves(r, j.b)) stiffen(j.b);
+  }
+}
+
+void JointSolver::restore_inertia(RigidBodies& r) {
+  for (const auto& [b, inv] : saved_inertia_) r.inv_inertia_world[b] = inv;
+  saved_inertia_.clear();
 }
 
 }  // namespace simreel::sim::detail

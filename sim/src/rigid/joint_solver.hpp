@@ -42,6 +42,11 @@
 //   book's acceleration-level term ω × (ω × r) of eq. 5.8, as a velocity target of ½ h J̇ v,
 //   keeps a free double pendulum's energy as well; RATTLE was kept because it needs no explicit
 //   term quadratic in ω, which amplifies any spike of ω a contact gives a light link.)
+// - Geometric stiffness (Andrews, Teichmann & Kry 2017): the solve takes each joint force's
+//   moment with the step's lever arms, explicit in the links' rotation, which a light link under
+//   a large force turns faster than the step resolves (a chain of a thousand 1 cm links came
+//   apart in a second). Such links get that stiffness added to their inertia for the solve
+//   (stiffen_inertia()); links the step resolves are left as they are.
 // - Determinism: rows in joint order, bodies in index order; no threads, no hashing.
 // - Memory: rows, triplets and vectors are resized, never shrunk; after the first steps of a
 //   fixed set of joints a step allocates only inside Eigen's factorisation.
@@ -142,6 +147,31 @@ class JointSolver {
   /// Per joint (indices of prepare()'s spans): the impulses applied to body b this step.
   [[nodiscard]] std::span<const JointImpulse> impulses() const { return impulse_; }
 
+  /// Geometric stiffness (Andrews, Teichmann & Kry 2017, "Geometric Stiffness for Real-time
+  /// Constrained Multibody Dynamics", after Tournier et al. 2015, "Stable Constrained Dynamics"):
+  /// a joint force f at a lever arm r turns with its body, a rotational stiffness of up to
+  /// |f| |r| that the velocity solve, with the step's Jacobian, treats explicitly. A light link
+  /// under a large tension (the top links of a long chain of small links) then has its rotation
+  /// ω² = k / I far above (2 / h)² and the chain blows up within a second. Each moving body's
+  /// k = Σ_j |f_j| |r_j| over its joints (forces `force_n` in N, per joint, from the last step's
+  /// readings; r_j from its centre of mass) is added to its inertia for the solve as E k h² (the
+  /// diagonal bound of Andrews et al.: the exact term is a 3×3 block per body whose eigenvalues
+  /// are within ±|f| |r|; the form without its part about r, exact for a tension along r, let
+  /// a whipping 1000-link chain come apart at 1.9 s, this one at its whip crack at 4.3 s, which
+  /// only a smaller step resolves), scaled by (x - x0) / (1 + x)
+  /// with x = k h² / I_min, I_min the smallest principal moment: nothing where the rotation is
+  /// resolved (x <= x0 = 0.1, ω h < 0.3, so those articulations keep their bits), the whole
+  /// term where it is not: the stiffened rotation's (ω h)² = x / (1 + added / I_min) stays near
+  /// 1 or below, inside the step's limit of 4. inv_inertia_world of those bodies is replaced
+  /// until restore_inertia(); call around the contact and joint solvers' prepare() (their rows
+  /// carry the inverse inertia), not around integrate_velocities (ω = I_w⁻¹ L stays the body's
+  /// own).
+  void stiffen_inertia(RigidBodies& r, std::span<const JointModel> models,
+                       std::span<const JointBodies> bodies, std::span<const double> force_n,
+                       double h);
+  /// Puts back the inverse inertias stiffen_inertia() replaced.
+  void restore_inertia(RigidBodies& r);
+
  private:
   /// One row of the exact system: J = (ja_lin, ja_ang, jb_lin, jb_ang), M⁻¹Jᵀ per side.
   struct EqRow {
@@ -181,6 +211,8 @@ class JointSolver {
   std::vector<Vec3> dx_, dtheta_;  ///< per-body position corrections (projection scratch)
   std::vector<Vec3> moved_x_;      ///< (m) sum of a body's displacements over the projection
   std::vector<Vec3> moved_theta_;  ///< (N m s · s) sum of the angular impulses × h that turned it
+  std::vector<double> stiffness_;   ///< (N m) per body: Σ |f| |r| (stiffen_inertia scratch)
+  std::vector<std::pair<std::uint32_t, Mat3>> saved_inertia_;  ///< (body, its own I_w⁻¹)
 };
 
 }  // namespace simreel::sim::detail
