@@ -232,6 +232,24 @@ void apply_override(json& doc, const std::string& assignment, const std::string&
     doc[ptr] = value;  // a new key; the schema check rejects unknown ones
     return;
   }
+  // Keys of objects the scene leaves out (--set /simulation/max_step=0.001 on a scene without a
+  // "simulation" block): the objects are made, as a user writing them would, and the schema check
+  // rejects a misspelt one. A missing array element (/emitters/3/rate) is not made up.
+  {
+    json::json_pointer base = parent;
+    std::vector<std::string> missing;
+    while (!base.empty() && !doc.contains(base)) {
+      missing.push_back(base.back());
+      base.pop_back();
+    }
+    const bool keys = std::none_of(missing.begin(), missing.end(), [](const std::string& t) {
+      return !t.empty() && std::all_of(t.begin(), t.end(), [](char c) { return c >= '0' && c <= '9'; });
+    });
+    if (keys && doc[base].is_object() && !missing.empty() && !ptr.back().empty()) {
+      doc[ptr] = value;  // nlohmann's operator[] makes the missing objects on the way
+      return;
+    }
+  }
   throw SceneError(file + ": " + ptr_text + ": --set names nothing in the scene (no value at " +
                    ptr_text + " and " + (parent.empty() ? "/" : parent.to_string()) +
                    " is not an object)");

@@ -108,9 +108,22 @@ TEST(SceneOverride, ReplacesExistingValueReadAsJson) {
 TEST(SceneOverride, PointerThatNamesNothingIsAnError) {
   json doc = json::parse(R"({"emitters":[{"rate":10}]})");
   EXPECT_THROW(apply_override(doc, "/emitters/3/rate=1", "s.json"), SceneError);
-  EXPECT_THROW(apply_override(doc, "/camera/fov_deg=1", "s.json"), SceneError);
+  EXPECT_THROW(apply_override(doc, "/chains/0/links=3", "s.json"), SceneError);  // no array made up
+  EXPECT_THROW(apply_override(doc, "/emitters/0/rate/x=1", "s.json"), SceneError);  // under a number
   EXPECT_THROW(apply_override(doc, "emitters=1", "s.json"), SceneError);
   EXPECT_THROW(apply_override(doc, "/emitters/0/rate", "s.json"), SceneError);
+  EXPECT_EQ(doc, json::parse(R"({"emitters":[{"rate":10}]})")) << "a refused --set leaves the scene";
+}
+
+TEST(SceneOverride, KeyOfABlockTheSceneLeavesOutMakesTheBlock) {
+  // The message of a diverged run suggests --set /simulation/max_step=...: on a scene without a
+  // "simulation" block (its defaults) that must work, as writing the block by hand would.
+  json doc = json::parse(R"({"emitters":[{"rate":10}]})");
+  apply_override(doc, "/simulation/max_step=0.001", "s.json");
+  apply_override(doc, "/camera/fov_deg=30", "s.json");
+  apply_override(doc, "/emitters/0/split/count=3", "s.json");
+  EXPECT_EQ(doc, json::parse(R"({"emitters":[{"rate":10,"split":{"count":3}}],
+                                 "simulation":{"max_step":0.001},"camera":{"fov_deg":30}})"));
 }
 
 TEST(SceneLoad, SphereCylinderAndMeshColliders) {

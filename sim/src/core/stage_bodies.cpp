@@ -204,6 +204,10 @@ void stage_bodies(WorldState& w, double t0, double t1) {
       m.precision(9);
       m << "body '" << b.name << "': non-finite position or velocity (faster than light) at internal step "
         << w.steps + 1 << ", t = " << t1 << " s";
+      // Motion the step does not resolve (a link 1000 times lighter than the load on its chain,
+      // a whip crack) is what blows up here: say what resolves it.
+      m << "; motion faster than the step resolves: a smaller simulation.max_step (now " << h
+        << " s) or simulation.body_substeps (now " << w.def.body_substeps << ") may resolve it";
       throw NonFiniteState(m.str());
     }
     const Quat& q = r.orientation[i];
