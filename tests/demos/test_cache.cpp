@@ -376,8 +376,18 @@ TEST(StateRoundTrip, IllConditionedInertiaStatesPassTheLoadChecks) {
   const Scene scene = load_scene(file);
   SceneWorld a = build_world(scene), b = build_world(scene);
   std::string s;
+  // The needle (inertia ratio 1e9) spins up about its axis to 1e7 rad/s within a third of a
+  // second and its run stops as diverged at 0.675 s (it used to hang in the air instead, held
+  // at its start pose by the continuous collision from 0.8 s on): its states are checked up
+  // to there, the ill-conditioned ones among them.
+  int checked = 0;
   for (int frame = 1; frame <= 90; ++frame) {
-    a.world.advance(1.0 / 30.0);
+    try {
+      a.world.advance(1.0 / 30.0);
+    } catch (const simreel::sim::NonFiniteState&) {
+      break;
+    }
+    ++checked;
     a.world.save_state(s);
     try {
       b.world.load_state(s);
@@ -386,6 +396,7 @@ TEST(StateRoundTrip, IllConditionedInertiaStatesPassTheLoadChecks) {
       break;
     }
   }
+  EXPECT_GE(checked, 15);  // measured: 20
 }
 
 /// Every PNG of `dir`, by name.

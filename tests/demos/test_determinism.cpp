@@ -117,7 +117,9 @@ std::uint64_t run(const fs::path& file, int threads) {
 /// Stop 98 re-pinned the four jointed scenes (chandelier, newtons_cradle, ragdolls_stairs,
 /// rope_bridge) on purpose: light links under large joint forces get the geometric stiffness of
 /// those forces in the solve (joint_solver.hpp stiffen_inertia); frames looked at, the ragdolls'
-/// golden re-recorded (their tumble is chaotic), the other goldens held.
+/// golden re-recorded (their tumble is chaotic), the other goldens held. ring_toss moved when
+/// the sweep stopped holding a body that starts within its goal of a surface at its start pose
+/// (body_ccd.cpp; the green ring settles a little differently on its peg; frames looked at).
 /// Same compiler, flags and CPU family as CI.
 const std::map<std::string, std::uint64_t>& pinned() {
   static const std::map<std::string, std::uint64_t> table = {
@@ -143,7 +145,7 @@ const std::map<std::string, std::uint64_t>& pinned() {
       {"rain", 0x7c6288ed62a9afcaull},
       {"rain_on_mesh", 0x9e194f935e6a4022ull},
       {"ragdolls_stairs", 0xbc74c02456168cc6ull},  // stop 98: geometric stiffness for light links under large joint forces (joint_solver.hpp stiffen_inertia; frames looked at); 1, 2 and 4 threads agreed
-      {"ring_toss", 0x61f52866655b662bull},  // re-pinned: body contacts kept from 1 um when new and to 1 mm while they carry load (a body set exactly on a surface keeps its contacts); 1, 2 and 4 threads agreed
+      {"ring_toss", 0xc9110c08dd04f1e0ull},  // stop 98: the sweep leaves a body that starts as close as it would stop it (it was held at its start pose for good); frames looked at; 1, 2 and 4 threads agreed
       {"rope_bridge", 0x4fd50aeb460bc9dbull},  // stop 98: geometric stiffness for light links under large joint forces (joint_solver.hpp stiffen_inertia; frames looked at); 1, 2 and 4 threads agreed
       {"sheet_ball", 0x68aa3827f800503dull},  // issue 14/16: the cloth contacts' tree built once per step and refitted, self pairs from the tree against itself (other contact order); 1, 2 and 4 threads agreed
       {"shells", 0x7d0ae63ec5578a8bull},

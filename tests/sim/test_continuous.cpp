@@ -6,7 +6,10 @@
 // there (the test can fail).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "simreel/sim/world.hpp"
 
@@ -247,6 +250,43 @@ TEST(Continuous, AFastBodySlidingOnAFloorIsNotHeldBack) {
       EXPECT_NEAR(w.pose(box).translation.z(), 0.025, 2e-3) << "floor " << floor << ", h = " << h;
     }
   }
+}
+
+TEST(Continuous, AToppledStackOfSmallDiceComesToRest) {
+  // Eight 1 cm dice stacked with 0.1 mm gaps, each 0.3 mm off the one below, at the default
+  // step: the stack topples (a stack of small bodies needs a finer step to stand) and the dice
+  // tumble, fast for their size. One came to lie with a corner 0.3 mm above the ground, closer
+  // than the advancement's goal, so the sweep stopped it at t = 0; the next step started from
+  // the same pose and was stopped again, for good, while gravity and the contacts' torques
+  // added to its velocity: it stood still for 4 s reaching 11 m/s and 1350 rad/s. Every die
+  // must come to rest, and the dice never hold more kinetic energy than the stack's fall gives.
+  World w(def(WorldDef{}.max_step, true));
+  PlaneDef ground;
+  ground.material = Material(0.1, 0.6);
+  (void)w.add_plane(ground);
+  const double half = 0.005, mass = 1200.0 * 8.0 * half * half * half;
+  std::vector<BodyHandle> dice;
+  for (int k = 0; k < 8; ++k) {
+    BodyDef die = dynamic_box({0.0003 * k, 0.0, half + 0.0101 * k}, Vec3::Constant(half), 0.1, 0.6);
+    die.mass = mass;
+    dice.push_back(w.add_body(die));
+  }
+  const double fall = 8.0 * mass * 9.81 * 0.0101 * 3.5;  // (J) the stack's centre brought to the ground
+  double most = 0.0, end_speed = 0.0;
+  for (int f = 0; f < 150; ++f) {
+    (void)w.advance(1.0 / 30.0);
+    double kinetic = 0.0;
+    end_speed = 0.0;
+    for (const BodyHandle d : dice) {
+      const BodyMotion m = w.motion(d);
+      kinetic += 0.5 * m.mass * m.linear_velocity.squaredNorm() + 0.5 * m.angular_velocity.dot(m.angular_momentum);
+      end_speed = std::max(end_speed, m.linear_velocity.norm());
+    }
+    most = std::max(most, kinetic);
+  }
+  RecordProperty("largest_kinetic_over_fall", std::to_string(most / fall));
+  EXPECT_LT(most, fall);
+  EXPECT_LT(end_speed, 0.01) << "every die at rest after 5 s";
 }
 
 }  // namespace

@@ -188,10 +188,16 @@ TEST(SoftStep, AHundredMetresPerSecondBoxStopsAtACentimetreWall) {
   b.gravity = Vec3::Zero();
   b.linear_velocity = {100.0, 0.0, 0.0};
   const BodyHandle box = w.add_body(b);
-  for (int i = 0; i < 15; ++i) w.advance(kFrame);
-  const double x = w.pose(box).translation.x();
-  EXPECT_LE(x, 1.0 - 0.005 - 0.025 + 1e-3);
-  EXPECT_GE(x, 1.0 - 0.005 - 0.025 - 0.015);
+  // The farthest it gets: at the wall (its face within 1.5 cm of it) and never through. After
+  // the impact the soft contact's push leaves it drifting back at 8.4 cm/s (it used to be held
+  // at its start pose by the sweep from frame 9 on while its velocity said it moved).
+  double farthest = 0.0;
+  for (int i = 0; i < 15; ++i) {
+    w.advance(kFrame);
+    farthest = std::max(farthest, w.pose(box).translation.x());
+  }
+  EXPECT_LE(farthest, 1.0 - 0.005 - 0.025 + 1e-3);
+  EXPECT_GE(farthest, 1.0 - 0.005 - 0.025 - 0.015);
   EXPECT_LT(std::abs(w.velocity(box).first.x()), 0.1);
 }
 
