@@ -94,9 +94,15 @@ struct ContactSolverSettings {
   bool warm_start = true;    ///< apply the cached impulses before iterating
   // Soft step (solve_soft and friends; Catto 2024, Box2D v3's solver):
   // Tuned on bench_bodies' 20-row pyramid at 1/60 s with 4 substeps: Box2D's 30 Hz and one
-  // biased sweep let it sink 3 cm (a soft spring per layer) and lean; 60 Hz, two biased sweeps
-  // and no slop keep its top within 1 cm and it falls asleep in about a second.
-  double contact_hertz = 60.0;    ///< (Hz) stiffness of the soft contact, capped at 1/4 of the substep rate
+  // biased sweep let it sink 3 cm (a soft spring per layer) and lean; 60 Hz (there the cap),
+  // two biased sweeps and no slop keep its top within 1 cm and it falls asleep in about a second.
+  /// (Hz) stiffness f of the soft contact, capped at a quarter of the substep rate (Box2D v3's
+  /// cap, for stability); the default is the cap itself. A stack's soft contacts sag by about
+  /// g / (2π f)² per layer and box of load, whatever the boxes' size, so a fixed f (60 Hz until
+  /// stop 99) left every 10-box stack ~7 mm low at any substep count: a stack of 2 cm boxes sank
+  /// a third of a box and fell. At the cap the sag falls with the substep squared, and the soft
+  /// step tends to rigid contact as the substeps get finer.
+  double contact_hertz = std::numeric_limits<double>::infinity();
   double damping_ratio = 10.0;    ///< ζ of the soft contact (heavily over-damped: no bounce from the push)
   double max_push_speed = 3.0;    ///< (m/s) largest speed at which overlap is pushed out
   double soft_slop = 0.0;         ///< (m) overlap the soft step leaves alone
