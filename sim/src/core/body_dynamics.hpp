@@ -250,10 +250,13 @@ void begin_continuous(WorldState& w, double h);
 /// bound being the centre's speed towards the other shape plus θ r_max. A pair already
 /// touching at the start, or one the body cannot penetrate by more than half its inner radius,
 /// is left to the discrete contacts. The body is put back at its earliest time of
-/// impact, keeping its velocity; the next step's speculative contact stops or bounces it. The
+/// impact t (a fraction of the step h, s), keeping its velocity, less what the step's forces
+/// added over the (1 - t) h it did not move when no contact point touched it in the step (a
+/// free fall: speed and height then agree, and a bounce is as high as e² times the drop); the
+/// next step's speculative contact stops or bounces it. The
 /// book's end-of-step test with bisection (§4.4) cannot see a body that is past a thin wall at
 /// the end of the step; this replaces it for fast bodies.
-void continuous_collisions(WorldState& w);
+void continuous_collisions(WorldState& w, double h);
 
 /// Broad and narrow phase (body_contacts.cpp): fills d.manifolds (in a fixed order: planes
 /// first, then pairs by shape index) and d.points, each point warm-started from d.previous.

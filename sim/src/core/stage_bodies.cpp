@@ -176,7 +176,7 @@ void stage_bodies(WorldState& w, double t0, double t1) {
     js.project_positions(r, d.joint_models, d.joint_bodies, h, {});
   }
   }
-  continuous_collisions(w);  // fast bodies back to their time of impact (body_ccd.cpp)
+  continuous_collisions(w, h);  // fast bodies back to their time of impact (body_ccd.cpp)
   clear_forces(r);
   // The solver's impulses go back into the manifolds: next step's warm start (tangent impulses
   // as world vectors, persistent_manifold.hpp).
