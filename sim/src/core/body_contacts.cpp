@@ -66,6 +66,15 @@ double round_radius(const Collider& c) {
   return c.shape == Collider::Shape::sphere || c.shape == Collider::Shape::capsule ? c.radius : 0.0;
 }
 
+/// A cylinder's axis (unit, world) and the offset of world point p from it, perpendicular to
+/// it (ContactPoint::axis_a); both zero for other shapes.
+void spin_axis(const Collider& c, const Vec3& p, Vec3& axis, Vec3& radial) {
+  if (c.shape != Collider::Shape::cylinder) return;
+  axis = c.R.col(2);
+  const Vec3 rel = p - c.center;
+  radial = rel - rel.dot(axis) * axis;
+}
+
 PosedShape posed(const Collider& c) { return {convex_of(c), c.R, c.center}; }
 
 /// Where each shape belongs: its body's dense index and its index within the body.
@@ -289,6 +298,8 @@ class Builder {
       c.static_friction = mu_s;
       c.round_a = round_radius(w_.shapes[a]);
       c.round_b = round_radius(w_.shapes[b]);
+      spin_axis(w_.shapes[a], p.point_a, c.axis_a, c.radial_a);
+      spin_axis(w_.shapes[b], p.point_b, c.axis_b, c.radial_b);
       c.normal_impulse = p.normal_impulse;
       c.tangent_impulse[0] = p.tangent_impulse.dot(t1);
       c.tangent_impulse[1] = p.tangent_impulse.dot(t2);

@@ -82,6 +82,9 @@ void soft_step(WorldState& w, double h, int n) {
     sync_all(r);
     integrate_positions(r, hs, Motion::velocity);
     cs.track_separations(r);
+    js.stiffen_inertia(r, d.joint_models, d.joint_bodies, d.joint_force_n, hs);
+    cs.refresh_soft(r);  // the lever arms and the world inertia turned with the bodies
+    js.restore_inertia(r);
     for (int it = 0; it < set.relax_iterations; ++it) {
       cs.solve_soft(r, d.points, false);
       if (joints) {

@@ -44,6 +44,34 @@ Axis make_axis(const Side& a, const Side& b, bool move_a, bool move_b, const Vec
   return x;
 }
 
+/// The 2×2 tangent block K = J_t M⁻¹ J_tᵀ (its off-diagonal couples t1 and t2 through the
+/// lever arms: large off a box's corner) inverted for the sticking solve, and one mass from its
+/// trace (invariant under turning t1, t2 about n) for the sliding direction (friction_pair()).
+void tangent_masses(Row& r) {
+  const double k11 = 1.0 / r.t1.mass, k22 = 1.0 / r.t2.mass;
+  const double k12 = r.t1.ra_d.dot(r.t2.ia_d) + r.t1.rb_d.dot(r.t2.ib_d);
+  const double det = k11 * k22 - k12 * k12;
+  r.sticking_mass[0] = det > 0.0 ? k22 / det : r.t1.mass;
+  r.sticking_mass[1] = det > 0.0 ? -k12 / det : 0.0;
+  r.sticking_mass[2] = det > 0.0 ? k11 / det : r.t2.mass;
+  r.sliding_mass = 2.0 / (k11 + k22);
+}
+
+/// (m) How far the offset `radial` (perpendicular to the unit `axis`) moves under the swing
+/// part of the turn (R - E = `turned`): the rotation that takes the axis where R takes it by the
+/// shortest arc, with R's twist about the axis left out (R_swing x = c x + v × x + v (v·x)/(1+c),
+/// c = a0·a1, v = a0 × a1). Zero when there is no axis.
+Vec3 swing_moves(const Mat3& turned, const Vec3& axis, const Vec3& radial) {
+  if (axis.isZero(0.0)) return Vec3::Zero();
+  const Vec3 a1 = axis + turned * axis;
+  const double c = axis.dot(a1);
+  const Vec3 v = axis.cross(a1);
+  // Turned over by more than ~170°: the shortest arc is ill-defined; the whole turn is then as
+  // good a guess as any.
+  if (c < -0.985) return turned * radial;
+  return (c - 1.0) * radial + v.cross(radial) + v * (v.dot(radial) / (1.0 + c));
+}
+
 /// (v_b(p) - v_a(p)) · d from the arrays v and w (real or pseudo velocities).
 [[gnu::always_inline]] inline double relative_speed(const Row& r, const Axis& x, const std::vector<Vec3>& v,
                       const std::vector<Vec3>& w) {
@@ -132,18 +160,7 @@ void ContactSolver::prepare(const RigidBodies& bodies, std::span<const ContactPo
     r.n = make_axis(a, b, r.move_a, r.move_b, ra, rb, c.normal);
     r.t1 = make_axis(a, b, r.move_a, r.move_b, ra, rb, t1);
     r.t2 = make_axis(a, b, r.move_a, r.move_b, ra, rb, t2);
-    // The 2×2 tangent block K = J_t M⁻¹ J_tᵀ (its off-diagonal couples t1 and t2 through the
-    // lever arms: large off a box's corner) inverted for the sticking solve, and one mass from its
-    // trace (invariant under turning t1, t2 about n) for the sliding direction (friction_pair()).
-    {
-      const double k11 = 1.0 / r.t1.mass, k22 = 1.0 / r.t2.mass;
-      const double k12 = r.t1.ra_d.dot(r.t2.ia_d) + r.t1.rb_d.dot(r.t2.ib_d);
-      const double det = k11 * k22 - k12 * k12;
-      r.sticking_mass[0] = det > 0.0 ? k22 / det : r.t1.mass;
-      r.sticking_mass[1] = det > 0.0 ? -k12 / det : 0.0;
-      r.sticking_mass[2] = det > 0.0 ? k11 / det : r.t2.mass;
-      r.sliding_mass = 2.0 / (k11 + k22);
-    }
+    tangent_masses(r);
     const Vec3 v_rel = relative_velocity(bodies, c.body_a, c.body_b, c.point);
     const double vn = v_rel.dot(c.normal);
     r.friction = c.friction;
@@ -268,12 +285,22 @@ void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const Cont
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     const ContactPoint& c = contacts[k];
     SoftRow& s = soft_[k];
-    s.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - bodies.position[c.body_a]);
-    s.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - bodies.position[c.body_b]);
+    // Each side's arm to its own surface point (c.point is midway): in a deep overlap the
+    // midpoint lies off a thin body, and the arm to it turned the push into spin about the
+    // body's axis (a wire 4 cm into the ground got 8·10⁴ rad/s). The two points differ along n
+    // only, so the pair's impulses still carry no net torque.
+    s.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point + 0.5 * c.depth * c.normal - bodies.position[c.body_a]);
+    s.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - 0.5 * c.depth * c.normal - bodies.position[c.body_b]);
+    s.arm_a = s.ra;
+    s.arm_b = s.rb;
     // A round side's surface point under the contact is its centre -/+ radius along n: that
     // centre turns with the body, the point does not (0 · n leaves other shapes' arms as they are).
-    s.turn_a = s.ra - c.round_a * c.normal;
-    s.turn_b = s.rb + c.round_b * c.normal;
+    s.turn_a = s.ra - c.round_a * c.normal - c.radial_a;
+    s.turn_b = s.rb + c.round_b * c.normal - c.radial_b;
+    s.axis_a = c.axis_a;
+    s.axis_b = c.axis_b;
+    s.radial_a = c.radial_a;
+    s.radial_b = c.radial_b;
     s.separation = -c.depth;
     s.current = s.separation;
     s.restitution = c.restitution;
@@ -284,6 +311,30 @@ void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const Cont
       r.sliding = (v_rel - s.approach * c.normal).squaredNorm() >
                   settings_.soft_stick_speed * settings_.soft_stick_speed;
     s.max_normal = 0.0;
+  }
+  refresh_soft(bodies);
+}
+
+void ContactSolver::refresh_soft(const RigidBodies& bodies) {
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    Row& r = rows_[k];
+    const SoftRow& s = soft_[k];
+    auto refresh = [&](Axis& x) {
+      if (r.move_a) {
+        x.ra_d = s.arm_a.cross(x.d);
+        x.ia_d = bodies.inv_inertia_world[r.a] * x.ra_d;
+      }
+      if (r.move_b) {
+        x.rb_d = s.arm_b.cross(x.d);
+        x.ib_d = bodies.inv_inertia_world[r.b] * x.rb_d;
+      }
+      const double m = r.inv_mass_a + r.inv_mass_b + x.ra_d.dot(x.ia_d) + x.rb_d.dot(x.ib_d);
+      x.mass = m > 0.0 ? 1.0 / m : 0.0;
+    };
+    refresh(r.n);
+    refresh(r.t1);
+    refresh(r.t2);
+    tangent_masses(r);
   }
 }
 
@@ -312,8 +363,16 @@ void ContactSolver::track_separations(const RigidBodies& bodies) {
     const Row& r = rows_[k];
     SoftRow& s = soft_[k];
     Vec3 d = Vec3::Zero();
-    if (r.move_b) d += moved_x_[r.b] + turned_[r.b] * s.turn_b;
-    if (r.move_a) d -= moved_x_[r.a] + turned_[r.a] * s.turn_a;
+    if (r.move_b) {
+      const Vec3 arm = turned_[r.b] * s.turn_b + swing_moves(turned_[r.b], s.axis_b, s.radial_b);
+      s.arm_b = s.rb + arm;
+      d += moved_x_[r.b] + arm;
+    }
+    if (r.move_a) {
+      const Vec3 arm = turned_[r.a] * s.turn_a + swing_moves(turned_[r.a], s.axis_a, s.radial_a);
+      s.arm_a = s.ra + arm;
+      d -= moved_x_[r.a] + arm;
+    }
     s.current = s.separation + d.dot(r.n.d);
   }
 }

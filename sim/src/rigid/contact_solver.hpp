@@ -74,6 +74,13 @@ struct ContactPoint {
   /// contact stays below its centre (or segment) as it turns, so the soft step tracks that
   /// centre, not a point fixed in the body (a ball rolling down a slope sank otherwise).
   double round_a = 0.0, round_b = 0.0;
+  /// A side of rotational symmetry that is not round (a cylinder; zero otherwise): its axis
+  /// (unit, world) and the contact point's offset from that axis, perpendicular to it (m,
+  /// world). Spin about the axis leaves the surface where it is, so the soft step tracks the
+  /// offset turned only by the part of the body's turn that tilts the axis (a rolling wire's
+  /// contact otherwise rode up with the body: 1000 rad/s about a 0.5 mm axis let it sink).
+  Vec3 axis_a = Vec3::Zero(), axis_b = Vec3::Zero();
+  Vec3 radial_a = Vec3::Zero(), radial_b = Vec3::Zero();
   double normal_impulse = 0.0;         ///< (N s) accumulated, >= 0: warm start in, result out
   double tangent_impulse[2] = {0.0, 0.0};  ///< (N s) along tangent_basis(normal): in and out
 };
@@ -154,7 +161,10 @@ class ContactSolver {
   // lever arms, tangents and effective masses stay those of the step's start (prepare_soft);
   // only the separation is brought up to date each substep from the bodies' displacement and
   // turn since then (anchors fixed in the bodies), which costs a few products per contact
-  // instead of a narrow phase. Overlap is removed by a soft constraint (a damped spring of
+  // instead of a narrow phase. The angular response I_w⁻¹ (r × d) and the effective masses are
+  // refreshed after each substep's turn (refresh_soft): in 3D the world inertia turns with the
+  // body (Box2D's 2D inertia is a scalar), and a response left at the step's start put a
+  // needle's axial spin across its axis (a 1 mm wire gained 10⁸ times its energy at one landing). Overlap is removed by a soft constraint (a damped spring of
   // contact_hertz, damping_ratio, through mass and impulse scales: Catto's "soft step") whose
   // bias goes into the real velocity and is then relaxed away, so no pseudo-velocities.
 
@@ -164,6 +174,9 @@ class ContactSolver {
   /// Brings every contact's separation up to date with the bodies' positions (after each
   /// integrate_positions of a substep).
   void track_separations(const RigidBodies& bodies);
+  /// Recomputes every row's angular response I_w⁻¹ (r × d) and effective masses from the
+  /// bodies' current world inertia (lever arms kept).
+  void refresh_soft(const RigidBodies& bodies);
   /// Applies the accumulated impulses (of this step so far, or the cached ones at its start).
   void warm_start_soft(RigidBodies& bodies, std::span<ContactPoint> contacts) const;
   /// One sweep: per contact the normal row, then the tangent pair (friction_pair, isotropic)
@@ -205,7 +218,10 @@ class ContactSolver {
   /// A contact's soft-step data: lever arms at the step's start and the separation they give.
   struct SoftRow {
     Vec3 ra, rb;             ///< (m) contact point - centre of mass of a, b (zero for static)
-    Vec3 turn_a, turn_b;     ///< (m) the point of a, b that turns with it: ra, rb, or a round side's centre
+    Vec3 turn_a, turn_b;     ///< (m) the point of a, b that turns with it: ra, rb, or a round side's centre or axis point
+    Vec3 axis_a, axis_b;     ///< ContactPoint::axis_a, axis_b (zero: none)
+    Vec3 radial_a, radial_b; ///< ContactPoint::radial_a, radial_b
+    Vec3 arm_a, arm_b;       ///< (m) the tracked contact point - centre of mass, now (track_separations)
     double separation;       ///< (m) -depth at the step's start
     double current;          ///< (m) separation at the bodies' current poses (track_separations)
     double restitution;      ///< e
