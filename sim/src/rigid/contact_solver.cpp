@@ -141,7 +141,7 @@ Vec3 relative_velocity(const RigidBodies& bodies, std::uint32_t a, std::uint32_t
 }
 
 void ContactSolver::prepare(const RigidBodies& bodies, std::span<const ContactPoint> contacts,
-                            double h) {
+                            double h, bool own_surface) {
   rows_.resize(contacts.size());  // keeps capacity: no allocation once grown
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     const ContactPoint& c = contacts[k];
@@ -153,8 +153,9 @@ void ContactSolver::prepare(const RigidBodies& bodies, std::span<const ContactPo
     r.move_b = dynamic(bodies, c.body_b);
     r.inv_mass_a = r.move_a ? a.inv_mass : 0.0;
     r.inv_mass_b = r.move_b ? b.inv_mass : 0.0;
-    const Vec3 ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point - a.position);
-    const Vec3 rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - b.position);
+    const Vec3 half = own_surface ? Vec3(0.5 * c.depth * c.normal) : Vec3::Zero();
+    const Vec3 ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point + half - a.position);
+    const Vec3 rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - half - b.position);
     Vec3 t1, t2;
     tangent_basis(c.normal, t1, t2);
     r.n = make_axis(a, b, r.move_a, r.move_b, ra, rb, c.normal);
@@ -261,7 +262,7 @@ void ContactSolver::solve(RigidBodies& bodies, std::span<ContactPoint> contacts)
 
 void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const ContactPoint> contacts,
                                  double h_sub) {
-  prepare(bodies, contacts, h_sub);
+  prepare(bodies, contacts, h_sub, true);
   h_sub_ = h_sub;
   // Soft constraint of stiffness ω = 2π f, damping ratio ζ over the substep h (Catto 2024,
   // b2MakeSoft): bias rate ω / (2ζ + h ω), mass scale h ω (2ζ + h ω) / (1 + h ω (2ζ + h ω)),
@@ -289,6 +290,7 @@ void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const Cont
     // midpoint lies off a thin body, and the arm to it turned the push into spin about the
     // body's axis (a wire 4 cm into the ground got 8·10⁴ rad/s). The two points differ along n
     // only, so the pair's impulses still carry no net torque.
+    // (prepare(own_surface) built the rows from the same arms.)
     s.ra = c.body_a == kStaticBody ? Vec3::Zero() : Vec3(c.point + 0.5 * c.depth * c.normal - bodies.position[c.body_a]);
     s.rb = c.body_b == kStaticBody ? Vec3::Zero() : Vec3(c.point - 0.5 * c.depth * c.normal - bodies.position[c.body_b]);
     s.arm_a = s.ra;
@@ -312,12 +314,31 @@ void ContactSolver::prepare_soft(const RigidBodies& bodies, std::span<const Cont
                   settings_.soft_stick_speed * settings_.soft_stick_speed;
     s.max_normal = 0.0;
   }
-  refresh_soft(bodies);
+  refreshed_q_.assign(bodies.orientation.begin(), bodies.orientation.end());
+  refreshed_inertia_.assign(bodies.inv_inertia_world.begin(), bodies.inv_inertia_world.end());
 }
 
 void ContactSolver::refresh_soft(const RigidBodies& bodies) {
+  const std::size_t n = bodies.size();
+  stale_.assign(n, 0);
+  // sin(θ/2) of the turn since the body's rows were computed; the inertia test catches what
+  // changes it without a turn (a joint's geometric stiffness, JointSolver::stiffen_inertia).
+  constexpr double kHalfTurn = 0.5 * kRefreshTurn;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!bodies.is_dynamic(i)) continue;
+    const Quat dq = bodies.orientation[i] * refreshed_q_[i].conjugate();
+    const Mat3& inertia = bodies.inv_inertia_world[i];
+    const double moved = (inertia - refreshed_inertia_[i]).cwiseAbs().maxCoeff();
+    if (dq.vec().squaredNorm() > kHalfTurn * kHalfTurn ||
+        moved > kRefreshTurn * refreshed_inertia_[i].cwiseAbs().maxCoeff()) {
+      stale_[i] = 1;
+      refreshed_q_[i] = bodies.orientation[i];
+      refreshed_inertia_[i] = inertia;
+    }
+  }
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     Row& r = rows_[k];
+    if (!((r.move_a && stale_[r.a]) || (r.move_b && stale_[r.b]))) continue;
     const SoftRow& s = soft_[k];
     auto refresh = [&](Axis& x) {
       if (r.move_a) {
