@@ -161,16 +161,17 @@ class ContactSolver {
   // --- Soft step (Catto 2024, "Solver2D"; Box2D v3). Contacts are found once per step of
   // length h; the step is cut into n substeps of h/n, each: integrate velocities, warm start,
   // solve_soft(bias), integrate positions, solve_soft(relax); then restitution once. The
-  // lever arms, tangents and effective masses stay those of the step's start (prepare_soft);
-  // only the separation is brought up to date each substep from the bodies' displacement and
-  // turn since then (anchors fixed in the bodies), which costs a few products per contact
-  // instead of a narrow phase. The angular response I_w⁻¹ (r × d) and the effective masses are
-  // refreshed after each substep's turn (refresh_soft): in 3D the world inertia turns with the
-  // body (Box2D's 2D inertia is a scalar), and a response left at the step's start put a
-  // needle's axial spin across its axis (a 1 mm wire gained 10⁸ times its energy at one landing);
-  // a body turned by less than kRefreshTurn since keeps its rows. Overlap is removed by a soft constraint (a damped spring of
-  // contact_hertz, damping_ratio, through mass and impulse scales: Catto's "soft step") whose
-  // bias goes into the real velocity and is then relaxed away, so no pseudo-velocities.
+  // normal and tangents stay those of the step's start (prepare_soft); the separation is brought
+  // up to date each substep from the bodies' displacement and turn since then (anchors fixed in
+  // the bodies), which costs a few products per contact instead of a narrow phase. The lever
+  // arms, the angular response I_w⁻¹ (r × d) and the effective masses turn with the bodies
+  // (track_separations, refresh_soft): in 3D the world inertia turns with the body (Box2D's 2D
+  // inertia is a scalar), and a response left at the step's start put a needle's axial spin
+  // across its axis (a 1 mm wire gained 10⁸ times its energy at one landing); a body turned by
+  // less than kRefreshTurn since its rows were computed keeps them. Overlap is removed by a soft
+  // constraint (a damped spring of contact_hertz, damping_ratio, through mass and impulse
+  // scales: Catto's "soft step") whose bias goes into the real velocity and is then relaxed
+  // away, so no pseudo-velocities.
 
   /// Rows as prepare(), plus the start poses of all bodies and each contact's separation and
   /// lever arms; `h_sub` is the substep (s).
