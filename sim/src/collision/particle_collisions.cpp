@@ -459,6 +459,7 @@ void ParticleCollider::find_collider_contacts(const std::vector<Collider>& colli
 void ParticleCollider::remap_colliders(const std::vector<std::uint32_t>& new_index) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
   for (WarmCache& c : caches_) {
+    key_order(c, 1, sort_scratch_, key_order_tmp_);
     std::size_t keep = 0;
     for (std::size_t q = 0; q < c.ki.size(); ++q) {
       std::uint64_t kj = c.kj[q];
@@ -484,7 +485,15 @@ void ParticleCollider::remap_colliders(const std::vector<std::uint32_t>& new_ind
 
 void ParticleCollider::save_warm(StateWriter& out) const {
   out.value(std::uint64_t(caches_.size()));
-  for (const WarmCache& c : caches_) {
+  for (const WarmCache& stored : caches_) {
+    // The saved state holds key order, whichever form the step left.
+    WarmCache copy, tmp;
+    CountingSortScratch scratch;
+    if (!stored.owner.empty()) {
+      copy = stored;
+      key_order(copy, 1, scratch, tmp);
+    }
+    const WarmCache& c = stored.owner.empty() ? stored : copy;
     out.value(c.group);
     out.array(c.ki);
     out.array(c.kj);
@@ -499,6 +508,8 @@ void ParticleCollider::load_warm(StateReader& in) {
   caches_.resize(in.records(sizeof(std::uint32_t) + 5 * sizeof(std::uint64_t), "particle contact groups"));
   constexpr std::size_t kMax = std::size_t{1} << 40;
   for (WarmCache& c : caches_) {
+    for (auto* a : {&c.owner, &c.perm, &c.pair_first, &c.wall_first}) a->clear();  // key order
+    c.keys.clear();
     in.value(c.group);
     in.array(c.ki, kMax, "particle warm-start keys");
     in.array(c.kj, c.ki.size(), "particle warm-start keys");
@@ -517,27 +528,38 @@ void ParticleCollider::forget_system(std::uint32_t serial) {
                 caches_.end());
 }
 
-void ParticleCollider::load_warm_start(const WarmCache& c) {
+void ParticleCollider::load_warm_start(WarmCache& c) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
-  // The first cache entry of each particle's key, by a walk over the particles in flat order
-  // (keys ascending within a system, systems in registration order), searching only where a key
-  // goes back.
-  // (The walk's cursor is lower_bound(ki, key) at every particle, so each thread's stretch of
-  // particles starts with one.)
   const std::size_t n = key_flat_.size();
-  warm_first_.resize(n);
   const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
+  // Through the working index the cache's step gave each particle, when the store holds the
+  // same particles in the same places (same flat keys) and the cache has its ranges; else by key.
+  const bool by_place = !c.owner.empty() && !c.pair_first.empty() && c.keys == key_flat_;
+  if (by_place) {
+    prev_working_.resize(n);
+    const std::ptrdiff_t np = std::ptrdiff_t(n);
+#pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
+    for (std::ptrdiff_t q = 0; q < np; ++q) prev_working_[c.perm[std::size_t(q)]] = std::uint32_t(q);
+  } else {
+    key_order(c, par, sort_scratch_, key_order_tmp_);
+    // The first cache entry of each particle's key, by a walk over the particles in flat order
+    // (keys ascending within a system, systems in registration order), searching only where a
+    // key goes back.
+    // (The walk's cursor is lower_bound(ki, key) at every particle, so each thread's stretch of
+    // particles starts with one.)
+    warm_first_.resize(n);
 #pragma omp parallel num_threads(par) if (par > 1)
-  {
-    const std::size_t t = std::size_t(omp_get_thread_num()), parts = std::size_t(omp_get_num_threads());
-    const std::size_t f0 = n * t / parts, f1 = n * (t + 1) / parts;
-    std::size_t cursor = 0;
-    for (std::size_t f = f0; f < f1; ++f) {
-      const std::uint64_t kf = key_flat_[f];
-      if (f == f0 || kf < key_flat_[f - 1])
-        cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), kf) - c.ki.begin());
-      while (cursor < c.ki.size() && c.ki[cursor] < kf) ++cursor;
-      warm_first_[f] = std::uint32_t(cursor);
+    {
+      const std::size_t t = std::size_t(omp_get_thread_num()), parts = std::size_t(omp_get_num_threads());
+      const std::size_t f0 = n * t / parts, f1 = n * (t + 1) / parts;
+      std::size_t cursor = 0;
+      for (std::size_t f = f0; f < f1; ++f) {
+        const std::uint64_t kf = key_flat_[f];
+        if (f == f0 || kf < key_flat_[f - 1])
+          cursor = std::size_t(std::lower_bound(c.ki.begin(), c.ki.end(), kf) - c.ki.begin());
+        while (cursor < c.ki.size() && c.ki[cursor] < kf) ++cursor;
+        warm_first_[f] = std::uint32_t(cursor);
+      }
     }
   }
   const std::ptrdiff_t m = std::ptrdiff_t(contacts.size());
@@ -553,10 +575,22 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
     const std::uint32_t owner = wall ? ct.j : ct.i;
     const std::uint64_t ki = key[owner];
     const std::uint64_t kj = wall ? (kWall | ct.collider) : key[ct.j];
+    // The particle's entries: in key order, those with its key (pairs, then collider contacts,
+    // each in contact order); by place, those of its kind, the same ones in the same order (a
+    // pair's kj never has the collider bit, so only one kind can match).
+    std::size_t q = 0, end = c.ki.size();
+    if (by_place) {
+      const std::uint32_t k = prev_working_[perm_[owner]];
+      const std::vector<std::uint32_t>& first = wall ? c.wall_first : c.pair_first;
+      q = first[k];
+      end = first[k + 1];
+    } else {
+      q = warm_first_[perm_[owner]];
+    }
     // A collider may give a particle several contacts: the one with the nearest normal.
     std::size_t best = c.ki.size();
     double best_dot = 0.99;
-    for (std::size_t q = warm_first_[perm_[owner]]; q < c.ki.size() && c.ki[q] == ki; ++q) {
+    for (; q < end && (by_place || c.ki[q] == ki); ++q) {
       if (c.kj[q] != kj) continue;
       const double dot = wall ? c.n[q].dot(ct.n) : 1.0;
       if (dot < best_dot) continue;
@@ -574,33 +608,95 @@ void ParticleCollider::load_warm_start(const WarmCache& c) {
 
 void ParticleCollider::store_warm_start(WarmCache& c) {
   constexpr std::uint64_t kWall = std::uint64_t{1} << 63;
-  // Entries in the flat order of their first particle (a stable counting sort; ties in contact
-  // order), which is ascending key order unless systems' keys interleave.
+  // The resting contacts (pn > 0) in contact order: a stable pass that keeps them, split over
+  // the threads for a large system (stable_counting_sort() with one bucket).
   const std::size_t n = key_flat_.size();
   const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
-  const auto owner_of = [&](const Contact& ct) { return ct.i == kCollider ? ct.j : ct.i; };
   stable_counting_sort(
-      contacts.size(), n, par, sort_scratch_,
-      [&](std::size_t q) {
-        const Contact& ct = contacts[q];
-        return ct.pn > 0.0 ? std::size_t(perm_[owner_of(ct)]) : n;
-      },
+      contacts.size(), 1, par, sort_scratch_,
+      [&](std::size_t q) { return contacts[q].pn > 0.0 ? std::size_t(0) : std::size_t(1); },
       [&](std::size_t m) {
         c.ki.resize(m);
         c.kj.resize(m);
         c.n.resize(m);
         c.pt.resize(m);
         c.pn.resize(m);
+        c.owner.resize(m);
       },
       [&](std::size_t q, std::size_t e) {
         const Contact& ct = contacts[q];
-        const std::uint32_t owner = owner_of(ct);
+        const bool wall = ct.i == kCollider;
+        const std::uint32_t owner = wall ? ct.j : ct.i;
+        c.owner[e] = owner;
         c.ki[e] = key[owner];
-        c.kj[e] = ct.i == kCollider ? (kWall | ct.collider) : key[ct.j];
+        c.kj[e] = wall ? (kWall | ct.collider) : key[ct.j];
         c.n[e] = ct.n;
         c.pt[e] = ct.pt;
         c.pn[e] = ct.pn;
       });
+  c.perm.assign(perm_.begin(), perm_.end());
+  c.keys.assign(key_flat_.begin(), key_flat_.end());
+  // The ranges, where each kind's owners ascend (the pairs come before the collider contacts).
+  const std::size_t kept = c.ki.size();
+  const std::size_t walls = std::size_t(
+      std::partition_point(c.kj.begin(), c.kj.end(), [](std::uint64_t kj) { return (kj & kWall) == 0; }) -
+      c.kj.begin());
+  const auto ranges = [&](std::vector<std::uint32_t>& first, std::size_t e0, std::size_t e1, bool wall) {
+    first.resize(n + 1);
+    std::size_t k = 0;
+    for (std::size_t e = e0; e < e1; ++e) {
+      const std::size_t o = c.owner[e];
+      // An owner before the last one, or an entry of the other kind in between.
+      if (o + 1 < k || o >= n || ((c.kj[e] & kWall) != 0) != wall) return false;
+      while (k <= o) first[k++] = std::uint32_t(e);
+    }
+    while (k <= n) first[k++] = std::uint32_t(e1);
+    return true;
+  };
+  if (kept > std::numeric_limits<std::uint32_t>::max() || !ranges(c.pair_first, 0, walls, false) ||
+      !ranges(c.wall_first, walls, kept, true)) {
+    c.pair_first.clear();
+    c.wall_first.clear();
+  }
+}
+
+void ParticleCollider::key_order(WarmCache& c, int parts, CountingSortScratch& scratch, WarmCache& tmp) {
+  if (c.owner.empty()) {  // key order already (or no entries)
+    c.perm.clear();
+    c.keys.clear();
+    c.pair_first.clear();
+    c.wall_first.clear();
+    return;
+  }
+  // Entries in the flat order of their particle (a stable counting sort: ties in contact order),
+  // which is ascending key order unless systems' keys interleave.
+  const std::size_t n = c.perm.size();
+  stable_counting_sort(
+      c.ki.size(), n, parts, scratch, [&](std::size_t e) { return std::size_t(c.perm[c.owner[e]]); },
+      [&](std::size_t m) {
+        tmp.ki.resize(m);
+        tmp.kj.resize(m);
+        tmp.n.resize(m);
+        tmp.pt.resize(m);
+        tmp.pn.resize(m);
+      },
+      [&](std::size_t e, std::size_t r) {
+        tmp.ki[r] = c.ki[e];
+        tmp.kj[r] = c.kj[e];
+        tmp.n[r] = c.n[e];
+        tmp.pt[r] = c.pt[e];
+        tmp.pn[r] = c.pn[e];
+      });
+  c.ki.swap(tmp.ki);
+  c.kj.swap(tmp.kj);
+  c.n.swap(tmp.n);
+  c.pt.swap(tmp.pt);
+  c.pn.swap(tmp.pn);
+  c.owner.clear();
+  c.perm.clear();
+  c.keys.clear();
+  c.pair_first.clear();
+  c.wall_first.clear();
   if (std::is_sorted(c.ki.begin(), c.ki.end())) return;
   // Keys out of order (particles of several systems interleaved): sort by ki, ties in the order
   // above, so lookups stay deterministic.

@@ -229,16 +229,36 @@ class ParticleCollider {
   void load_warm(StateReader& in);
 
  private:
-  /// Previous step's resting impulses of one group (keyed by its first system).
+  /// Previous step's resting impulses of one group (keyed by its first system). Two forms of
+  /// the same entries. In key order (ki ascending, ties in contact order) a particle's entries
+  /// are found by its key whatever became of the store; the saved state holds this form. In
+  /// contact order (`owner` filled) they are as that step's contacts left them, which costs the
+  /// store a sequential copy instead of a scatter into key order, and lets the next step find a
+  /// particle's entries through its working index when the store's keys are unchanged (a
+  /// particle's working index moves little from one step to the next, so the lookups stay near
+  /// each other in memory). key_order() turns the second form into the first.
   struct WarmCache {
     std::uint32_t group = 0;
     std::vector<std::uint64_t> ki, kj;  ///< kj: particle key, or collider index for walls
     std::vector<Vec3> n, pt;
     std::vector<double> pn;
+    // Contact order only (owner empty in key order):
+    std::vector<std::uint32_t> owner;  ///< each entry's particle, that step's working index
+    std::vector<std::uint32_t> perm;   ///< that step's perm_ (working -> flat index)
+    std::vector<std::uint64_t> keys;   ///< that step's key_flat_
+    /// Per working index k, n + 1 of each: the first particle-pair entry (pair_first) and the
+    /// first collider entry (wall_first) of a particle at k or later, so that particle k's are
+    /// [first[k], first[k + 1]). Empty when the owners of either kind's entries do not ascend
+    /// (the hashed grid's contact order): key order is then the only way in.
+    std::vector<std::uint32_t> pair_first, wall_first;
   };
   std::vector<WarmCache> caches_;
-  void load_warm_start(const WarmCache& c);
+  WarmCache key_order_tmp_;  ///< key_order()'s destination, swapped in (no allocation a step)
+  std::vector<std::uint32_t> prev_working_;  ///< load_warm_start(): flat index -> the cache's working index
+  void load_warm_start(WarmCache& c);
   void store_warm_start(WarmCache& c);
+  /// Puts a contact-order cache into key order (no-op for one already so); `parts` threads.
+  static void key_order(WarmCache& c, int parts, CountingSortScratch& scratch, WarmCache& tmp);
 
   // Uniform grid (one level): particles sorted by cell (x-major linear cell index, then particle
   // index) with a counting sort over the cells of the particles' bounding box (a comparison sort
