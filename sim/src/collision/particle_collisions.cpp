@@ -510,6 +510,7 @@ void ParticleCollider::load_warm(StateReader& in) {
   for (WarmCache& c : caches_) {
     for (auto* a : {&c.owner, &c.perm, &c.pair_first, &c.wall_first}) a->clear();  // key order
     c.keys.clear();
+    c.by_place = false;
     in.value(c.group);
     in.array(c.ki, kMax, "particle warm-start keys");
     in.array(c.kj, c.ki.size(), "particle warm-start keys");
@@ -534,7 +535,7 @@ void ParticleCollider::load_warm_start(WarmCache& c) {
   const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
   // Through the working index the cache's step gave each particle, when the store holds the
   // same particles in the same places (same flat keys) and the cache has its ranges; else by key.
-  const bool by_place = !c.owner.empty() && !c.pair_first.empty() && c.keys == key_flat_;
+  const bool by_place = !c.owner.empty() && c.by_place && c.keys == key_flat_;
   if (by_place) {
     prev_working_.resize(n);
     const std::ptrdiff_t np = std::ptrdiff_t(n);
@@ -582,8 +583,11 @@ void ParticleCollider::load_warm_start(WarmCache& c) {
     if (by_place) {
       const std::uint32_t k = prev_working_[perm_[owner]];
       const std::vector<std::uint32_t>& first = wall ? c.wall_first : c.pair_first;
-      q = first[k];
-      end = first[k + 1];
+      q = end = 0;  // none of this kind
+      if (!first.empty()) {
+        q = first[k];
+        end = first[k + 1];
+      }
     } else {
       q = warm_first_[perm_[owner]];
     }
@@ -635,13 +639,16 @@ void ParticleCollider::store_warm_start(WarmCache& c) {
         c.pn[e] = ct.pn;
       });
   c.perm.assign(perm_.begin(), perm_.end());
-  c.keys.assign(key_flat_.begin(), key_flat_.end());
   // The ranges, where each kind's owners ascend (the pairs come before the collider contacts).
   const std::size_t kept = c.ki.size();
   const std::size_t walls = std::size_t(
       std::partition_point(c.kj.begin(), c.kj.end(), [](std::uint64_t kj) { return (kj & kWall) == 0; }) -
       c.kj.begin());
   const auto ranges = [&](std::vector<std::uint32_t>& first, std::size_t e0, std::size_t e1, bool wall) {
+    if (e0 == e1) {  // none of this kind: left empty
+      first.clear();
+      return true;
+    }
     first.resize(n + 1);
     std::size_t k = 0;
     for (std::size_t e = e0; e < e1; ++e) {
@@ -653,11 +660,11 @@ void ParticleCollider::store_warm_start(WarmCache& c) {
     while (k <= n) first[k++] = std::uint32_t(e1);
     return true;
   };
-  if (kept > std::numeric_limits<std::uint32_t>::max() || !ranges(c.pair_first, 0, walls, false) ||
-      !ranges(c.wall_first, walls, kept, true)) {
-    c.pair_first.clear();
-    c.wall_first.clear();
-  }
+  c.by_place = kept <= std::numeric_limits<std::uint32_t>::max() && ranges(c.pair_first, 0, walls, false) &&
+               ranges(c.wall_first, walls, kept, true);
+  // The flat keys are read no more this step, and run() writes every entry again: handed over
+  // instead of copied.
+  c.keys.swap(key_flat_);
 }
 
 void ParticleCollider::key_order(WarmCache& c, int parts, CountingSortScratch& scratch, WarmCache& tmp) {
@@ -666,6 +673,7 @@ void ParticleCollider::key_order(WarmCache& c, int parts, CountingSortScratch& s
     c.keys.clear();
     c.pair_first.clear();
     c.wall_first.clear();
+    c.by_place = false;
     return;
   }
   // Entries in the flat order of their particle (a stable counting sort: ties in contact order),
@@ -697,6 +705,7 @@ void ParticleCollider::key_order(WarmCache& c, int parts, CountingSortScratch& s
   c.keys.clear();
   c.pair_first.clear();
   c.wall_first.clear();
+  c.by_place = false;
   if (std::is_sorted(c.ki.begin(), c.ki.end())) return;
   // Keys out of order (particles of several systems interleaved): sort by ki, ties in the order
   // above, so lookups stay deterministic.

@@ -248,9 +248,11 @@ class ParticleCollider {
     std::vector<std::uint64_t> keys;   ///< that step's key_flat_
     /// Per working index k, n + 1 of each: the first particle-pair entry (pair_first) and the
     /// first collider entry (wall_first) of a particle at k or later, so that particle k's are
-    /// [first[k], first[k + 1]). Empty when the owners of either kind's entries do not ascend
-    /// (the hashed grid's contact order): key order is then the only way in.
+    /// [first[k], first[k + 1]); empty when there are none of that kind.
     std::vector<std::uint32_t> pair_first, wall_first;
+    /// The ranges hold: each kind's owners ascend (false in the hashed grid's contact order, and
+    /// key order is then the only way in).
+    bool by_place = false;
   };
   std::vector<WarmCache> caches_;
   WarmCache key_order_tmp_;  ///< key_order()'s destination, swapped in (no allocation a step)
