@@ -1066,15 +1066,26 @@ TEST(SimParticleCollision, PairOfTwoSystemsTakesTheirMeanRestitution) {
 }
 
 // A step finds each contact's warm start (the previous step's impulses) through the working index
-// its particle had then when the stores hold the same particles, and by key otherwise (after a
-// restore, or once particles were born or died). The two lookups must give the same impulses:
-// a heap of two systems in one group settling on a plane (resting pairs within and across the
-// systems, resting collider contacts, friction) stepped on, against the same heap saved and
-// restored into a fresh world before every step (its caches come back in key order), bit for
+// its particle had then while the stores hold the same particles in the same places (births
+// after them allowed), and by key otherwise (after a restore, or once particles died or a birth
+// moved others). The two lookups must give the same impulses: a heap of two systems in one group
+// settling on a plane (resting pairs within and across the systems, resting collider contacts,
+// friction), with beads born now and then into the second system (after every particle: by
+// place) and the first (moving the second's: by key), stepped on, against the same heap saved
+// and restored into a fresh world before every step (its caches come back in key order), bit for
 // bit; likewise a system large enough for the threads' split, on one thread and on two.
 TEST(SimParticleCollision, WarmStartByPlaceGivesTheImpulsesOfTheLookupByKey) {
   struct Heap {
     World world;
+    ParticleSystemHandle a, b;
+    /// Every 10th step three beads are born over the heap into the second system, every 25th
+    /// into the first.
+    void births(int step) {
+      if (step % 10 != 9 && step % 25 != 24) return;
+      for (int k = 0; k < 3; ++k)
+        world.spawn_particle(step % 25 == 24 ? a : b, Vec3(0.1 + 0.03 * k, 0.1, 0.09), Vec3(0.0, 0.0, -0.5), 1e-3,
+                             0.01, 100.0);
+    }
     explicit Heap(int per_side, int layers, int threads) : world(WorldDef{1.0 / 240, 3, 0.05, threads}) {
       PlaneDef ground;
       ground.material = Material(0.2, 0.6);
@@ -1085,7 +1096,8 @@ TEST(SimParticleCollision, WarmStartByPlaceGivesTheImpulsesOfTheLookupByKey) {
       def.collision_group = "heap";
       def.particle_restitution = 0.1;
       def.particle_friction = 0.5;
-      const ParticleSystemHandle a = world.add_particle_system(def), b = world.add_particle_system(def);
+      a = world.add_particle_system(def);
+      b = world.add_particle_system(def);
       Rng rng(11);
       for (int k = 0; k < layers; ++k)
         for (int i = 0; i < per_side; ++i)
@@ -1102,9 +1114,11 @@ TEST(SimParticleCollision, WarmStartByPlaceGivesTheImpulsesOfTheLookupByKey) {
     std::string state;
     a.world.save_state(state);
     for (int s = 0; s < steps; ++s) {
+      a.births(s);
       a.world.advance(1.0 / 240);
       Heap fresh(per_side, layers, threads_b);
       fresh.world.load_state(state);
+      fresh.births(s);
       fresh.world.advance(1.0 / 240);
       state.clear();
       fresh.world.save_state(state);

@@ -534,13 +534,19 @@ void ParticleCollider::load_warm_start(WarmCache& c) {
   const std::size_t n = key_flat_.size();
   const int par = threads > 1 && x.size() >= kParallelMin ? threads : 1;
   // Through the working index the cache's step gave each particle, when the store holds the
-  // same particles in the same places (same flat keys) and the cache has its ranges; else by key.
-  const bool by_place = !c.owner.empty() && c.by_place && c.keys == key_flat_;
+  // same particles in the same places (the stored flat keys begin the current ones: particles
+  // may have been born since, not died) and the cache has its ranges; else by key. One born since
+  // has no entries (its key is new), so it has no working index then (kNone).
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  const std::size_t before = c.keys.size();
+  const bool by_place = !c.owner.empty() && c.by_place && before <= n &&
+                        std::equal(c.keys.begin(), c.keys.end(), key_flat_.begin());
   if (by_place) {
     prev_working_.resize(n);
-    const std::ptrdiff_t np = std::ptrdiff_t(n);
+    const std::ptrdiff_t np = std::ptrdiff_t(before);
 #pragma omp parallel for schedule(static) num_threads(par) if (par > 1)
     for (std::ptrdiff_t q = 0; q < np; ++q) prev_working_[c.perm[std::size_t(q)]] = std::uint32_t(q);
+    std::fill(prev_working_.begin() + std::ptrdiff_t(before), prev_working_.end(), kNone);
   } else {
     key_order(c, par, sort_scratch_, key_order_tmp_);
     // The first cache entry of each particle's key, by a walk over the particles in flat order
@@ -583,8 +589,8 @@ void ParticleCollider::load_warm_start(WarmCache& c) {
     if (by_place) {
       const std::uint32_t k = prev_working_[perm_[owner]];
       const std::vector<std::uint32_t>& first = wall ? c.wall_first : c.pair_first;
-      q = end = 0;  // none of this kind
-      if (!first.empty()) {
+      q = end = 0;  // none of this kind, or born since
+      if (!first.empty() && k != kNone) {
         q = first[k];
         end = first[k + 1];
       }

@@ -234,9 +234,10 @@ class ParticleCollider {
   /// are found by its key whatever became of the store; the saved state holds this form. In
   /// contact order (`owner` filled) they are as that step's contacts left them, which costs the
   /// store a sequential copy instead of a scatter into key order, and lets the next step find a
-  /// particle's entries through its working index when the store's keys are unchanged (a
-  /// particle's working index moves little from one step to the next, so the lookups stay near
-  /// each other in memory). key_order() turns the second form into the first.
+  /// particle's entries through its working index while the stores' particles stay where they
+  /// were, births after them allowed (a particle's working index moves little from one step to
+  /// the next, so the lookups stay near each other in memory). key_order() turns the second form
+  /// into the first.
   struct WarmCache {
     std::uint32_t group = 0;
     std::vector<std::uint64_t> ki, kj;  ///< kj: particle key, or collider index for walls
