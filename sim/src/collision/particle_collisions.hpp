@@ -243,6 +243,14 @@ class ParticleCollider {
     std::vector<std::uint64_t> ki, kj;  ///< kj: particle key, or collider index for walls
     std::vector<Vec3> n, pt;
     std::vector<double> pn;
+    /// ki, kj, n, pt and pn to m entries.
+    void resize_entries(std::size_t m) {
+      ki.resize(m);
+      kj.resize(m);
+      n.resize(m);
+      pt.resize(m);
+      pn.resize(m);
+    }
     // Contact order only (owner empty in key order):
     std::vector<std::uint32_t> owner;  ///< each entry's particle, that step's working index
     std::vector<std::uint32_t> perm;   ///< that step's perm_ (working -> flat index)

@@ -34,11 +34,7 @@ void ParticleCollider::remap_colliders(const std::vector<std::uint32_t>& new_ind
       c.pn[keep] = c.pn[q];
       ++keep;
     }
-    c.ki.resize(keep);
-    c.kj.resize(keep);
-    c.n.resize(keep);
-    c.pt.resize(keep);
-    c.pn.resize(keep);
+    c.resize_entries(keep);
   }
 }
 
@@ -185,11 +181,7 @@ void ParticleCollider::store_warm_start(WarmCache& c) {
       contacts.size(), 1, par, sort_scratch_,
       [&](std::size_t q) { return contacts[q].pn > 0.0 ? std::size_t(0) : std::size_t(1); },
       [&](std::size_t m) {
-        c.ki.resize(m);
-        c.kj.resize(m);
-        c.n.resize(m);
-        c.pt.resize(m);
-        c.pn.resize(m);
+        c.resize_entries(m);
         c.owner.resize(m);
       },
       [&](std::size_t q, std::size_t e) {
@@ -247,11 +239,7 @@ void ParticleCollider::key_order(WarmCache& c, int parts, CountingSortScratch& s
   stable_counting_sort(
       c.ki.size(), n, parts, scratch, [&](std::size_t e) { return std::size_t(c.perm[c.owner[e]]); },
       [&](std::size_t m) {
-        tmp.ki.resize(m);
-        tmp.kj.resize(m);
-        tmp.n.resize(m);
-        tmp.pt.resize(m);
-        tmp.pn.resize(m);
+        tmp.resize_entries(m);
       },
       [&](std::size_t e, std::size_t r) {
         tmp.ki[r] = c.ki[e];
